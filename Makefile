@@ -1,0 +1,41 @@
+# coin: two commands set everything up on a fresh machine:
+#   make demo   installs into .venv, runs a small basin sweep and one simulation, writes out/
+#   make test   installs into .venv and runs the test suite
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+COIN   := $(BIN)/coin
+OUT    ?= out
+
+.PHONY: install demo test test-fast bench lint docs clean
+
+$(BIN)/activate:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+
+$(VENV)/.installed: pyproject.toml $(BIN)/activate
+	$(BIN)/pip install --quiet -e ".[test]"
+	touch $@
+
+install: $(VENV)/.installed
+
+demo: install
+	mkdir -p $(OUT)
+	$(COIN) stability
+	$(COIN) simulate --vy 1.197 --vphi 3.508 --rrd $(OUT)/fig2.rrd
+	$(COIN) basin $(OUT)/basin.zarr --res 128
+	$(COIN) basin render $(OUT)/basin.zarr -o $(OUT)/basin.png
+	$(COIN) basin stats $(OUT)/basin.zarr
+	@echo "outputs in $(OUT)/: fig2.rrd (open with: rerun $(OUT)/fig2.rrd), basin.zarr, basin.png"
+
+test: install
+	$(BIN)/python -m pytest -n 2 -q
+
+bench: install
+	$(COIN) bench
+
+lint: install
+	$(BIN)/ruff check coincli tests
+
+clean:
+	rm -rf $(OUT) .pytest_cache

@@ -1,0 +1,47 @@
+"""`coin methods`: the integration methods with their properties for the current parameters."""
+
+from __future__ import annotations
+
+from rich.table import Table
+
+from ..integrators import METHODS
+from ..model import stiffest_frequency
+from ..params import param_array
+from . import app
+from .common import (
+    COpt, DiameterOpt, GOpt, InertiaOpt, JsonOpt, KOpt, MassOpt, PresetOpt, ThicknessOpt,
+    build_scene, console, print_json, user_errors,
+)
+
+
+@app.command("methods")
+def methods_command(
+    preset: PresetOpt = "paper", diameter: DiameterOpt = None, thickness: ThicknessOpt = None,
+    mass: MassOpt = None, inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None,
+    g: GOpt = None, json_out: JsonOpt = False,
+) -> None:
+    """List the integration methods: order, adaptive, symplectic, and stable step."""
+    with user_errors():
+        scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
+                            inertia=inertia, k=k, c=c, g=g)
+    omega, zeta = stiffest_frequency(param_array(scene))
+    rows = []
+    for m in METHODS.values():
+        limit = m.stable_step(scene)
+        rows.append({"name": m.name, "order": m.order, "adaptive": m.adaptive,
+                     "symplectic": m.symplectic, "stable_step": limit, "summary": m.summary,
+                     "default": m.name == scene.integration.method})
+    if json_out:
+        print_json({"omega_max": omega, "zeta": zeta, "methods": rows})
+        return
+    table = Table(title=f"Integration methods (stiffest mode: rocking on two corners, "
+                        f"omega = {omega:.4g} rad/s, damping ratio {zeta:.3f})",
+                  title_justify="left")
+    for col in ("method", "order", "adaptive", "symplectic", "stable step", "what it is"):
+        table.add_column(col)
+    for r in rows:
+        name = f"{r['name']} (default)" if r["default"] else r["name"]
+        limit = "-" if r["stable_step"] is None else f"{r['stable_step']:.3g} s"
+        table.add_row(name, str(r["order"]), "yes" if r["adaptive"] else "no",
+                      "yes" if r["symplectic"] else "no", limit, r["summary"])
+    console.print(table)

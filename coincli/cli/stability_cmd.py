@@ -1,0 +1,74 @@
+"""`coin stability`: the static energy table and the critical stiffnesses (paper, section 3)."""
+
+from __future__ import annotations
+
+import math
+
+from rich.table import Table
+
+from .. import __version__
+from ..stability import analyse
+from . import app
+from .common import (
+    COpt, DiameterOpt, GOpt, InertiaOpt, JsonOpt, KOpt, MassOpt, PresetOpt, ThicknessOpt,
+    build_scene, console, print_json, user_errors,
+)
+
+
+@app.command("stability")
+def stability_command(
+    preset: PresetOpt = "paper", diameter: DiameterOpt = None, thickness: ThicknessOpt = None,
+    mass: MassOpt = None, inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None,
+    g: GOpt = None, json_out: JsonOpt = False,
+) -> None:
+    """Static states, the energy each needs to lose stability, k_min, k_cr and E_crit."""
+    with user_errors():
+        scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
+                            inertia=inertia, k=k, c=c, g=g)
+    report = analyse(scene)
+    if json_out:
+        print_json({"version": __version__, "parameters": scene.to_dict(), **report.to_dict()})
+        return
+    mj = 1e3
+    table = Table(title="Static states (energies in mJ)", title_justify="left")
+    table.add_column("")
+    table.add_column("rigid (eq. 8)", justify="right")
+    table.add_column("elastic (eq. 10)", justify="right")
+    rows = [
+        ("V_max  (on a corner, phi_cr)", "v_max"),
+        ("V_min1 (lying, phi = 0)", "v_min1"),
+        ("V_min2 (standing, phi = pi/2)", "v_min2"),
+        ("to tip a lying coin  V_max - V_min1", "to_destabilise_lying"),
+        ("to tip a standing coin  V_max - V_min2", "to_destabilise_standing"),
+    ]
+    for label, attr in rows:
+        table.add_row(label, f"{getattr(report.rigid, attr) * mj:.6g}",
+                      f"{getattr(report.elastic, attr) * mj:.6g}")
+    table.add_row("ratio (eqs. 9, 12)", f"{report.rigid.ratio:.1f}",
+                  f"{report.elastic.ratio:.1f}" if math.isfinite(report.elastic.ratio)
+                  and report.elastic.ratio > 0 else "none (k <= k_cr)")
+    console.print(table)
+    crit = Table(title="Critical values", title_justify="left")
+    crit.add_column("")
+    crit.add_column("value", justify="right")
+    crit.add_column("meaning")
+    crit.add_row("phi_cr", f"{math.degrees(report.phi_cr):.3f} deg",
+                 "the diagonal is vertical: the coin balances on a corner")
+    crit.add_row("k", f"{report.k:.6g} N/m", "this foundation")
+    crit.add_row("k_min (eq. 11)", f"{report.k_min:.1f} N/m",
+                 "above it a coin on phi_cr rests on one corner only")
+    crit.add_row("k_cr (eq. 13)", f"{report.k_cr:.2f} N/m",
+                 "above it a standing coin can be at rest")
+    crit.add_row("E_crit", f"{report.e_crit * mj:.6g} mJ",
+                 "m g (r - m g / 2k): below it the count of quarter turns is final")
+    console.print(crit)
+    states = ["lying (phi = 0): static"]
+    if report.standing_static:
+        states.append("standing (phi = pi/2): static")
+    console.print("Static states for k = {:g} N/m: {}.".format(report.k, "; ".join(states)))
+    if not report.standing_static:
+        console.print(f"[bold yellow]k = {report.k:g} N/m is below k_cr = {report.k_cr:.2f} "
+                      "N/m: a standing coin cannot be at rest; every coin ends lying.[/]")
+    if not report.single_corner_contact:
+        console.print(f"[yellow]k is below k_min = {report.k_min:.1f} N/m: a coin at phi_cr "
+                      "sinks onto a second corner (eq. 10 does not hold).[/]")

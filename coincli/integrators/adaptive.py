@@ -1,0 +1,363 @@
+"""Adaptive Dormand-Prince 5(4) with contact events, and the event-driven method built on it.
+
+The right-hand side is smooth as long as the set of penetrating corners (the *mode*) does not
+change; it jumps when a corner touches (the damping force appears at full strength) or lifts off.
+So the integrator keeps the mode fixed during a step (the force law of a corner in the mode is
+extended smoothly beyond the surface), and after each accepted step it checks every corner's
+height. If a corner left its side of the surface, the crossing is located on the step's
+continuous extension (4th order, Hairer's ``contd5``), the state there is taken from it, the mode
+is switched, and integration restarts exactly at the event. No step straddles a jump, so the
+method keeps its order, and no step is rejected because of one.
+
+Hysteresis of ``EVENT_BAND`` metres keeps a corner that sits exactly on the surface from
+toggling back and forth: a contact corner lifts off when it rises above +EVENT_BAND, a free corner
+touches down when it sinks below 0 (flight) or -EVENT_BAND (stepping).
+
+``exact_flight`` (the ``event`` method) replaces integration while no corner is in contact by
+the closed-form parabola and uniform rotation, and finds the next touch-down on that path by
+second-order conservative advancement: each corner's height h obeys h'' >= -(g + vphi^2 r), so
+h(t + s) >= h + h' s - (g + vphi^2 r) s^2 / 2 and advancing by the first root of that bound can
+never step over a contact, however grazing. Near a transversal root the bound is tight to
+O(s^2), so convergence is quadratic (3-5 iterations per flight).
+
+Every run stops, if asked, as soon as the total energy falls below E_crit (the count of quarter
+turns is then final, NOTES.md).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..model import SX, SY, accelerations, contact_mask, critical_energy, jit, total_energy, well_index
+from ..params import P_G, P_R, P_RD, P_RT
+from .fixed import (
+    NO_WELL,
+    NONFINITE,
+    SETTLED,
+    UNSETTLED,
+    is_finite_state,
+    record_events,
+    record_sample,
+)
+
+EVENT_BAND = 1e-11  # m, hysteresis of contact switching (far below any penetration, ~1e-6 m)
+LANDING_GAP = 1e-13  # m, how close conservative advancement brings a corner before touch-down
+ROOT_TIME_TOL = 1e-15  # s, bracket width at which an event time counts as located
+H_MIN = 1e-13  # s, a smaller step means the solution blew up
+
+# Dormand-Prince 5(4) tableau.
+A21 = 1.0 / 5.0
+A31, A32 = 3.0 / 40.0, 9.0 / 40.0
+A41, A42, A43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
+A51, A52, A53, A54 = 19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0
+A61, A62, A63, A64, A65 = (9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0,
+                           -5103.0 / 18656.0)
+B1, B3, B4, B5, B6 = 35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0
+E1, E3, E4, E5, E6, E7 = (71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0,
+                          22.0 / 525.0, -1.0 / 40.0)
+D1, D3, D4, D5, D6, D7 = (-12715105075.0 / 11282082432.0, 87487479700.0 / 32700410799.0,
+                          -10690763975.0 / 1880347072.0, 701980252875.0 / 199316789632.0,
+                          -1453857185.0 / 822651844.0, 69997945.0 / 29380423.0)
+
+
+@jit
+def rhs(p, s, mode, out):
+    """Time derivative of the state with the contact force on the corners in ``mode``."""
+    ax, ay, aphi = accelerations(p, s[0], s[1], s[2], s[3], s[4], s[5], mode)
+    out[0] = s[3]
+    out[1] = s[4]
+    out[2] = s[5]
+    out[3] = ax
+    out[4] = ay
+    out[5] = aphi
+
+
+@jit
+def error_scales(p, rtol, scale):
+    """Absolute tolerance per component: rtol times a natural scale of the coin (its half
+    diagonal for positions, 1 rad, the speed sqrt(2 g r) gained falling by r)."""
+    r = p[P_R]
+    v_ref = math.sqrt(2.0 * max(p[P_G], 1.0) * r)
+    scale[0] = rtol * r
+    scale[1] = rtol * r
+    scale[2] = rtol
+    scale[3] = rtol * v_ref
+    scale[4] = rtol * v_ref
+    scale[5] = rtol * v_ref / r
+
+
+@jit
+def dense_state(rc, theta, out):
+    """State at fraction theta of the last step from its continuous extension."""
+    one_minus = 1.0 - theta
+    for j in range(6):
+        out[j] = rc[0, j] + theta * (rc[1, j] + one_minus * (
+            rc[2, j] + theta * (rc[3, j] + one_minus * rc[4, j])))
+
+
+@jit
+def dense_corner_height(p, rc, theta, i):
+    one_minus = 1.0 - theta
+    y = rc[0, 1] + theta * (rc[1, 1] + one_minus * (rc[2, 1] + theta * (rc[3, 1] + one_minus * rc[4, 1])))
+    phi = rc[0, 2] + theta * (rc[1, 2] + one_minus * (rc[2, 2] + theta * (rc[3, 2] + one_minus * rc[4, 2])))
+    return y + SX[i] * p[P_RD] * math.sin(phi) + SY[i] * p[P_RT] * math.cos(phi)
+
+
+@jit
+def locate_crossing(p, rc, h, i, level, g0, g1):
+    """Fraction theta of the step where corner i's height crosses ``level`` (g0, g1: height minus
+    level at the ends, of opposite signs). Illinois regula falsi on the continuous extension."""
+    lo, hi = 0.0, 1.0
+    f_lo, f_hi = g0, g1
+    side = 0
+    theta = 1.0
+    for _ in range(100):
+        theta = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        if not (lo < theta < hi):
+            theta = 0.5 * (lo + hi)
+        f = dense_corner_height(p, rc, theta, i) - level
+        if f == 0.0:
+            return theta
+        if (f > 0.0) == (f_hi > 0.0):
+            hi, f_hi = theta, f
+            if side == 1:
+                f_lo *= 0.5
+            side = 1
+        else:
+            lo, f_lo = theta, f
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
+        if (hi - lo) * h < ROOT_TIME_TOL:
+            break
+    # the upper end of the bracket is on the far side: the event has certainly happened there
+    return hi
+
+
+@jit
+def flight_state(p, s, tau, out):
+    """Closed-form free flight: a parabola for the centroid, uniform rotation."""
+    out[0] = s[0] + s[3] * tau
+    out[1] = s[1] + (s[4] - 0.5 * p[P_G] * tau) * tau
+    out[2] = s[2] + s[5] * tau
+    out[3] = s[3]
+    out[4] = s[4] - p[P_G] * tau
+    out[5] = s[5]
+
+
+@jit
+def time_to_touchdown(p, s, t_max):
+    """Time until the first corner touches the surface in free flight from ``s`` (or t_max if
+    none does before), and that corner (-1 if none). Conservative advancement with the
+    second-order lower bound h(t + sig) >= h + h' sig - A sig^2 / 2, A = g + vphi^2 r."""
+    g = p[P_G]
+    w = s[5]
+    bound = g + w * w * p[P_R]
+    tau = 0.0
+    for _ in range(10000):
+        y = s[1] + (s[4] - 0.5 * g * tau) * tau
+        vy = s[4] - g * tau
+        phi = s[2] + w * tau
+        c = math.cos(phi)
+        sn = math.sin(phi)
+        step = math.inf
+        lowest = -1
+        lowest_height = math.inf
+        lowest_rate = 0.0
+        for i in range(4):
+            px = SX[i] * p[P_RD]
+            py = SY[i] * p[P_RT]
+            height = y + px * sn + py * c
+            rate = vy + w * (px * c - py * sn)
+            if height < lowest_height:
+                lowest_height = height
+                lowest = i
+                lowest_rate = rate
+            hpos = max(height, 0.0)
+            if bound > 0.0:
+                sig = (rate + math.sqrt(rate * rate + 2.0 * bound * hpos)) / bound
+            elif rate < 0.0:
+                sig = hpos / -rate
+            else:
+                sig = math.inf
+            step = min(step, sig)
+        if lowest_height <= LANDING_GAP and lowest_rate <= 0.0:
+            return tau, lowest
+        if step < 1e-15:
+            # resting on the surface with no downward speed: it is a touch-down
+            return tau, lowest
+        tau += step
+        if tau >= t_max:
+            return t_max, -1
+    return tau, lowest
+
+
+@jit
+def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flight, sample_dt,
+                       samples, events, final):
+    """Dormand-Prince 5(4) with located contact events; with ``exact_flight``, closed-form
+    flight between contacts. Same outputs as :func:`coincli.integrators.fixed.integrate_fixed`:
+    (t, steps, status, settle_time, n_well, n_samples, n_events)."""
+    k = np.empty((7, 6))
+    rc = np.empty((5, 6))
+    s = state.copy()
+    s_new = np.empty(6)
+    tmp = np.empty(6)
+    scale = np.empty(6)
+    error_scales(p, rtol, scale)
+    e_crit = critical_energy(p)
+    record = samples.shape[0] > 0 and sample_dt > 0.0
+    n_samples = 0
+    n_events = 0
+    if record:
+        n_samples = record_sample(samples, 0, 0.0, s[0], s[1], s[2], s[3], s[4], s[5])
+    next_sample = sample_dt
+    mode = contact_mask(p, s[1], s[2])
+    if events.shape[0] > 0 and mode != 0:
+        n_events = record_events(events, 0, 0.0, 0, mode, s[0], s[1], s[2], s[3], s[4], s[5])
+    status = UNSETTLED
+    settle_time = math.nan
+    n_well = NO_WELL
+    t = 0.0
+    steps = 0
+    h = h_init
+    need_rhs = True
+    if total_energy(p, s) < e_crit:
+        status = SETTLED
+        settle_time = 0.0
+        n_well = well_index(p, s[2])
+    while t < t_end and not (status == SETTLED and stop_on_settle):
+        if mode == 0 and exact_flight:
+            tau, corner = time_to_touchdown(p, s, t_end - t)
+            if record:
+                while next_sample <= t + tau and n_samples < samples.shape[0]:
+                    flight_state(p, s, next_sample - t, tmp)
+                    n_samples = record_sample(samples, n_samples, next_sample, tmp[0], tmp[1],
+                                              tmp[2], tmp[3], tmp[4], tmp[5])
+                    next_sample += sample_dt
+            flight_state(p, s, tau, tmp)
+            s[:] = tmp
+            t = t + tau if corner >= 0 else t_end
+            steps += 1
+            if corner >= 0:
+                new_mode = mode | (1 << corner)
+                n_events = record_events(events, n_events, t, mode, new_mode,
+                                         s[0], s[1], s[2], s[3], s[4], s[5])
+                mode = new_mode
+            need_rhs = True
+            # flight conserves energy, so settling is only checked where contact begins
+            if status != SETTLED and total_energy(p, s) < e_crit:
+                status = SETTLED
+                settle_time = t
+                n_well = well_index(p, s[2])
+            continue
+        if need_rhs:
+            rhs(p, s, mode, k[0])
+            need_rhs = False
+        h = min(h, t_end - t)
+        # --- one Dormand-Prince step from s with step h (stages 2..7) ---
+        for j in range(6):
+            tmp[j] = s[j] + h * A21 * k[0, j]
+        rhs(p, tmp, mode, k[1])
+        for j in range(6):
+            tmp[j] = s[j] + h * (A31 * k[0, j] + A32 * k[1, j])
+        rhs(p, tmp, mode, k[2])
+        for j in range(6):
+            tmp[j] = s[j] + h * (A41 * k[0, j] + A42 * k[1, j] + A43 * k[2, j])
+        rhs(p, tmp, mode, k[3])
+        for j in range(6):
+            tmp[j] = s[j] + h * (A51 * k[0, j] + A52 * k[1, j] + A53 * k[2, j] + A54 * k[3, j])
+        rhs(p, tmp, mode, k[4])
+        for j in range(6):
+            tmp[j] = s[j] + h * (A61 * k[0, j] + A62 * k[1, j] + A63 * k[2, j] + A64 * k[3, j]
+                                 + A65 * k[4, j])
+        rhs(p, tmp, mode, k[5])
+        for j in range(6):
+            s_new[j] = s[j] + h * (B1 * k[0, j] + B3 * k[2, j] + B4 * k[3, j] + B5 * k[4, j]
+                                   + B6 * k[5, j])
+        rhs(p, s_new, mode, k[6])
+        err = 0.0
+        for j in range(6):
+            e = h * (E1 * k[0, j] + E3 * k[2, j] + E4 * k[3, j] + E5 * k[4, j] + E6 * k[5, j]
+                     + E7 * k[6, j])
+            tol = scale[j] + rtol * max(abs(s[j]), abs(s_new[j]))
+            err += (e / tol) ** 2
+        err = math.sqrt(err / 6.0)
+        if not (err <= 1.0):  # also catches NaN
+            if not (err == err) or h < H_MIN:
+                status = NONFINITE
+                break
+            h *= max(0.2, 0.9 * err ** -0.2)
+            continue
+        steps += 1
+        # --- accepted: continuous extension, then look for contact events inside the step ---
+        for j in range(6):
+            d = s_new[j] - s[j]
+            rc[0, j] = s[j]
+            rc[1, j] = d
+            rc[2, j] = h * k[0, j] - d
+            rc[3, j] = d - h * k[6, j] - rc[2, j]
+            rc[4, j] = h * (D1 * k[0, j] + D3 * k[2, j] + D4 * k[3, j] + D5 * k[4, j]
+                            + D6 * k[5, j] + D7 * k[6, j])
+        theta_event = 2.0
+        event_mask = 0
+        c1 = math.cos(s_new[2])
+        s1 = math.sin(s_new[2])
+        c0 = math.cos(s[2])
+        s0 = math.sin(s[2])
+        for i in range(4):
+            px = SX[i] * p[P_RD]
+            py = SY[i] * p[P_RT]
+            height1 = s_new[1] + px * s1 + py * c1
+            in_contact = (mode >> i) & 1
+            level = EVENT_BAND if in_contact else -EVENT_BAND
+            crossed = height1 > level if in_contact else height1 < level
+            if crossed:
+                height0 = s[1] + px * s0 + py * c0
+                g0 = height0 - level
+                if (g0 > 0.0) == (height1 - level > 0.0):
+                    theta = 0.0  # already across at the start (cannot happen beyond rounding)
+                else:
+                    theta = locate_crossing(p, rc, h, i, level, g0, height1 - level)
+                if theta < theta_event - 1e-12:
+                    theta_event = theta
+                    event_mask = 1 << i
+                elif abs(theta - theta_event) <= 1e-12:
+                    event_mask |= 1 << i
+        if event_mask != 0:
+            dense_state(rc, theta_event, s_new)
+            t_new = t + theta_event * h
+        else:
+            t_new = t + h
+        if record:
+            while next_sample <= t_new and n_samples < samples.shape[0]:
+                dense_state(rc, (next_sample - t) / h, tmp)
+                n_samples = record_sample(samples, n_samples, next_sample, tmp[0], tmp[1],
+                                          tmp[2], tmp[3], tmp[4], tmp[5])
+                next_sample += sample_dt
+        t = t_new
+        s[:] = s_new
+        if not is_finite_state(s[0], s[1], s[2], s[3], s[4], s[5]):
+            status = NONFINITE
+            break
+        if event_mask != 0:
+            new_mode = mode ^ event_mask
+            n_events = record_events(events, n_events, t, mode, new_mode,
+                                     s[0], s[1], s[2], s[3], s[4], s[5])
+            mode = new_mode
+            need_rhs = True
+        else:
+            for j in range(6):
+                k[0, j] = k[6, j]  # first same as last
+        if status != SETTLED and total_energy(p, s) < e_crit:
+            status = SETTLED
+            settle_time = t
+            n_well = well_index(p, s[2])
+        h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
+    if record and n_samples > 0 and samples[n_samples - 1, 0] < t:
+        n_samples = record_sample(samples, n_samples, t, s[0], s[1], s[2], s[3], s[4], s[5])
+    final[:] = s
+    return t, steps, status, settle_time, n_well, n_samples, n_events
+

@@ -1,0 +1,270 @@
+"""Fixed-step integrators: symplectic Euler (the paper's), Stormer-Verlet and classical RK4.
+
+One driver, :func:`integrate_fixed`, runs any of them and does the bookkeeping shared by every
+method (settling, samples at a display rate, contact onsets and lift-offs, non-finite states).
+The contact set of a fixed-step method is whatever corners penetrate at the point where the force
+is evaluated, so a contact onset falls somewhere inside a step: that is the error the adaptive
+methods avoid by landing on it.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..model import (
+    accelerations_auto,
+    contact_mask,
+    critical_energy,
+    jit,
+    total_energy,
+    well_index,
+    SX,
+    SY,
+)
+from ..params import P_C, P_G, P_INERTIA, P_K, P_MASS, P_RD, P_RT
+
+SYMPLECTIC_EULER, VERLET, RK4 = 0, 1, 2
+
+# Status codes of a run (shared by every method and the stores).
+SETTLED, UNSETTLED, NONFINITE = 0, 1, 2
+NO_WELL = -32768  # n_well before the run has settled
+
+# Event kinds recorded in the events buffer.
+ONSET, LIFTOFF = 1, -1
+EVENT_COLUMNS = 9  # t, corner, kind, x, y, phi, vx, vy, vphi
+SAMPLE_COLUMNS = 7  # t, x, y, phi, vx, vy, vphi
+
+
+@jit
+def step_symplectic_euler(p, h, x, y, phi, vx, vy, vphi):
+    """The paper's scheme: velocities from the force at the old state, positions from the new
+    velocities."""
+    ax, ay, aphi = accelerations_auto(p, x, y, phi, vx, vy, vphi)
+    vx += h * ax
+    vy += h * ay
+    vphi += h * aphi
+    return x + h * vx, y + h * vy, phi + h * vphi, vx, vy, vphi
+
+
+@jit
+def _split_accelerations(p, y, phi):
+    """The force split as a(q, v) = a0(q) - D(q) v, with D the mass-weighted damping matrix.
+
+    Returns a0 (3 floats) and the 6 distinct entries of the symmetric C = c sum J_i^T J_i over
+    penetrating corners, J_i = [[1, 0, -d_yi], [0, 1, d_xi]] (before dividing by the masses)."""
+    c = math.cos(phi)
+    s = math.sin(phi)
+    m = p[P_MASS]
+    k = p[P_K]
+    fy = -m * p[P_G]
+    moment = 0.0
+    n = 0.0
+    sx = 0.0  # sum of d_x over contacts
+    sy = 0.0  # sum of d_y
+    srr = 0.0  # sum of d_x^2 + d_y^2
+    for i in range(4):
+        px = SX[i] * p[P_RD]
+        py = SY[i] * p[P_RT]
+        dx = px * c - py * s
+        dy = px * s + py * c
+        yi = y + dy
+        if yi < 0.0:
+            fyi = -k * yi
+            fy += fyi
+            moment += dx * fyi
+            n += 1.0
+            sx += dx
+            sy += dy
+            srr += dx * dx + dy * dy
+    return fy / m, moment / p[P_INERTIA], n, sx, sy, srr
+
+
+
+@jit
+def _solve_damped_velocity(p, h2, ay0, aphi0, n, sx, sy, srr, bx, by, bphi):
+    """Solve (M + h2 C) v = M b + h2 M a0 for v, where C = c [[n, 0, -sy], [0, n, sx],
+    [-sy, sx, srr]] is the damping matrix of the penetrating corners (linear in v, so the
+    implicit half steps of Stormer-Verlet reduce to one 3x3 solve)."""
+    m = p[P_MASS]
+    inertia = p[P_INERTIA]
+    cc = p[P_C] * h2
+    # matrix A = M + h2 C
+    a11 = m + cc * n
+    a22 = m + cc * n
+    a33 = inertia + cc * srr
+    a13 = -cc * sy
+    a23 = cc * sx
+    r1 = m * bx
+    r2 = m * (by + h2 * ay0)
+    r3 = inertia * (bphi + h2 * aphi0)
+    # A = [[a11, 0, a13], [0, a22, a23], [a13, a23, a33]]: eliminate by Schur complement.
+    s33 = a33 - a13 * a13 / a11 - a23 * a23 / a22
+    vphi = (r3 - a13 * r1 / a11 - a23 * r2 / a22) / s33
+    vx = (r1 - a13 * vphi) / a11
+    vy = (r2 - a23 * vphi) / a22
+    return vx, vy, vphi
+
+
+@jit
+def step_verlet(p, h, x, y, phi, vx, vy, vphi):
+    """Stormer-Verlet (Lobatto IIIA-IIIB) for q'' = a0(q) - D(q) q'. Both velocity half steps
+    are implicit in the damping term, which is linear in the velocity, so each is one exact 3x3
+    solve: second order and symplectic when c = 0."""
+    h2 = 0.5 * h
+    ay0, aphi0, n, sx, sy, srr = _split_accelerations(p, y, phi)
+    vx, vy, vphi = _solve_damped_velocity(p, h2, ay0, aphi0, n, sx, sy, srr, vx, vy, vphi)
+    x += h * vx
+    y += h * vy
+    phi += h * vphi
+    ay0, aphi0, n, sx, sy, srr = _split_accelerations(p, y, phi)
+    # v_{n+1} = v_half + h2 (a0(q1) - D(q1) v_{n+1})
+    vx, vy, vphi = _solve_damped_velocity(p, h2, ay0, aphi0, n, sx, sy, srr, vx, vy, vphi)
+    return x, y, phi, vx, vy, vphi
+
+
+@jit
+def step_rk4(p, h, x, y, phi, vx, vy, vphi):
+    a1x, a1y, a1p = accelerations_auto(p, x, y, phi, vx, vy, vphi)
+    h2 = 0.5 * h
+    x2, y2, p2 = x + h2 * vx, y + h2 * vy, phi + h2 * vphi
+    vx2, vy2, vp2 = vx + h2 * a1x, vy + h2 * a1y, vphi + h2 * a1p
+    a2x, a2y, a2p = accelerations_auto(p, x2, y2, p2, vx2, vy2, vp2)
+    x3, y3, p3 = x + h2 * vx2, y + h2 * vy2, phi + h2 * vp2
+    vx3, vy3, vp3 = vx + h2 * a2x, vy + h2 * a2y, vphi + h2 * a2p
+    a3x, a3y, a3p = accelerations_auto(p, x3, y3, p3, vx3, vy3, vp3)
+    x4, y4, p4 = x + h * vx3, y + h * vy3, phi + h * vp3
+    vx4, vy4, vp4 = vx + h * a3x, vy + h * a3y, vphi + h * a3p
+    a4x, a4y, a4p = accelerations_auto(p, x4, y4, p4, vx4, vy4, vp4)
+    h6 = h / 6.0
+    return (x + h6 * (vx + 2.0 * vx2 + 2.0 * vx3 + vx4),
+            y + h6 * (vy + 2.0 * vy2 + 2.0 * vy3 + vy4),
+            phi + h6 * (vphi + 2.0 * vp2 + 2.0 * vp3 + vp4),
+            vx + h6 * (a1x + 2.0 * a2x + 2.0 * a3x + a4x),
+            vy + h6 * (a1y + 2.0 * a2y + 2.0 * a3y + a4y),
+            vphi + h6 * (a1p + 2.0 * a2p + 2.0 * a3p + a4p))
+
+
+@jit
+def fixed_step(method, p, h, x, y, phi, vx, vy, vphi):
+    if method == SYMPLECTIC_EULER:
+        return step_symplectic_euler(p, h, x, y, phi, vx, vy, vphi)
+    if method == VERLET:
+        return step_verlet(p, h, x, y, phi, vx, vy, vphi)
+    return step_rk4(p, h, x, y, phi, vx, vy, vphi)
+
+
+@jit
+def is_finite_state(x, y, phi, vx, vy, vphi):
+    # NaN fails every comparison; 1e30 catches a blow-up before it overflows to inf.
+    big = 1e30
+    return (abs(x) < big and abs(y) < big and abs(phi) < big and abs(vx) < big
+            and abs(vy) < big and abs(vphi) < big)
+
+
+@jit
+def record_events(events, n_events, t, old_mask, new_mask, x, y, phi, vx, vy, vphi):
+    """Append one row per corner whose contact state changed between old_mask and new_mask."""
+    changed = old_mask ^ new_mask
+    if changed == 0:
+        return n_events
+    for i in range(4):
+        if changed & (1 << i) and n_events < events.shape[0]:
+            row = events[n_events]
+            row[0] = t
+            row[1] = i
+            row[2] = ONSET if new_mask & (1 << i) else LIFTOFF
+            row[3] = x
+            row[4] = y
+            row[5] = phi
+            row[6] = vx
+            row[7] = vy
+            row[8] = vphi
+            n_events += 1
+    return n_events
+
+
+@jit
+def record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi):
+    if n_samples < samples.shape[0]:
+        row = samples[n_samples]
+        row[0] = t
+        row[1] = x
+        row[2] = y
+        row[3] = phi
+        row[4] = vx
+        row[5] = vy
+        row[6] = vphi
+        n_samples += 1
+    return n_samples
+
+
+@jit
+def integrate_fixed(method, p, state, dt, t_end, stop_on_settle, sample_dt, samples, events,
+                    final):
+    """Integrate from ``state`` with a fixed step ``dt`` until ``t_end`` (or until settled, if
+    ``stop_on_settle``). Writes the final state into ``final``; fills ``samples`` (one row every
+    ``sample_dt`` of simulated time, first and last state included) and ``events`` (contact
+    onsets and lift-offs) while they have room.
+
+    Returns (t, steps, status, settle_time, n_well, n_samples, n_events)."""
+    x, y, phi, vx, vy, vphi = state[0], state[1], state[2], state[3], state[4], state[5]
+    e_crit = critical_energy(p)
+    n_total = int(math.ceil(t_end / dt - 1e-9))
+    record = samples.shape[0] > 0 and sample_dt > 0.0
+    track_events = events.shape[0] > 0
+    n_samples = 0
+    n_events = 0
+    if record:
+        n_samples = record_sample(samples, 0, 0.0, x, y, phi, vx, vy, vphi)
+    next_sample = sample_dt
+    mask = contact_mask(p, y, phi) if track_events else 0
+    if track_events and mask != 0:
+        n_events = record_events(events, 0, 0.0, 0, mask, x, y, phi, vx, vy, vphi)
+    status = UNSETTLED
+    settle_time = math.nan
+    n_well = NO_WELL
+    cur = state.copy()
+    steps = 0
+    t = 0.0
+    if total_energy(p, state) < e_crit:
+        status = SETTLED
+        settle_time = 0.0
+        n_well = well_index(p, phi)
+    if not (status == SETTLED and stop_on_settle):
+        for steps in range(1, n_total + 1):
+            x, y, phi, vx, vy, vphi = fixed_step(method, p, dt, x, y, phi, vx, vy, vphi)
+            t = steps * dt
+            if not is_finite_state(x, y, phi, vx, vy, vphi):
+                status = NONFINITE
+                break
+            if track_events:
+                new_mask = contact_mask(p, y, phi)
+                n_events = record_events(events, n_events, t, mask, new_mask,
+                                         x, y, phi, vx, vy, vphi)
+                mask = new_mask
+            if record and t >= next_sample - 0.5 * dt:
+                n_samples = record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi)
+                next_sample += sample_dt
+            if status != SETTLED:
+                cur[0] = x
+                cur[1] = y
+                cur[2] = phi
+                cur[3] = vx
+                cur[4] = vy
+                cur[5] = vphi
+                if total_energy(p, cur) < e_crit:
+                    status = SETTLED
+                    settle_time = t
+                    n_well = well_index(p, phi)
+                    if stop_on_settle:
+                        break
+    if record and n_samples > 0 and samples[n_samples - 1, 0] < t:
+        n_samples = record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi)
+    final[0] = x
+    final[1] = y
+    final[2] = phi
+    final[3] = vx
+    final[4] = vy
+    final[5] = vphi
+    return t, steps, status, settle_time, n_well, n_samples, n_events
+

@@ -1,0 +1,124 @@
+"""The registry of integration methods: one entry per method, used by ``simulate``, ``basin``,
+``accuracy`` and ``methods``.
+
+Each fixed-step method declares its stable step for the current parameters, predicted from the
+stiffest contact mode (a lying coin rocking on two corners, omega = sqrt(2 k r_d^2 / I), with its
+damping ratio): the largest h for which the method's one-step map of that damped oscillator has
+spectral radius <= 1.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model import stiffest_frequency
+from ..params import ParameterError, Scene, param_array
+from .fixed import RK4, SYMPLECTIC_EULER, VERLET
+from .kernels import DOPRI5, EVENT
+
+
+def _map_symplectic_euler(h: float, omega: float, zeta: float) -> np.ndarray:
+    # on (x, v): v' = v + h(-w^2 x - 2 z w v), x' = x + h v'
+    a = 1.0 - 2.0 * zeta * omega * h
+    b = -h * omega**2
+    return np.array([[1.0 + h * b, h * a], [b, a]])
+
+
+def _map_verlet(h: float, omega: float, zeta: float) -> np.ndarray:
+    # half steps implicit in the damping, as in step_verlet
+    cols = []
+    for x, v in ((1.0, 0.0), (0.0, 1.0)):
+        v = (v - 0.5 * h * omega**2 * x) / (1.0 + zeta * omega * h)
+        x = x + h * v
+        v = (v - 0.5 * h * omega**2 * x) / (1.0 + zeta * omega * h)
+        cols.append((x, v))
+    return np.array(cols).T
+
+
+def _map_rk4(h: float, omega: float, zeta: float) -> np.ndarray:
+    a = np.array([[0.0, 1.0], [-omega**2, -2.0 * zeta * omega]]) * h
+    term = np.eye(2)
+    total = np.eye(2)
+    for n in range(1, 5):
+        term = term @ a / n
+        total = total + term
+    return total
+
+
+def _stable_limit(step_map, omega: float, zeta: float) -> float:
+    """Largest h with spectral radius <= 1 (scan up to 10/omega, then bisect the first failure)."""
+    def stable(h: float) -> bool:
+        return max(abs(np.linalg.eigvals(step_map(h, omega, zeta)))) <= 1.0 + 1e-12
+
+    lo = 0.0
+    h = 0.01 / omega
+    while h < 10.0 / omega and stable(h):
+        lo, h = h, h * 1.05
+    hi = h
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
+    return lo
+
+
+@dataclass(frozen=True)
+class Method:
+    name: str
+    kernel_id: int
+    order: int
+    adaptive: bool
+    symplectic: bool
+    summary: str
+    step_map: object = None  # one-step map of the damped oscillator, fixed-step methods only
+
+    def stable_step(self, scene: Scene) -> float | None:
+        """Predicted largest stable step (s), or None for an adaptive method."""
+        if self.step_map is None:
+            return None
+        omega, zeta = stiffest_frequency(param_array(scene))
+        return _stable_limit(self.step_map, omega, zeta)
+
+
+METHODS: dict[str, Method] = {
+    m.name: m
+    for m in (
+        Method("symplectic_euler", SYMPLECTIC_EULER, 1, False, True,
+               "the paper's scheme: kick with the old force, then drift", _map_symplectic_euler),
+        Method("verlet", VERLET, 2, False, True,
+               "Stormer-Verlet; damping taken implicitly in both half kicks (3x3 solve)",
+               _map_verlet),
+        Method("rk4", RK4, 4, False, False, "classical Runge-Kutta, 4 force evaluations a step",
+               _map_rk4),
+        Method("dopri5", DOPRI5, 5, True, False,
+               "Dormand-Prince 5(4), error control, lands on every contact onset and lift-off"),
+        Method("event", EVENT, 5, True, False,
+               "dopri5 in contact, closed-form flight between contacts, certified early stop"),
+    )
+}
+
+
+def get(name: str) -> Method:
+    try:
+        return METHODS[name]
+    except KeyError:
+        raise ParameterError(f"unknown method '{name}'; available: {', '.join(METHODS)}") from None
+
+
+def check_step(scene: Scene, force: bool = False) -> Method:
+    """Return the scene's method; refuse a fixed step beyond its stable step unless forced."""
+    method = get(scene.integration.method)
+    limit = method.stable_step(scene)
+    if limit is not None and scene.integration.dt > limit and not force:
+        raise ParameterError(
+            f"--dt {scene.integration.dt:g} s is beyond the stable step of {method.name} for "
+            f"these parameters ({limit:.3g} s, from the rocking frequency "
+            f"{stiffest_frequency(param_array(scene))[0]:.4g} rad/s); use a smaller --dt "
+            "or --force")
+    if method.adaptive and scene.integration.dt >= scene.integration.t_end:
+        raise ParameterError("--dt (the initial step) must be smaller than --t-end")
+    return method
+
+
+__all__ = ["METHODS", "Method", "check_step", "get"]

@@ -1,0 +1,224 @@
+"""Parameters of one scene: the coin, the foundation, gravity, the initial state and the
+integration settings.
+
+Everything is a frozen dataclass so that a scene can be hashed, compared and stored verbatim in
+every output (Zarr attributes, Rerun recordings). Kernels never see these objects: they get the
+plain float64 arrays built by :func:`param_array` and :func:`state_array`, which is what lets
+numba cache its compiled code.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field, fields, replace
+
+import numpy as np
+
+# Layout of the parameter array handed to every kernel (see param_array).
+P_MASS, P_INERTIA, P_RD, P_RT, P_K, P_C, P_G, P_R = range(8)
+N_PARAMS = 8
+
+# Layout of the state vector.
+X, Y, PHI, VX, VY, VPHI = range(6)
+STATE_NAMES = ("x", "y", "phi", "vx", "vy", "vphi")
+
+
+class ParameterError(ValueError):
+    """A parameter value that makes no physical or numerical sense (reported in one line)."""
+
+
+@dataclass(frozen=True)
+class Coin:
+    """A rigid rectangle: diameter d, thickness t (m), mass m (kg), moment of inertia I (kg m^2)."""
+
+    diameter: float = 0.02
+    thickness: float = 0.002
+    mass: float = math.pi * 1e-3
+    inertia: float = 7.06e-8
+
+    @property
+    def r_d(self) -> float:
+        return self.diameter / 2
+
+    @property
+    def r_t(self) -> float:
+        return self.thickness / 2
+
+    @property
+    def r(self) -> float:
+        """Half diagonal: the distance from the centroid to a corner."""
+        return math.hypot(self.r_d, self.r_t)
+
+    @property
+    def phi_cr(self) -> float:
+        """Angle at which the diagonal is vertical (the coin balances on one corner)."""
+        return math.atan2(self.r_d, self.r_t)
+
+
+@dataclass(frozen=True)
+class Foundation:
+    """Winkler foundation with viscous damping acting on each penetrating corner."""
+
+    k: float = 1.0e4  # N/m
+    c: float = 0.5  # N s/m
+
+
+@dataclass(frozen=True)
+class InitialState:
+    """Initial position and velocity of the centroid. ``y0=None`` means y0 = r (as in the paper)."""
+
+    x0: float = 0.0
+    y0: float | None = None
+    phi0: float = 0.0
+    vx: float = 0.0
+    vy: float = 0.0
+    vphi: float = 0.0
+
+
+@dataclass(frozen=True)
+class Integration:
+    """How the equations of motion are integrated.
+
+    ``dt`` is the step of a fixed-step method (or the initial step of an adaptive one), ``rtol``
+    the relative tolerance of an adaptive one. ``stop_on_settle`` stops a run as soon as its
+    outcome is certain (total energy below E_crit); the paper's own runs always last ``t_end``.
+    """
+
+    method: str = "event"
+    dt: float = 1.0e-6
+    rtol: float = 1.0e-7
+    t_end: float = 2.0
+    stop_on_settle: bool = True
+
+
+@dataclass(frozen=True)
+class Scene:
+    coin: Coin = field(default_factory=Coin)
+    foundation: Foundation = field(default_factory=Foundation)
+    g: float = 9.81
+    initial: InitialState = field(default_factory=InitialState)
+    integration: Integration = field(default_factory=Integration)
+
+    # -- derived quantities -------------------------------------------------------------------
+    @property
+    def y0(self) -> float:
+        return self.coin.r if self.initial.y0 is None else self.initial.y0
+
+    @property
+    def e_crit(self) -> float:
+        """Total energy below which the count of quarter turns can no longer change (NOTES.md)."""
+        weight = self.coin.mass * self.g
+        return weight * (self.coin.r - weight / (2 * self.foundation.k))
+
+    # -- conversions ----------------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["initial"]["y0"] = self.y0
+        return d
+
+    def with_overrides(self, **overrides) -> Scene:
+        """Return a copy with flat overrides such as ``mass=...``, ``vy=...``, ``method=...``.
+
+        None values are ignored, so CLI options that were not given leave the preset alone.
+        """
+        groups = {"coin": self.coin, "foundation": self.foundation, "initial": self.initial,
+                  "integration": self.integration}
+        changes: dict[str, dict] = {name: {} for name in groups}
+        top: dict = {}
+        for key, value in overrides.items():
+            if value is None:
+                continue
+            if key == "g":
+                top["g"] = value
+                continue
+            for name, obj in groups.items():
+                if key in {f.name for f in fields(obj)}:
+                    changes[name][key] = value
+                    break
+            else:
+                raise ParameterError(f"unknown parameter '{key}'")
+        new = {name: replace(obj, **changes[name]) for name, obj in groups.items()}
+        return replace(self, **new, **top)
+
+
+FLAT_KEYS = {
+    "coin": [f.name for f in fields(Coin)],
+    "foundation": [f.name for f in fields(Foundation)],
+    "initial": [f.name for f in fields(InitialState)],
+    "integration": [f.name for f in fields(Integration)],
+}
+
+
+def scene_from_dict(data: dict) -> Scene:
+    """Build a scene from the nested dict form (as in a preset file or a store's attributes)."""
+    known = {"coin", "foundation", "initial", "integration", "g", "name", "description"}
+    unknown = set(data) - known
+    if unknown:
+        raise ParameterError(f"unknown section(s) {sorted(unknown)}; expected {sorted(known)}")
+    kwargs: dict = {}
+    for section, cls in (("coin", Coin), ("foundation", Foundation), ("initial", InitialState),
+                         ("integration", Integration)):
+        values = data.get(section, {})
+        if not isinstance(values, dict):
+            raise ParameterError(f"[{section}] must be a table of values")
+        allowed = {f.name for f in fields(cls)}
+        bad = set(values) - allowed
+        if bad:
+            raise ParameterError(f"unknown key(s) {sorted(bad)} in [{section}]; "
+                                 f"allowed: {', '.join(sorted(allowed))}")
+        kwargs[section] = cls(**values)
+    if "g" in data:
+        kwargs["g"] = data["g"]
+    return Scene(**kwargs)
+
+
+def _check_number(name: str, value, positive: bool = False, nonnegative: bool = False) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{name} must be a number, got {value!r}")
+    if not math.isfinite(value):
+        raise ParameterError(f"{name} must be finite, got {value}")
+    if positive and value <= 0:
+        raise ParameterError(f"{name} must be positive, got {value}")
+    if nonnegative and value < 0:
+        raise ParameterError(f"{name} must not be negative, got {value}")
+
+
+def validate(scene: Scene) -> Scene:
+    """Raise ParameterError with a one-line message if a value is unusable; return the scene."""
+    c, f, s, i = scene.coin, scene.foundation, scene.initial, scene.integration
+    for name in ("diameter", "thickness", "mass", "inertia"):
+        _check_number(name, getattr(c, name), positive=True)
+    _check_number("k", f.k, positive=True)
+    _check_number("c", f.c, nonnegative=True)
+    _check_number("g", scene.g, nonnegative=True)
+    for name in ("x0", "phi0", "vx", "vy", "vphi"):
+        _check_number(name, getattr(s, name))
+    if s.y0 is not None:
+        _check_number("y0", s.y0)
+    _check_number("dt", i.dt, positive=True)
+    _check_number("rtol", i.rtol, positive=True)
+    _check_number("t_end", i.t_end, positive=True)
+    if i.rtol >= 1e-1:
+        raise ParameterError(f"rtol must be below 0.1, got {i.rtol}")
+    if not isinstance(i.method, str):
+        raise ParameterError(f"method must be a name, got {i.method!r}")
+    return scene
+
+
+def param_array(scene: Scene) -> np.ndarray:
+    """The float64 parameter vector every kernel takes (layout: the P_* constants)."""
+    p = np.empty(N_PARAMS, dtype=np.float64)
+    p[P_MASS] = scene.coin.mass
+    p[P_INERTIA] = scene.coin.inertia
+    p[P_RD] = scene.coin.r_d
+    p[P_RT] = scene.coin.r_t
+    p[P_K] = scene.foundation.k
+    p[P_C] = scene.foundation.c
+    p[P_G] = scene.g
+    p[P_R] = scene.coin.r
+    return p
+
+
+def state_array(scene: Scene) -> np.ndarray:
+    s = scene.initial
+    return np.array([s.x0, scene.y0, s.phi0, s.vx, s.vy, s.vphi], dtype=np.float64)
