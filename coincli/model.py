@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
+from .jit import jit
 from .params import P_C, P_G, P_INERTIA, P_K, P_MASS, P_R, P_RD, P_RT
 
 # Body-frame signs of the corners: 0 = (+r_d, -r_t), 1 = (-r_d, -r_t), 2 = (-r_d, +r_t),
@@ -24,9 +24,6 @@ from .params import P_C, P_G, P_INERTIA, P_K, P_MASS, P_R, P_RD, P_RT
 SX = (1.0, -1.0, -1.0, 1.0)
 SY = (-1.0, -1.0, 1.0, 1.0)
 N_CORNERS = 4
-
-jit = nb.njit(cache=True, fastmath=False, nogil=True)
-
 
 @jit
 def corner_offset(p, phi, i):

@@ -30,7 +30,16 @@ import math
 
 import numpy as np
 
-from ..model import SX, SY, accelerations, contact_mask, critical_energy, jit, total_energy, well_index
+from ..model import (
+    SX,
+    SY,
+    accelerations,
+    contact_mask,
+    critical_energy,
+    jit,
+    total_energy,
+    well_index,
+)
 from ..params import P_G, P_R, P_RD, P_RT
 from .fixed import (
     NO_WELL,
@@ -46,6 +55,8 @@ EVENT_BAND = 1e-11  # m, hysteresis of contact switching (far below any penetrat
 LANDING_GAP = 1e-13  # m, how close conservative advancement brings a corner before touch-down
 ROOT_TIME_TOL = 1e-15  # s, bracket width at which an event time counts as located
 H_MIN = 1e-13  # s, a smaller step means the solution blew up
+MAX_TURN = 0.1  # rad, largest rotation in one step (a corner's dip lasts ~0.2 rad at most)
+SCAN_TURN = math.pi / 64.0  # rad, pieces in which a step is scanned for crossings
 
 # Dormand-Prince 5(4) tableau.
 A21 = 1.0 / 5.0
@@ -106,13 +117,13 @@ def dense_corner_height(p, rc, theta, i):
 
 
 @jit
-def locate_crossing(p, rc, h, i, level, g0, g1):
-    """Fraction theta of the step where corner i's height crosses ``level`` (g0, g1: height minus
-    level at the ends, of opposite signs). Illinois regula falsi on the continuous extension."""
-    lo, hi = 0.0, 1.0
+def locate_crossing(p, rc, h, i, level, lo, hi, g0, g1):
+    """Fraction theta of the step in [lo, hi] where corner i's height crosses ``level`` (g0, g1:
+    height minus level at lo and hi, of opposite signs). Illinois regula falsi on the
+    continuous extension."""
     f_lo, f_hi = g0, g1
     side = 0
-    theta = 1.0
+    theta = hi
     for _ in range(100):
         theta = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
         if not (lo < theta < hi):
@@ -134,6 +145,65 @@ def locate_crossing(p, rc, h, i, level, g0, g1):
             break
     # the upper end of the bracket is on the far side: the event has certainly happened there
     return hi
+
+
+@jit
+def _corner_heights_at(p, rc, theta, s_start, s_end, out):
+    if theta == 0.0:
+        y, phi = s_start[1], s_start[2]
+    elif theta == 1.0:
+        y, phi = s_end[1], s_end[2]
+    else:
+        one_minus = 1.0 - theta
+        y = rc[0, 1] + theta * (rc[1, 1] + one_minus * (rc[2, 1] + theta * (
+            rc[3, 1] + one_minus * rc[4, 1])))
+        phi = rc[0, 2] + theta * (rc[1, 2] + one_minus * (rc[2, 2] + theta * (
+            rc[3, 2] + one_minus * rc[4, 2])))
+    c = math.cos(phi)
+    sn = math.sin(phi)
+    for i in range(4):
+        out[i] = y + SX[i] * p[P_RD] * sn + SY[i] * p[P_RT] * c
+
+
+@jit
+def find_event(p, rc, h, mode, s_start, s_end):
+    """Earliest contact event inside the accepted step: (theta, mask of the corners that switch
+    there), or (2.0, 0) if none. A rotating coin can dip a corner below the surface and lift it
+    again within one long step, so the step is scanned in pieces of at most SCAN_TURN of rotation
+    (the centroid's parabola is concave and cannot hide a dip by itself)."""
+    turn = abs(s_end[2] - s_start[2])
+    pieces = 1 + min(64, int(turn / SCAN_TURN))
+    before = np.empty(4)
+    after = np.empty(4)
+    _corner_heights_at(p, rc, 0.0, s_start, s_end, before)
+    lo = 0.0
+    for piece in range(1, pieces + 1):
+        hi = 1.0 if piece == pieces else piece / pieces
+        _corner_heights_at(p, rc, hi, s_start, s_end, after)
+        theta_event = 2.0
+        event_mask = 0
+        for i in range(4):
+            in_contact = (mode >> i) & 1
+            level = EVENT_BAND if in_contact else -EVENT_BAND
+            crossed = after[i] > level if in_contact else after[i] < level
+            if not crossed:
+                continue
+            g0 = before[i] - level
+            g1 = after[i] - level
+            if (g0 > 0.0) == (g1 > 0.0):
+                theta = lo  # already across at the start (only by rounding)
+            else:
+                theta = locate_crossing(p, rc, h, i, level, lo, hi, g0, g1)
+            if theta < theta_event - 1e-12:
+                theta_event = theta
+                event_mask = 1 << i
+            elif abs(theta - theta_event) <= 1e-12:
+                event_mask |= 1 << i
+        if event_mask != 0:
+            return theta_event, event_mask
+        lo = hi
+        before[:] = after
+    return 2.0, 0
 
 
 @jit
@@ -257,6 +327,9 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
             rhs(p, s, mode, k[0])
             need_rhs = False
         h = min(h, t_end - t)
+        # A long step could carry a corner below the surface and back unseen: bound the turn.
+        if abs(s[5]) * h > MAX_TURN:
+            h = MAX_TURN / abs(s[5])
         # --- one Dormand-Prince step from s with step h (stages 2..7) ---
         for j in range(6):
             tmp[j] = s[j] + h * A21 * k[0, j]
@@ -301,31 +374,7 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
             rc[3, j] = d - h * k[6, j] - rc[2, j]
             rc[4, j] = h * (D1 * k[0, j] + D3 * k[2, j] + D4 * k[3, j] + D5 * k[4, j]
                             + D6 * k[5, j] + D7 * k[6, j])
-        theta_event = 2.0
-        event_mask = 0
-        c1 = math.cos(s_new[2])
-        s1 = math.sin(s_new[2])
-        c0 = math.cos(s[2])
-        s0 = math.sin(s[2])
-        for i in range(4):
-            px = SX[i] * p[P_RD]
-            py = SY[i] * p[P_RT]
-            height1 = s_new[1] + px * s1 + py * c1
-            in_contact = (mode >> i) & 1
-            level = EVENT_BAND if in_contact else -EVENT_BAND
-            crossed = height1 > level if in_contact else height1 < level
-            if crossed:
-                height0 = s[1] + px * s0 + py * c0
-                g0 = height0 - level
-                if (g0 > 0.0) == (height1 - level > 0.0):
-                    theta = 0.0  # already across at the start (cannot happen beyond rounding)
-                else:
-                    theta = locate_crossing(p, rc, h, i, level, g0, height1 - level)
-                if theta < theta_event - 1e-12:
-                    theta_event = theta
-                    event_mask = 1 << i
-                elif abs(theta - theta_event) <= 1e-12:
-                    event_mask |= 1 << i
+        theta_event, event_mask = find_event(p, rc, h, mode, s, s_new)
         if event_mask != 0:
             dense_state(rc, theta_event, s_new)
             t_new = t + theta_event * h

@@ -12,14 +12,14 @@ from __future__ import annotations
 import math
 
 from ..model import (
+    SX,
+    SY,
     accelerations_auto,
     contact_mask,
     critical_energy,
     jit,
     total_energy,
     well_index,
-    SX,
-    SY,
 )
 from ..params import P_C, P_G, P_INERTIA, P_K, P_MASS, P_RD, P_RT
 

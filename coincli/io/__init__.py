@@ -1,0 +1,1 @@
+"""Input/output: Rerun recordings, Zarr stores, charts. Heavy libraries load lazily."""
