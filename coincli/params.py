@@ -202,6 +202,8 @@ def validate(scene: Scene) -> Scene:
         raise ParameterError(f"rtol must be below 0.1, got {i.rtol}")
     if not isinstance(i.method, str):
         raise ParameterError(f"method must be a name, got {i.method!r}")
+    if not isinstance(i.stop_on_settle, bool):
+        raise ParameterError(f"stop_on_settle must be true or false, got {i.stop_on_settle!r}")
     return scene
 
 

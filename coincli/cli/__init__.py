@@ -16,8 +16,9 @@ app = typer.Typer(
 
 def _register() -> None:
     # Each module adds its command(s) to `app`; imported here so `coin --help` lists them all.
-    from . import presets_cmd, simulate_cmd, stability_cmd, methods_cmd  # noqa: F401
     import importlib
+
+    from . import methods_cmd, presets_cmd, simulate_cmd, stability_cmd  # noqa: F401
 
     for optional in ("basin_cmd", "accuracy_cmd", "bench_cmd"):
         try:

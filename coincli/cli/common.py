@@ -9,6 +9,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from ..params import ParameterError, Scene, validate
 from ..presets import load
@@ -22,29 +23,29 @@ INTEG = "Integration"
 
 PresetOpt = Annotated[str, typer.Option("--preset", "-p", help="Preset name (see `coin presets`) "
                                         "or path to a TOML file.", rich_help_panel=PHYS)]
-DiameterOpt = Annotated[float | None, typer.Option("--diameter", help="Coin diameter d [m].",
+DiameterOpt = Annotated[float | None, typer.Option("--diameter", help="Coin diameter d (m).",
                                                    rich_help_panel=PHYS)]
-ThicknessOpt = Annotated[float | None, typer.Option("--thickness", help="Coin thickness t [m].",
+ThicknessOpt = Annotated[float | None, typer.Option("--thickness", help="Coin thickness t (m).",
                                                     rich_help_panel=PHYS)]
-MassOpt = Annotated[float | None, typer.Option("--mass", help="Coin mass m [kg].",
+MassOpt = Annotated[float | None, typer.Option("--mass", help="Coin mass m (kg).",
                                                rich_help_panel=PHYS)]
 InertiaOpt = Annotated[float | None, typer.Option("--inertia", help="Moment of inertia I "
                                                   "[kg m^2].", rich_help_panel=PHYS)]
 KOpt = Annotated[float | None, typer.Option("--k", help="Foundation stiffness per corner "
                                             "[N/m].", rich_help_panel=PHYS)]
-COpt = Annotated[float | None, typer.Option("--c", help="Viscous damping per corner [N s/m].",
+COpt = Annotated[float | None, typer.Option("--c", help="Viscous damping per corner (N s/m).",
                                             rich_help_panel=PHYS)]
-GOpt = Annotated[float | None, typer.Option("--g", help="Gravity [m/s^2].", rich_help_panel=PHYS)]
+GOpt = Annotated[float | None, typer.Option("--g", help="Gravity (m/s^2).", rich_help_panel=PHYS)]
 
-X0Opt = Annotated[float | None, typer.Option("--x0", help="Initial x [m].", rich_help_panel=INIT)]
-Y0Opt = Annotated[float | None, typer.Option("--y0", help="Initial height of the centroid [m] "
+X0Opt = Annotated[float | None, typer.Option("--x0", help="Initial x (m).", rich_help_panel=INIT)]
+Y0Opt = Annotated[float | None, typer.Option("--y0", help="Initial height of the centroid (m) "
                                              "(default r, as in the paper).",
                                              rich_help_panel=INIT)]
-Phi0Opt = Annotated[float | None, typer.Option("--phi0", help="Initial angle [rad].",
+Phi0Opt = Annotated[float | None, typer.Option("--phi0", help="Initial angle (rad).",
                                                rich_help_panel=INIT)]
-VxOpt = Annotated[float | None, typer.Option("--vx", help="Initial horizontal velocity [m/s].",
+VxOpt = Annotated[float | None, typer.Option("--vx", help="Initial horizontal velocity (m/s).",
                                              rich_help_panel=INIT)]
-VyOpt = Annotated[float | None, typer.Option("--vy", help="Initial vertical velocity [m/s].",
+VyOpt = Annotated[float | None, typer.Option("--vy", help="Initial vertical velocity (m/s).",
                                              rich_help_panel=INIT)]
 VphiOpt = Annotated[float | None, typer.Option("--vphi", help="Initial angular velocity "
                                                "[rad/s].", rich_help_panel=INIT)]
@@ -52,11 +53,11 @@ VphiOpt = Annotated[float | None, typer.Option("--vphi", help="Initial angular v
 MethodOpt = Annotated[str | None, typer.Option("--method", help="Integration method (see "
                                                "`coin methods`).", rich_help_panel=INTEG)]
 DtOpt = Annotated[float | None, typer.Option("--dt", help="Step of a fixed-step method, first "
-                                             "step of an adaptive one [s].",
+                                             "step of an adaptive one (s).",
                                              rich_help_panel=INTEG)]
 RtolOpt = Annotated[float | None, typer.Option("--rtol", help="Relative tolerance of an "
                                                "adaptive method.", rich_help_panel=INTEG)]
-TEndOpt = Annotated[float | None, typer.Option("--t-end", help="End time [s].",
+TEndOpt = Annotated[float | None, typer.Option("--t-end", help="End time (s).",
                                                rich_help_panel=INTEG)]
 StopOpt = Annotated[bool | None, typer.Option("--stop-on-settle/--full", help="Stop as soon as "
                                               "the outcome is certain (E < E_crit), or always "
@@ -70,7 +71,7 @@ JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on 
 
 def fail(message: str) -> typer.Exit:
     """Print a one-line error and return the exit to raise (code 2, like a usage error)."""
-    err_console.print(f"[bold red]error:[/] {message}", highlight=False, soft_wrap=True)
+    err_console.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
     return typer.Exit(code=2)
 
 

@@ -9,8 +9,19 @@ from ..model import stiffest_frequency
 from ..params import param_array
 from . import app
 from .common import (
-    COpt, DiameterOpt, GOpt, InertiaOpt, JsonOpt, KOpt, MassOpt, PresetOpt, ThicknessOpt,
-    build_scene, console, print_json, user_errors,
+    COpt,
+    DiameterOpt,
+    GOpt,
+    InertiaOpt,
+    JsonOpt,
+    KOpt,
+    MassOpt,
+    PresetOpt,
+    ThicknessOpt,
+    build_scene,
+    console,
+    print_json,
+    user_errors,
 )
 
 

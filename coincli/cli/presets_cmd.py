@@ -19,7 +19,7 @@ def presets_command(json_out: JsonOpt = False) -> None:
                              **p.scene.to_dict()} for p in found})
         return
     table = Table(title=f"Presets ({presets_mod.presets_dir()})", title_justify="left")
-    for col in ("name", "d [mm]", "t [mm]", "m [g]", "I [kg m^2]", "k [N/m]", "c [N s/m]",
+    for col in ("name", "d [mm]", "t [mm]", "m [g]", "I (kg m^2)", "k (N/m)", "c (N s/m)",
                 "method", "description"):
         table.add_column(col, overflow="fold")
     for p in found:

@@ -3,17 +3,64 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
+from typing import Annotated
 
+import typer
 from rich.table import Table
 
 from .. import __version__
+from ..io import rrd as rrd_io  # numpy only: rerun itself loads when a recording is written
 from ..simulate import Trajectory, simulate
 from . import app
 from .common import (
-    COpt, DiameterOpt, DtOpt, ForceOpt, GOpt, InertiaOpt, JsonOpt, KOpt, MassOpt, MethodOpt,
-    Phi0Opt, PresetOpt, RtolOpt, StopOpt, TEndOpt, ThicknessOpt, VphiOpt, VxOpt, VyOpt, X0Opt,
-    Y0Opt, build_scene, console, print_json, user_errors,
+    COpt,
+    DiameterOpt,
+    DtOpt,
+    ForceOpt,
+    GOpt,
+    InertiaOpt,
+    JsonOpt,
+    KOpt,
+    MassOpt,
+    MethodOpt,
+    Phi0Opt,
+    PresetOpt,
+    RtolOpt,
+    StopOpt,
+    TEndOpt,
+    ThicknessOpt,
+    VphiOpt,
+    VxOpt,
+    VyOpt,
+    X0Opt,
+    Y0Opt,
+    build_scene,
+    console,
+    fail,
+    print_json,
+    user_errors,
 )
+
+REC = "Recording (Rerun)"
+MAX_FRAMES = 1_000_000
+
+RrdOpt = Annotated[Path, typer.Option("--rrd", metavar="PATH", help="Write the recording of the "
+                                      "throw to this .rrd file (open it with `rerun PATH`).",
+                                      rich_help_panel=REC)]
+NoRrdOpt = Annotated[bool, typer.Option("--no-rrd", help="Write no .rrd file (with neither "
+                                        "--spawn nor --connect: print the numbers only).",
+                                        rich_help_panel=REC)]
+SpawnOpt = Annotated[bool, typer.Option("--spawn", help="Open a Rerun viewer and stream the "
+                                        "recording to it.", rich_help_panel=REC)]
+ConnectOpt = Annotated[str | None, typer.Option("--connect", metavar="URL", help="Stream the "
+                                                "recording to a running viewer, e.g. "
+                                                "rerun+http://127.0.0.1:9876/proxy.",
+                                                rich_help_panel=REC)]
+LogEveryOpt = Annotated[float, typer.Option("--log-every", metavar="SECONDS", help="Simulated "
+                                            "time between frames of the recording (contact "
+                                            "onsets and lift-offs are added at their exact "
+                                            "times).", rich_help_panel=REC)]
 
 
 @app.command("simulate")
@@ -25,24 +72,72 @@ def simulate_command(
     inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, g: GOpt = None,
     method: MethodOpt = None, dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
     stop_on_settle: StopOpt = None, force: ForceOpt = False, json_out: JsonOpt = False,
+    rrd: RrdOpt = Path("coin.rrd"), no_rrd: NoRrdOpt = False, spawn: SpawnOpt = False,
+    connect: ConnectOpt = None, log_every: LogEveryOpt = rrd_io.DEFAULT_LOG_EVERY,
 ) -> None:
     """Run one throw and print its outcome: n quarter turns, lying or standing, when it settled.
+    The throw is also recorded for the Rerun viewer (coin.rrd unless --rrd/--no-rrd).
 
     Example (the standing throw of the paper's fig. 2): coin simulate --vy 1.197 --vphi 3.508
     """
+    rrd_path = None if no_rrd else rrd
+    recording = rrd_path is not None or spawn or connect is not None
     with user_errors():
         scene = build_scene(preset, x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi,
                             diameter=diameter, thickness=thickness, mass=mass, inertia=inertia,
                             k=k, c=c, g=g, method=method, dt=dt, rtol=rtol, t_end=t_end,
                             stop_on_settle=stop_on_settle)
-        trajectory = simulate(scene, force=force)
+        if recording:
+            _check_recording_options(scene, rrd_path, connect, log_every)
+        trajectory = simulate(scene, sample_dt=log_every if recording else None,
+                              record_events=recording, force=force)
+    info = None
+    if recording:
+        with user_errors():
+            try:
+                info = rrd_io.write_recording(trajectory, rrd=rrd_path, spawn=spawn,
+                                              connect=connect, log_every=log_every)
+            except (RuntimeError, ValueError, OSError) as exc:
+                raise fail(f"could not write the recording: {exc}") from None
     if json_out:
         print_json({**trajectory.summary(), "version": __version__,
-                    "parameters": scene.to_dict()})
+                    "parameters": scene.to_dict(),
+                    "rrd": str(info.rrd) if info is not None and info.rrd is not None else None})
     else:
         print_summary(trajectory)
+        if info is not None:
+            print_recording(info)
     if trajectory.status == "non-finite":
         raise SystemExit(1)
+
+
+def _check_recording_options(scene, rrd_path, connect, log_every) -> None:
+    """Fail in one line, before the run, on an unusable path, URL or display rate."""
+    if isinstance(log_every, bool) or not math.isfinite(log_every) or log_every <= 0:
+        raise fail(f"--log-every must be a positive number of seconds, got {log_every}")
+    frames = scene.integration.t_end / log_every
+    if frames > MAX_FRAMES:
+        raise fail(f"--log-every {log_every:g} s makes {frames:.3g} frames for t_end = "
+                   f"{scene.integration.t_end:g} s (at most {MAX_FRAMES:,}); raise it")
+    if rrd_path is not None:
+        rrd_io.check_rrd_path(rrd_path)
+    if connect is not None:
+        try:
+            rrd_io.probe_viewer(connect)
+        except (ValueError, ConnectionError) as exc:
+            raise fail(str(exc)) from None
+
+
+def print_recording(info) -> None:
+    where = []
+    if info.rrd is not None:
+        where.append(f"{info.rrd}  (open with: rerun {info.rrd})")
+    if info.spawn:
+        where.append("streamed to a new viewer")
+    if info.connect is not None:
+        where.append(f"streamed to {info.connect}")
+    console.print(f"[bold]recording[/]    {'; '.join(where)}: {info.frames:,} frames, "
+                  f"{info.events} contact events", highlight=False, soft_wrap=True)
 
 
 def print_summary(tr: Trajectory) -> None:

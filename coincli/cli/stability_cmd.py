@@ -10,8 +10,19 @@ from .. import __version__
 from ..stability import analyse
 from . import app
 from .common import (
-    COpt, DiameterOpt, GOpt, InertiaOpt, JsonOpt, KOpt, MassOpt, PresetOpt, ThicknessOpt,
-    build_scene, console, print_json, user_errors,
+    COpt,
+    DiameterOpt,
+    GOpt,
+    InertiaOpt,
+    JsonOpt,
+    KOpt,
+    MassOpt,
+    PresetOpt,
+    ThicknessOpt,
+    build_scene,
+    console,
+    print_json,
+    user_errors,
 )
 
 

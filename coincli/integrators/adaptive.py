@@ -11,7 +11,7 @@ method keeps its order, and no step is rejected because of one.
 
 Hysteresis of ``EVENT_BAND`` metres keeps a corner that sits exactly on the surface from
 toggling back and forth: a contact corner lifts off when it rises above +EVENT_BAND, a free corner
-touches down when it sinks below 0 (flight) or -EVENT_BAND (stepping).
+touches down when it sinks below 0.
 
 ``exact_flight`` (the ``event`` method) replaces integration while no corner is in contact by
 the closed-form parabola and uniform rotation, and finds the next touch-down on that path by
@@ -51,8 +51,9 @@ from .fixed import (
     record_sample,
 )
 
-EVENT_BAND = 1e-11  # m, hysteresis of contact switching (far below any penetration, ~1e-6 m)
-LANDING_GAP = 1e-13  # m, how close conservative advancement brings a corner before touch-down
+EVENT_BAND = 1e-13  # m, a contact corner lifts off above this height (hysteresis; the state
+# error it causes is proportional to it and ~1e-9 of the coin's scale; rounding of y is 1e-18 m)
+LANDING_GAP = 1e-14  # m, how close conservative advancement brings a corner before touch-down
 ROOT_TIME_TOL = 1e-15  # s, bracket width at which an event time counts as located
 H_MIN = 1e-13  # s, a smaller step means the solution blew up
 MAX_TURN = 0.1  # rad, largest rotation in one step (a corner's dip lasts ~0.2 rad at most)
@@ -184,7 +185,7 @@ def find_event(p, rc, h, mode, s_start, s_end):
         event_mask = 0
         for i in range(4):
             in_contact = (mode >> i) & 1
-            level = EVENT_BAND if in_contact else -EVENT_BAND
+            level = EVENT_BAND if in_contact else 0.0
             crossed = after[i] > level if in_contact else after[i] < level
             if not crossed:
                 continue
@@ -407,6 +408,11 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
         h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
     if record and n_samples > 0 and samples[n_samples - 1, 0] < t:
         n_samples = record_sample(samples, n_samples, t, s[0], s[1], s[2], s[3], s[4], s[5])
+    if status == SETTLED and not total_energy(p, s) < e_crit:
+        # energy cannot rise again physically: a void certificate (see integrate_fixed)
+        status = UNSETTLED
+        n_well = NO_WELL
+        settle_time = math.nan
     final[:] = s
     return t, steps, status, settle_time, n_well, n_samples, n_events
 

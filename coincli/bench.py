@@ -1,0 +1,100 @@
+"""The benchmark behind ``coin bench`` (a measurement, not a test): per-trajectory cost of each
+method's default setting and of the paper's setting, measured side by side on the same cells,
+and each one's label agreement with the converged reference on the same grid.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .accuracy import REFERENCE_A, REFERENCE_B, Grid, Setting, run_grid
+from .integrators import METHODS, SETTLED, run_batch
+from .params import Scene, param_array
+
+# Each method's default setting: for the fixed-step methods the paper's step, for the adaptive
+# ones the tolerance the work-precision chart (docs/accuracy.png) picked for the event method.
+METHOD_DEFAULTS = {
+    "symplectic_euler": Setting("symplectic_euler", 1e-6, 1e-7),
+    "verlet": Setting("verlet", 1e-6, 1e-7),
+    "rk4": Setting("rk4", 1e-6, 1e-7),
+    "dopri5": Setting("dopri5", 1e-6, 1e-7),
+    "event": Setting("event", 1e-6, 1e-7),
+}
+PAPER = "paper (symplectic Euler h=1e-6, full 2 s)"
+
+
+@dataclass
+class CostRow:
+    name: str
+    setting: Setting
+    full_run: bool
+    seconds_per_trajectory: float  # median over repeats, one thread
+    repeats: list[float]
+    label_agreement: float = float("nan")  # on the robust cells of the label grid
+
+
+def time_cells(scene: Scene, setting: Setting, states: np.ndarray, full_run: bool) -> float:
+    """Seconds per trajectory for one pass over ``states`` on this thread."""
+    run_scene = setting.apply(scene, stop_on_settle=not full_run, t_end=2.0)
+    integ = run_scene.integration
+    p = param_array(run_scene)
+    n = states.shape[0]
+    outs = (np.empty(n, np.int16), np.empty(n, np.uint8), np.empty(n, np.float32),
+            np.empty(n, np.int64))
+    kernel = METHODS[setting.method].kernel_id
+    run_batch(kernel, p, states[:1], integ.dt, integ.rtol, integ.dt * 4, True,
+              *(o[:1] for o in outs))  # load the compiled kernel first
+    start = time.thread_time()
+    run_batch(kernel, p, states, integ.dt, integ.rtol, integ.t_end, integ.stop_on_settle, *outs)
+    return (time.thread_time() - start) / n
+
+
+def side_by_side(scene: Scene, cost_grid: Grid, repeats: int = 3,
+                 progress=None) -> list[CostRow]:
+    """Cost of every default setting and of the paper's, interleaved round by round on the same
+    cells so that machine noise hits them alike; the median of the rounds is reported."""
+    say = progress or (lambda text: None)
+    states = cost_grid.states(scene)
+    entries = [(name, s, False) for name, s in METHOD_DEFAULTS.items()]
+    entries.append((PAPER, Setting("symplectic_euler", 1e-6, 1e-7), True))
+    times: dict[str, list[float]] = {name: [] for name, _, _ in entries}
+    for r in range(repeats):
+        for name, setting, full in entries:
+            say(f"cost round {r + 1}/{repeats}: {name}")
+            times[name].append(time_cells(scene, setting, states, full))
+    return [CostRow(name, setting, full, statistics.median(times[name]), times[name])
+            for name, setting, full in entries]
+
+
+@dataclass
+class LabelCheck:
+    robust: np.ndarray
+    reference: np.ndarray
+    agreement_ab: float
+
+
+def label_check(scene: Scene, grid: Grid, rows: list[CostRow], threads: int,
+                progress=None) -> LabelCheck:
+    say = progress or (lambda text: None)
+    say("label reference A (event rtol=1e-12)")
+    ref_a = run_grid(scene, Setting(*REFERENCE_A), grid, threads)
+    say("label reference B (rk4 h=2.5e-7)")
+    ref_b = run_grid(scene, Setting(*REFERENCE_B), grid, threads)
+    robust = ((ref_a.status == SETTLED) & (ref_b.status == SETTLED)
+              & (ref_a.quarter_turns == ref_b.quarter_turns))
+    for row in rows:
+        if row.full_run:
+            continue  # the same labels as the early-stopped run of the same setting
+        say(f"labels: {row.name}")
+        run = run_grid(scene, row.setting, grid, threads)
+        same = (run.quarter_turns == ref_a.quarter_turns) & (run.status == SETTLED)
+        row.label_agreement = float(same[robust].mean())
+    paper = next(r for r in rows if r.full_run)
+    paper.label_agreement = next(r.label_agreement for r in rows
+                                 if r.setting == paper.setting and not r.full_run)
+    return LabelCheck(robust, ref_a.quarter_turns,
+                      float(np.mean(ref_a.quarter_turns == ref_b.quarter_turns)))

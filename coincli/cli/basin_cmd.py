@@ -1,0 +1,429 @@
+"""`coin basin`: resumable chunked sweeps of the outcome n over two initial conditions, into a
+Zarr store; `coin basin render` draws one, `coin basin stats` summarises one.
+
+`coin basin OUT.zarr [OPTIONS]` is short for `coin basin sweep OUT.zarr [OPTIONS]`: the group
+routes any first argument that is not a subcommand name to `sweep`.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+import time
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.progress import (
+    BarColumn,
+    Progress,
+    ProgressColumn,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+from rich.text import Text
+from typer.core import TyperGroup
+
+from .. import __version__
+from ..integrators import check_step
+from ..params import ParameterError
+from ..sweep import (
+    DEFAULT_CHUNK,
+    DEFAULT_RANGES,
+    DEFAULT_RES,
+    certify_attrs,
+    make_grid,
+    make_spec,
+    method_attrs,
+    parse_pair,
+    parse_range,
+)
+from . import app
+from .common import (
+    INIT,
+    COpt,
+    DiameterOpt,
+    DtOpt,
+    ForceOpt,
+    GOpt,
+    InertiaOpt,
+    JsonOpt,
+    KOpt,
+    MassOpt,
+    MethodOpt,
+    PresetOpt,
+    RtolOpt,
+    StopOpt,
+    TEndOpt,
+    ThicknessOpt,
+    build_scene,
+    console,
+    err_console,
+    fail,
+    print_json,
+    user_errors,
+)
+
+SWEEP = "Sweep"
+RUN = "Where it runs"
+
+
+class BasinGroup(TyperGroup):
+    """`coin basin PATH ...` runs `sweep`; `coin basin render|stats|sweep ...` as usual."""
+
+    def parse_args(self, ctx, args):
+        if args and args[0] not in self.commands and args[0] not in ctx.help_option_names:
+            args = ["sweep", *args]
+        return super().parse_args(ctx, args)
+
+
+basin_app = typer.Typer(
+    cls=BasinGroup,
+    no_args_is_help=True,
+    help="Map the final number n of quarter turns over two initial conditions.\n\n"
+         "coin basin OUT.zarr [OPTIONS] runs (or resumes) a sweep: it is short for "
+         "`coin basin sweep OUT.zarr`, whose --help lists the options. Then "
+         "`coin basin render OUT.zarr -o basin.png` and `coin basin stats OUT.zarr`.",
+)
+app.add_typer(basin_app, name="basin")
+
+
+def _ic(name: str, help_text: str, default_note: str = ""):
+    return typer.Option(f"--{name}", help=help_text + " A LO:HI range sweeps it (cell centres "
+                        "linspace(LO, HI, n), both ends included)." + default_note,
+                        rich_help_panel=INIT)
+
+
+X0Range = Annotated[str | None, _ic("x0", "Initial x, m (default 0).")]
+Y0Range = Annotated[str | None, _ic("y0", "Initial height of the centroid, m (default r).")]
+Phi0Range = Annotated[str | None, _ic("phi0", "Initial angle, rad (default 0).")]
+VxRange = Annotated[str | None, _ic("vx", "Initial horizontal velocity, m/s (default 0).")]
+VyRange = Annotated[str, _ic("vy", "Initial vertical velocity, m/s.")]
+VphiRange = Annotated[str, _ic("vphi", "Initial angular velocity, rad/s.")]
+
+
+class RateColumn(ProgressColumn):
+    def __init__(self, unit: str):
+        super().__init__()
+        self.unit = unit
+
+    def render(self, task) -> Text:
+        speed = task.finished_speed or task.speed
+        return Text(f"{speed:,.0f} {self.unit}/s" if speed else f"- {self.unit}/s",
+                    style="progress.data.speed")
+
+
+class _Stop:
+    """First Ctrl-C: finish the tiles in flight, then stop. Second: stop at once."""
+
+    def __init__(self):
+        self.requested = False
+        self.previous = None
+
+    def __enter__(self):
+        self.previous = signal.getsignal(signal.SIGINT)
+        if self.previous is signal.SIG_IGN:  # e.g. a background job: leave it alone
+            self.previous = None
+            return self
+        try:
+            signal.signal(signal.SIGINT, self._handle)
+        except ValueError:  # not the main thread: Ctrl-C is not ours to handle
+            self.previous = None
+        return self
+
+    def _handle(self, signum, frame):
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+        err_console.print("[yellow]interrupt:[/] finishing the tiles in flight, then stopping "
+                          "(Ctrl-C again to stop at once; rerun the same command to resume)")
+
+    def __exit__(self, *exc):
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, self.previous)
+        return False
+
+
+@basin_app.command("sweep")
+def sweep_command(
+    path: Annotated[Path, typer.Argument(help="The Zarr store to create or resume "
+                                         "(a directory, e.g. out.zarr).",
+                                         metavar="STORE")],
+    x0: X0Range = None, y0: Y0Range = None, phi0: Phi0Range = None, vx: VxRange = None,
+    vy: VyRange = DEFAULT_RANGES["vy"], vphi: VphiRange = DEFAULT_RANGES["vphi"],
+    res: Annotated[str, typer.Option("--res", help="Cells per axis: N, or NxM (N along the "
+                                     "first swept axis, M along the second).",
+                                     rich_help_panel=SWEEP)] = DEFAULT_RES,
+    chunk: Annotated[str, typer.Option("--chunk", help="Tile size in cells, N or NxM: the "
+                                       "unit of work, of writing and of resuming.",
+                                       rich_help_panel=SWEEP)] = DEFAULT_CHUNK,
+    certify: Annotated[bool, typer.Option("--certify", help="Compute every cell again with "
+                                          "a tenfold smaller error bound (rtol/10; fixed step "
+                                          "dt/10^(1/order)) and flag the cells whose n changes "
+                                          "as uncertain.", rich_help_panel=SWEEP)] = False,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing store "
+                                            "instead of resuming it.",
+                                            rich_help_panel=SWEEP)] = False,
+    threads: Annotated[int | None, typer.Option("--threads", help="Threads computing tiles "
+                                                "on this machine (default: one per core).",
+                                                rich_help_panel=RUN)] = None,
+    workers: Annotated[int | None, typer.Option("--workers", help="Start a local Dask "
+                                                "cluster of N worker processes and run the "
+                                                "tiles on it.", rich_help_panel=RUN)] = None,
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Run the tiles as Dask "
+                                                  "tasks on the cluster at this address "
+                                                  "(tcp://HOST:PORT); every worker writes its "
+                                                  "tiles to PATH, so PATH must be the same "
+                                                  "shared directory on all of them.",
+                                                  rich_help_panel=RUN)] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.",
+                                        rich_help_panel=RUN)] = False,
+    preset: PresetOpt = "paper",
+    diameter: DiameterOpt = None, thickness: ThicknessOpt = None, mass: MassOpt = None,
+    inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, g: GOpt = None,
+    method: MethodOpt = None, dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
+    stop_on_settle: StopOpt = None, force: ForceOpt = False,
+) -> None:
+    """Sweep two initial conditions over a grid and store n for every cell (resumable).
+
+    Defaults: the paper's setting (x0 = 0, y0 = r, phi0 = 0, vx0 = 0) over vy0 in 0.05:2 m/s and vphi0 in -20:20 rad/s, 512 x 512 cells. Running the same command again resumes the sweep; Ctrl-C stops after the tiles in flight.
+
+    Example: coin basin out.zarr --vy 0:2 --vphi -20:20 --res 512
+    """  # noqa: E501
+    started = time.time()
+    with user_errors():
+        ranges, fixed = {}, {}
+        for name, text in (("x0", x0), ("y0", y0), ("phi0", phi0), ("vx", vx), ("vy", vy),
+                           ("vphi", vphi)):
+            if text is None:
+                continue
+            value = parse_range(name, text)
+            if isinstance(value, tuple):
+                ranges[name] = value
+            else:
+                fixed[name] = value
+        scene = build_scene(preset, **fixed, diameter=diameter, thickness=thickness, mass=mass,
+                            inertia=inertia, k=k, c=c, g=g, method=method, dt=dt, rtol=rtol,
+                            t_end=t_end, stop_on_settle=stop_on_settle)
+        grid = make_grid(scene, ranges, parse_pair("res", res, 2), parse_pair("chunk", chunk, 1))
+        for axis in grid.axes:  # every swept value must make a valid scene too
+            for value in (axis.lo, axis.hi):
+                build_scene(preset, **fixed, **{axis.name: value}, diameter=diameter,
+                            thickness=thickness, mass=mass, inertia=inertia, k=k, c=c, g=g)
+        chosen = check_step(scene, force=force)
+        if workers is not None and scheduler is not None:
+            raise ParameterError("give --workers (a local cluster) or --scheduler (an existing "
+                                 "one), not both")
+        for option, value in (("--threads", threads), ("--workers", workers)):
+            if value is not None and value < 1:
+                raise ParameterError(f"{option} must be at least 1, got {value}")
+        if threads is not None and (workers is not None or scheduler is not None):
+            raise ParameterError("--threads is for a local run; a Dask run uses one thread per "
+                                 "worker")
+        if scheduler is not None and "://" not in scheduler:
+            raise ParameterError(f"--scheduler '{scheduler}' is not an address like "
+                                 "tcp://HOST:PORT")
+        spec = make_spec(scene, chosen, grid, certify=certify)
+        parameters = scene.to_dict()
+        for name in grid.dims:
+            parameters["initial"][name] = None  # swept: see sweep.axes
+        attrs = {"coin_basin": {"format": 1, "command": "coin basin"}, "version": __version__,
+                 "parameters": parameters, "sweep": grid.to_dict(),
+                 "method": method_attrs(scene, chosen), "certify": certify_attrs(spec)}
+        from ..io import store
+
+        done = store.prepare(path, attrs, spec, overwrite=overwrite)
+    tiles = [t for t in grid.tiles() if not done[t]]
+    total_tiles = len(grid.tiles())
+    if not tiles:
+        console.print(f"{path}: all {total_tiles} tiles are done already "
+                      f"({grid.n_cells:,} cells). Next: coin basin render {path}; "
+                      f"coin basin stats {path}")
+        return
+    from ..distributed import run_dask, run_threads, usable_cores
+
+    if scheduler is not None or workers is not None:
+        mode, n_workers = "dask", workers or 0
+        # workers open the store by this path: make it absolute (same path on every machine)
+        runner = run_dask(str(path.resolve()), spec, tiles, scheduler=scheduler,
+                          workers=workers)
+    else:
+        mode, n_workers = "threads", threads or usable_cores()
+        runner = run_threads(str(path), spec, tiles, n_workers)
+    cells_todo = sum(grid.tile_cells(t) for t in tiles)
+    already = total_tiles - len(tiles)
+    progress = Progress(
+        TextColumn("[bold]basin[/]"), BarColumn(),
+        TextColumn("{task.fields[tiles]}/{task.fields[ntiles]} tiles"),
+        RateColumn("cells" if certify else "traj"), TimeElapsedColumn(),
+        TextColumn("ETA"), TimeRemainingColumn(),
+        console=err_console, disable=quiet, transient=False)
+    task = progress.add_task("sweep", total=cells_todo, tiles=already, ntiles=total_tiles)
+    computed = cells = 0
+    wall0 = time.perf_counter()
+    interrupted = False
+    try:
+        with _Stop() as stop, progress:
+            for _tile, tile_cells, _cpu in runner:
+                computed += 1
+                cells += tile_cells
+                progress.update(task, advance=tile_cells, tiles=already + computed)
+                if stop.requested:
+                    interrupted = True
+                    break
+            runner.close()  # cancel what is queued, wait for the tiles in flight
+    except KeyboardInterrupt:
+        interrupted = True
+        runner.close()
+    except OSError as exc:  # e.g. no scheduler at that address
+        raise fail(f"cannot run the sweep: {exc}") from None
+    wall = time.perf_counter() - wall0
+    done_now = store.read_done(path)
+    n_done = int(done_now.sum())
+    cells = sum(grid.tile_cells(t) for t in tiles if done_now[t])  # tiles in flight included
+    store.record_run(path, store.run_record(started, wall, n_done - already, cells, mode,
+                                            n_workers, interrupted))
+    rate = cells / wall if wall > 0 else math.nan
+    where = (f"{n_workers} threads" if mode == "threads"
+             else f"Dask ({scheduler or f'{n_workers} local workers'})")
+    console.print(f"{path}: {n_done}/{total_tiles} tiles done; this run computed "
+                  f"{n_done - already} tiles ({cells:,} cells) in {wall:.1f} s wall, "
+                  f"{rate:,.0f} {'cells' if certify else 'trajectories'}/s on {where}.")
+    if interrupted or n_done < total_tiles:
+        err_console.print(f"[yellow]stopped:[/] {total_tiles - n_done} tiles left; run the same "
+                          "command again to resume.")
+        raise typer.Exit(code=130)
+    console.print(f"Next: coin basin render {path} -o basin.png; coin basin stats {path}")
+
+
+@basin_app.command("render")
+def render_command(
+    path: Annotated[Path, typer.Argument(help="A basin store (complete or partial).",
+                                         metavar="STORE")],
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="PNG to write (default: "
+                                             "the store's name with .png).")] = None,
+    title: Annotated[str | None, typer.Option("--title", help="Title of the picture.")] = None,
+    dpi: Annotated[int, typer.Option("--dpi", help="Resolution of the PNG.")] = 150,
+    n_max: Annotated[int | None, typer.Option("--n-max", help="Colour scale up to |n| = N "
+                                              "(default: the largest |n| in the store); fix "
+                                              "it to keep a zoom's colours equal to the full "
+                                              "map's.")] = None,
+    rrd: Annotated[Path | None, typer.Option("--rrd", help="Also save the map to this Rerun "
+                                             "recording (SegmentationImage with an "
+                                             "AnnotationContext).")] = None,
+) -> None:
+    """Draw a basin store to a PNG in the paper's colours.
+
+    n < 0 (clockwise) yellow to red, n > 0 (counter-clockwise) green to blue, n = 0 white, standing (odd n) black; uncertain cells grey, unsettled purple, non-finite magenta, not computed hatched. Works on partial stores.
+    """  # noqa: E501
+    from ..io.basin_render import log_rerun, render_png
+    from ..io.store import open_basin
+
+    with user_errors():
+        if dpi < 10 or dpi > 1200:
+            raise ParameterError(f"--dpi must be between 10 and 1200, got {dpi}")
+        if rrd is not None and rrd.suffix != ".rrd":
+            raise ParameterError(f"--rrd {rrd}: the file name must end in .rrd")
+        basin = open_basin(path)
+        target = out if out is not None else path.with_suffix(".png")
+        if target.suffix.lower() != ".png":
+            raise ParameterError(f"-o {target}: the file name must end in .png")
+        if n_max is not None and n_max < 1:
+            raise ParameterError(f"--n-max must be at least 1, got {n_max}")
+        render_png(basin, target, title=title, dpi=dpi, n_max=n_max)
+        console.print(f"wrote {target}")
+        if rrd is not None:
+            log_rerun(basin, rrd)
+            console.print(f"wrote {rrd} (open with: rerun {rrd})")
+
+
+def _pct(x: float) -> str:
+    return "-" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{100 * x:.3g} %"
+
+
+@basin_app.command("stats")
+def stats_command(
+    path: Annotated[Path, typer.Argument(help="A basin store (complete or partial).",
+                                         metavar="STORE")],
+    json_out: JsonOpt = False,
+) -> None:
+    """Outcome counts, the probability of standing (95 % Wilson interval), and the cost.
+
+    Count and fraction of each n over the labelled cells, the cells unsettled, non-finite or not computed, the uncertain fraction of a certified sweep with the outcome probabilities with and without the uncertain cells, and the CPU and wall time of the sweep.
+    """  # noqa: E501
+    from ..basin_stats import basin_stats
+    from ..io.store import open_basin
+
+    with user_errors():
+        basin = open_basin(path)
+    a = basin.arrays
+    stats = basin_stats(a["quarter_turns"], a["status"], a.get("uncertain"),
+                        basin.tile_seconds, basin.done, basin.attrs.get("runs"))
+    attrs = basin.attrs
+    if json_out:
+        print_json({"path": str(path), "version": __version__, "store_version": attrs["version"],
+                    "sweep": attrs["sweep"], "method": attrs["method"],
+                    "tiles_done": int(basin.done.sum()), "tiles": int(basin.done.size), **stats})
+        return
+    ax0, ax1 = basin.axes
+    console.print(f"[bold]coin basin stats[/] {path}: {ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} "
+                  f"{ax0['units']} x {ax1['name']} {ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, "
+                  f"{ax0['n']} x {ax1['n']} cells, {attrs['method']['name']}")
+    table = Table(title="Outcomes (over labelled cells)", title_justify="left")
+    for col, just in (("n", "right"), ("pose", "left"), ("turn", "left"), ("count", "right"),
+                      ("fraction", "right")):
+        table.add_column(col, justify=just)
+    certain_rows = {}
+    if stats["uncertain"] is not None:
+        table.add_column("certain cells", justify="right")
+        certain_rows = {r["n"]: r for r in stats["uncertain"]["outcomes_certain"]}
+    for row in stats["outcomes"]:
+        style = "bold magenta" if row["pose"] == "standing" else None
+        cells = [str(row["n"]), row["pose"], row["direction"], f"{row['count']:,}",
+                 _pct(row["fraction"])]
+        if stats["uncertain"] is not None:
+            r = certain_rows.get(row["n"])
+            cells.append(f"{r['count']:,} ({_pct(r['fraction'])})" if r else "0")
+        table.add_row(*cells, style=style)
+    console.print(table)
+    summary = Table(show_header=False, box=None, pad_edge=False)
+    summary.add_column(style="bold")
+    summary.add_column()
+    s = stats["standing"]
+    summary.add_row("cells", f"{stats['cells']:,}: {stats['computed']:,} computed "
+                             f"({int(basin.done.sum())}/{basin.done.size} tiles), "
+                             f"{stats['not_computed']:,} not computed")
+    summary.add_row("status", f"{stats['settled']:,} settled, {stats['unsettled']:,} unsettled "
+                              f"at t_end, {stats['non_finite']:,} non-finite")
+    summary.add_row("standing", f"{s['count']:,} of {s['of']:,} = {_pct(s['probability'])} "
+                                f"(95 % CI {_pct(s['ci95'][0])} to {_pct(s['ci95'][1])})")
+    if stats["uncertain"] is not None:
+        u = stats["uncertain"]
+        sc = u["standing_certain"]
+        summary.add_row("uncertain", f"{u['count']:,} of {stats['labelled']:,} = "
+                                     f"{_pct(u['fraction'])} (n changes under the certifying "
+                                     "run)")
+        summary.add_row("standing, certain", f"{sc['count']:,} of {sc['of']:,} = "
+                                             f"{_pct(sc['probability'])} (95 % CI "
+                                             f"{_pct(sc['ci95'][0])} to {_pct(sc['ci95'][1])}); "
+                                             f"{u['standing_uncertain']} standing cells "
+                                             "uncertain")
+    else:
+        summary.add_row("uncertain", "not certified (sweep with --certify to flag cells)")
+    cost = stats["cost"]
+    if not stats["computed"]:
+        summary.add_row("cost", "nothing computed yet")
+    elif "cpu_seconds" in cost:
+        per = " (two runs a cell)" if stats["certified"] else ""
+        summary.add_row("cost", f"{cost['cpu_seconds']:.4g} CPU s, "
+                                f"{cost['cpu_ms_per_cell']:.3g} ms a cell{per}, "
+                                f"{cost['trajectories_per_cpu_second']:,.0f} cells per CPU s")
+    if cost.get("wall_seconds"):
+        summary.add_row("wall", f"{cost['wall_seconds']:.4g} s over {cost['runs']} run(s), "
+                                f"{cost['trajectories_per_second']:,.0f} cells/s")
+    console.print(summary)
+
+
+__all__ = ["basin_app"]

@@ -1,0 +1,107 @@
+"""`coin bench`: per-trajectory cost side by side, label agreement, and the full default basin."""
+
+from __future__ import annotations
+
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from .. import bench
+from ..accuracy import Grid
+from . import app
+from .accuracy_cmd import parse_range, parse_res
+from .common import JsonOpt, PresetOpt, build_scene, console, print_json, user_errors
+
+
+@app.command("bench")
+def bench_command(
+    cost_res: Annotated[str, typer.Option("--cost-res", help="Cells timed side by side "
+                                          "(N or NxM).")] = "8",
+    label_res: Annotated[str, typer.Option("--label-res", help="Grid for label agreement.")] = "24",
+    repeats: Annotated[int, typer.Option("--repeats", help="Rounds of the side-by-side "
+                                         "timing (median reported).")] = 3,
+    basin_res: Annotated[int, typer.Option("--basin-res", help="Resolution of the full basin "
+                                           "sweep timed at the end (0 to skip).")] = 512,
+    vy_range: Annotated[str, typer.Option("--vy-range", help="vy0 range LO:HI (m/s).")] = "0.05:2",
+    vphi_range: Annotated[str, typer.Option("--vphi-range", help="vphi0 range LO:HI "
+                                            "[rad/s].")] = "-20:20",
+    threads: Annotated[int, typer.Option("--threads", help="Threads for the label grids.")] = (
+        os.cpu_count() or 1),
+    preset: PresetOpt = "paper", json_out: JsonOpt = False,
+) -> None:
+    """Benchmark: cost per trajectory of each method's default setting and of the paper's
+    setting (side by side), their label agreement with the converged reference, and the wall
+    time of the full default basin on all cores."""
+    with user_errors():
+        scene = build_scene(preset)
+        vy, vphi = parse_range(vy_range, "--vy-range"), parse_range(vphi_range, "--vphi-range")
+        cost_grid = Grid.linear(vy, vphi, parse_res(cost_res))
+        label_grid = Grid.linear(vy, vphi, parse_res(label_res))
+    with console.status("") as status:
+        say = lambda text: status.update(f"bench: {text}")  # noqa: E731
+        rows = bench.side_by_side(scene, cost_grid, repeats, say)
+        check = bench.label_check(scene, label_grid, rows, threads, say)
+        basin = time_basin(basin_res, say) if basin_res else None
+    paper = next(r for r in rows if r.full_run)
+    result = {
+        "cost_cells": cost_grid.shape[0] * cost_grid.shape[1],
+        "label_cells": int(check.robust.size), "robust_cells": int(check.robust.sum()),
+        "reference_agreement": check.agreement_ab,
+        "rows": [{"name": r.name, "method": r.setting.method, "dt": r.setting.dt,
+                  "rtol": r.setting.rtol, "full_run": r.full_run,
+                  "ms_per_trajectory": r.seconds_per_trajectory * 1e3,
+                  "rounds_ms": [t * 1e3 for t in r.repeats],
+                  "speedup_vs_paper": paper.seconds_per_trajectory / r.seconds_per_trajectory,
+                  "label_agreement_robust": r.label_agreement} for r in rows],
+        "basin": basin,
+    }
+    if json_out:
+        print_json(result)
+        return
+    table = Table(title=f"Cost per trajectory, one thread, median of {repeats} interleaved "
+                        f"rounds over the same {result['cost_cells']} cells", title_justify="left")
+    for col in ("setting", "ms / trajectory", "x faster than paper",
+                f"label agreement ({result['robust_cells']} robust cells)"):
+        table.add_column(col, justify="left" if col == "setting" else "right")
+    for r in result["rows"]:
+        name = r["name"] if r["full_run"] else (
+            f"{r['method']} " + (f"rtol={r['rtol']:g}" if r["method"] in ("dopri5", "event")
+                                 else f"h={r['dt']:g}") + ", stop when settled")
+        table.add_row(name, f"{r['ms_per_trajectory']:.4g}", f"{r['speedup_vs_paper']:.0f}",
+                      f"{r['label_agreement_robust']:.2%}")
+    console.print(table)
+    console.print(f"Label grid {label_grid.shape[0]} x {label_grid.shape[1]}: references (event "
+                  f"rtol=1e-12, rk4 h=2.5e-7) agree on {check.agreement_ab:.1%} of cells; "
+                  f"{result['robust_cells']} robust cells.")
+    if basin:
+        console.print(f"Full default basin {basin_res} x {basin_res} ({basin['cells']:,} "
+                      f"trajectories) with `coin basin`: {basin['wall_seconds']:.1f} s wall, "
+                      f"{basin['trajectories_per_second']:,.0f} trajectories/s on "
+                      f"{os.cpu_count()} cores, peak memory {basin['peak_rss_mb']:.0f} MB.")
+
+
+def time_basin(res: int, say) -> dict:
+    """Run the real `coin basin` command on defaults into a scratch store and time it."""
+    say(f"full default basin {res} x {res} (coin basin)")
+    scratch = tempfile.mkdtemp(prefix="coin-bench-")
+    store = os.path.join(scratch, "basin.zarr")
+    try:
+        start = time.perf_counter()
+        proc = subprocess.run([sys.executable, "-m", "coincli", "basin", store, "--res",
+                               str(res), "--quiet"], capture_output=True, text=True)
+        wall = time.perf_counter() - start
+        if proc.returncode != 0:
+            raise typer.Exit(code=proc.returncode)
+        peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+    return {"res": res, "cells": res * res, "wall_seconds": wall,
+            "trajectories_per_second": res * res / wall, "peak_rss_mb": peak}

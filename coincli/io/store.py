@@ -1,0 +1,307 @@
+"""The Zarr v3 store of a basin sweep: create or resume it, write one tile, read it back.
+
+Layout (dims named after the two swept initial conditions, e.g. ``vy`` and ``vphi``)::
+
+    out.zarr/                       group; attributes: coin_basin, version, parameters, sweep,
+                                    method, certify, runs
+      vy, vphi                      float64 cell centres, linspace(LO, HI, n)
+      quarter_turns  (vy, vphi)     int16, fill -32768 = no label (not computed or non-finite)
+      status         (vy, vphi)     uint8, 0 settled, 1 unsettled at t_end, 2 non-finite,
+                                    255 not computed
+      settle_time    (vy, vphi)     float32 [s], NaN fill (also NaN when never settled)
+      steps          (vy, vphi)     int64 integrator steps (cost), fill -1
+      uncertain      (vy, vphi)     uint8, only with --certify: 0 certain, 1 uncertain,
+                                    255 not computed
+      done           (tile_vy, tile_vphi)  uint8, 1 = the tile is complete; chunked (1, 1)
+      tile_seconds   (tile_vy, tile_vphi)  float64 CPU seconds the tile took; chunked (1, 1)
+
+Every data array is chunked exactly like the tiles, so one tile is one chunk in every array and
+concurrent writers (threads, Dask workers) never touch the same file. A tile's ``done`` flag is
+written after all its data, so a tile is either complete and flagged, or recomputed on resume
+(recomputing gives the same bytes). Chunks are written through Zarr's LocalStore (plain paths:
+write to a temporary file, then rename), with ``write_empty_chunks`` on so that a tile equal to
+the fill value is still written. The store is created in a temporary directory and renamed into
+place, and its metadata consolidated once at creation: no array's metadata changes afterwards
+(only the group's own ``runs`` attribute, which lives outside the consolidated part), so
+``xarray.open_zarr(path)`` opens it directly. ``quarter_turns`` carries ``missing_value`` so
+xarray masks cells without a label to NaN (``mask_and_scale=False`` keeps the int16 values).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import time
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..integrators import NOT_COMPUTED
+from ..params import ParameterError
+from ..sweep import STATUS_NOT_COMPUTED, UNCERTAIN_NOT_COMPUTED, SweepSpec, TileResult
+
+FORMAT = 1
+COMPARED_ATTRS = ("version", "parameters", "sweep", "method", "certify")
+
+ARRAYS = {
+    "quarter_turns": ("int16", int(NOT_COMPUTED), {
+        "long_name": "final number n of quarter turns (phi / (pi/2)); odd = standing",
+        "units": "1", "missing_value": int(NOT_COMPUTED),
+        "description": "the well that holds the settled coin; round(2 phi / pi) at t_end when "
+                       "unsettled; -32768 where not computed or non-finite"}),
+    "status": ("uint8", STATUS_NOT_COMPUTED, {
+        "long_name": "run status", "flag_values": [0, 1, 2, STATUS_NOT_COMPUTED],
+        "flag_meanings": "settled unsettled_at_t_end non_finite not_computed"}),
+    "settle_time": ("float32", math.nan, {
+        "long_name": "time at which the energy fell below E_crit (n final)", "units": "s"}),
+    "steps": ("int64", -1, {"long_name": "integrator steps", "units": "1"}),
+    "uncertain": ("uint8", UNCERTAIN_NOT_COMPUTED, {
+        "long_name": "n changes under the certifying run (see the certify attribute)",
+        "flag_values": [0, 1, UNCERTAIN_NOT_COMPUTED],
+        "flag_meanings": "certain uncertain not_computed"}),
+}
+DTYPES = {name: spec[0] for name, spec in ARRAYS.items()}
+FILLS = {name: spec[1] for name, spec in ARRAYS.items()}
+
+
+def _zarr():
+    import zarr
+
+    return zarr
+
+
+def _is_store(path: Path) -> bool:
+    return (path / "zarr.json").is_file()
+
+
+def _flatten(value, prefix: str = "") -> dict:
+    """Nested attribute dicts -> {'parameters.foundation.k': 1e4, 'sweep.axes.vy.lo': 0.05}."""
+    if isinstance(value, dict):
+        out = {}
+        for key, sub in value.items():
+            out.update(_flatten(sub, f"{prefix}.{key}" if prefix else str(key)))
+        return out
+    if isinstance(value, list) and value and all(isinstance(v, dict) and "name" in v
+                                                for v in value):
+        out = {}
+        for sub in value:
+            out.update(_flatten({k: v for k, v in sub.items() if k != "name"},
+                                f"{prefix}.{sub['name']}"))
+        return out
+    if isinstance(value, list):
+        return {prefix: json.dumps(value)}
+    return {prefix: value}
+
+
+def _display_name(key: str) -> str:
+    parts = key.split(".")
+    if parts[0] == "parameters":
+        return parts[-1]
+    if parts[0] == "sweep" and parts[1] == "axes" and len(parts) == 4:
+        return f"--{parts[2]} {'LO' if parts[3] == 'lo' else 'HI' if parts[3] == 'hi' else 'cells'}"
+    if parts[0] == "sweep":
+        return {"dims": "swept axes", "chunk": "--chunk", "fixed": "fixed initial value"}.get(
+            parts[1], parts[1]) + (f" {parts[2]}" if len(parts) > 2 else "")
+    if parts[0] == "method":
+        return "method" if parts[1] == "name" else parts[1]
+    if parts[0] == "version":
+        return "coincli version"
+    return key
+
+
+def _show(value) -> str:
+    if value is None:
+        return "none"
+    if isinstance(value, float):
+        return f"{value:.10g}"
+    return str(value)
+
+
+def differences(stored: dict, wanted: dict) -> list[str]:
+    """One phrase per differing parameter: 'k = 10000 in the store, 5000 here'."""
+    a = _flatten({k: stored.get(k) for k in COMPARED_ATTRS})
+    b = _flatten({k: wanted.get(k) for k in COMPARED_ATTRS})
+    out = []
+    for key in sorted(set(a) | set(b), key=lambda k: (k.split(".")[0] != "sweep", k)):
+        if a.get(key, "absent") != b.get(key, "absent"):
+            out.append(f"{_display_name(key)} = {_show(a.get(key))} in the store, "
+                       f"{_show(b.get(key))} here")
+    return out
+
+
+def _create(path: Path, attrs: dict, spec: SweepSpec) -> None:
+    """Build the empty store in a temporary directory and rename it into place."""
+    zarr = _zarr()
+    grid = spec.grid
+    tmp = path.with_name(f".{path.name}.creating-{os.getpid()}")
+    if tmp.exists():
+        shutil.rmtree(tmp)
+    group = zarr.open_group(str(tmp), mode="w-", zarr_format=3,
+                            attributes={**attrs, "runs": []})
+    d0, d1 = grid.dims
+    for axis in grid.axes:
+        arr = group.create_array(axis.name, shape=(axis.n,), chunks=(axis.n,), dtype="float64",
+                                 fill_value=0.0, dimension_names=(axis.name,),
+                                 attributes={"units": axis.units, "long_name": axis.long_name,
+                                             "cell_centres": "linspace(lo, hi, n), ends "
+                                                             "included"})
+        arr[:] = axis.coords
+    for name in spec.array_names:
+        dtype, fill, array_attrs = ARRAYS[name]
+        group.create_array(name, shape=grid.shape, chunks=grid.chunk, dtype=dtype,
+                           fill_value=fill, dimension_names=(d0, d1), attributes=array_attrs,
+                           config={"write_empty_chunks": True})
+    tiles = grid.tile_grid
+    tdims = (f"tile_{d0}", f"tile_{d1}")
+    group.create_array("done", shape=tiles, chunks=(1, 1), dtype="uint8", fill_value=0,
+                       dimension_names=tdims,
+                       attributes={"long_name": "1 = tile complete (written after its data)"})
+    group.create_array("tile_seconds", shape=tiles, chunks=(1, 1), dtype="float64",
+                       fill_value=math.nan, dimension_names=tdims,
+                       attributes={"long_name": "CPU time of the tile", "units": "s"})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # "consolidated metadata is not part of the v3 spec"
+        zarr.consolidate_metadata(str(tmp))
+    os.rename(tmp, path)
+
+
+def _check_layout(group, spec: SweepSpec, path: Path) -> None:
+    grid = spec.grid
+    expected = {**{name: (grid.shape, grid.chunk) for name in spec.array_names},
+                "done": (grid.tile_grid, (1, 1)), "tile_seconds": (grid.tile_grid, (1, 1))}
+    present = set(group.array_keys())
+    for name, (shape, chunks) in expected.items():
+        if name not in present:
+            raise ParameterError(f"{path} is damaged: array '{name}' is missing; "
+                                 "--overwrite starts it again")
+        arr = group[name]
+        if tuple(arr.shape) != tuple(shape) or tuple(arr.chunks) != tuple(chunks):
+            raise ParameterError(f"{path} is damaged: array '{name}' has shape {arr.shape} "
+                                 f"chunks {arr.chunks}, expected {shape} {chunks}; "
+                                 "--overwrite starts it again")
+
+
+def prepare(path: str | os.PathLike, attrs: dict, spec: SweepSpec,
+            overwrite: bool = False) -> np.ndarray:
+    """Create the store, or open an existing one with the same parameters, and return its
+    ``done`` flags (tile grid, 1 = complete). A store with other parameters is refused with a
+    message naming them unless ``overwrite``."""
+    zarr = _zarr()
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise ParameterError(f"{path} exists and is not a directory")
+    if path.is_dir() and not _is_store(path):
+        if any(path.iterdir()):
+            raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
+        path.rmdir()
+    if _is_store(path):
+        if overwrite:
+            shutil.rmtree(path)
+        else:
+            group = zarr.open_group(str(path), mode="r")
+            stored = dict(group.attrs)
+            if "coin_basin" not in stored:
+                raise ParameterError(f"{path} is a Zarr store but not a coin basin sweep; "
+                                     "--overwrite replaces it")
+            diff = differences(stored, attrs)
+            if diff:
+                raise ParameterError(f"{path} holds a different sweep: {'; '.join(diff[:4])}"
+                                     f"{' ...' if len(diff) > 4 else ''}. Rerun with the "
+                                     "store's parameters to resume it, or --overwrite to "
+                                     "replace it")
+            _check_layout(group, spec, path)
+            return np.asarray(group["done"][:])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    _create(path, attrs, spec)
+    return np.zeros(spec.grid.tile_grid, dtype=np.uint8)
+
+
+def write_tile(path: str | os.PathLike, spec: SweepSpec, result: TileResult) -> None:
+    """Write one tile's arrays, its cost, and last its ``done`` flag."""
+    zarr = _zarr()
+    group = zarr.open_group(str(path), mode="r+")
+    s0, s1 = spec.grid.tile_slices(result.tile)
+    i, j = result.tile
+    for name in spec.array_names:
+        arr = group[name].with_config({"write_empty_chunks": True})
+        arr[s0, s1] = result.arrays[name]
+    group["tile_seconds"].with_config({"write_empty_chunks": True})[i:i + 1, j:j + 1] = (
+        result.cpu_seconds)
+    group["done"].with_config({"write_empty_chunks": True})[i:i + 1, j:j + 1] = 1
+
+
+def read_done(path: str | os.PathLike) -> np.ndarray:
+    return np.asarray(_zarr().open_group(str(path), mode="r")["done"][:])
+
+
+def record_run(path: str | os.PathLike, run: dict) -> None:
+    """Append one invocation's record (wall time, tiles, mode) to the group's ``runs``."""
+    group = _zarr().open_group(str(path), mode="r+")
+    runs = list(group.attrs.get("runs", []))
+    runs.append(run)
+    group.attrs["runs"] = runs
+
+
+@dataclass
+class Basin:
+    """A store read back: cells of tiles not flagged done are reported as not computed."""
+
+    path: str
+    attrs: dict
+    dims: tuple[str, str]
+    axes: list[dict]
+    coords: tuple[np.ndarray, np.ndarray]
+    arrays: dict[str, np.ndarray]
+    done: np.ndarray
+    tile_seconds: np.ndarray
+    chunk: tuple[int, int]
+
+    @property
+    def certified(self) -> bool:
+        return "uncertain" in self.arrays
+
+    @property
+    def computed(self) -> np.ndarray:
+        """Cell mask of complete tiles."""
+        c0, c1 = self.chunk
+        n0, n1 = self.coords[0].size, self.coords[1].size
+        return np.repeat(np.repeat(self.done.astype(bool), c0, axis=0), c1, axis=1)[:n0, :n1]
+
+
+def open_basin(path: str | os.PathLike) -> Basin:
+    zarr = _zarr()
+    p = Path(path)
+    if not _is_store(p):
+        raise ParameterError(f"{path} is not a Zarr store (no zarr.json)")
+    group = zarr.open_group(str(p), mode="r")
+    attrs = dict(group.attrs)
+    if "coin_basin" not in attrs:
+        raise ParameterError(f"{path} is not a coin basin store")
+    sweep = attrs["sweep"]
+    dims = tuple(sweep["dims"])
+    present = set(group.array_keys())
+    arrays = {name: np.asarray(group[name][:]) for name in ARRAYS if name in present}
+    done = np.asarray(group["done"][:])
+    basin = Basin(path=str(path), attrs=attrs, dims=dims, axes=sweep["axes"],
+                  coords=tuple(np.asarray(group[d][:]) for d in dims), arrays=arrays, done=done,
+                  tile_seconds=np.asarray(group["tile_seconds"][:]),
+                  chunk=tuple(sweep["chunk"]))
+    missing = ~basin.computed
+    for name, arr in arrays.items():
+        arr[missing] = FILLS[name]
+    return basin
+
+
+def run_record(started: float, wall: float, tiles: int, cells: int, mode: str, workers: int,
+               interrupted: bool) -> dict:
+    return {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z", time.localtime(started)),
+            "wall_seconds": round(wall, 3), "tiles": tiles, "cells": cells, "mode": mode,
+            "workers": workers, "interrupted": interrupted}
+
+
+__all__ = ["ARRAYS", "Basin", "differences", "open_basin", "prepare", "read_done",
+           "record_run", "run_record", "write_tile"]

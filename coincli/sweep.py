@@ -1,0 +1,324 @@
+"""Basin sweeps as pure computation: the grid of initial conditions, its tiles, and one tile's
+outcomes. No files, no terminal: :mod:`coincli.io.store` writes what :func:`compute_tile`
+returns, :mod:`coincli.distributed` runs tiles on threads or a Dask cluster.
+
+The grid
+--------
+Exactly two of the six initial conditions are swept, each over ``n`` cell centres
+``numpy.linspace(lo, hi, n)`` (both ends included: the first cell is centred on ``lo``, the last on
+``hi``); the other four are fixed. Axis order is the order of the state vector
+(x0, y0, phi0, vx, vy, vphi), so the default sweep is indexed ``[i_vy, i_vphi]``.
+
+A tile is a block of ``chunk`` cells (the last row and column of tiles may be smaller), the unit
+of work, of writing and of resuming. Each cell's outcome depends only on its own initial
+condition (the kernels are deterministic and run one trajectory at a time), so a grid computed in
+any tiling, order, thread count or cluster gives bit-identical arrays.
+
+Certification
+-------------
+With ``certify`` every cell is computed a second time by the same method with a tenfold smaller
+error bound: an adaptive method at ``rtol / 10``; a fixed-step method of order p at
+``dt / 10**(1/p)`` (symplectic Euler dt/10, Verlet dt/3.16, RK4 dt/1.78). A cell whose n differs
+between the two runs (or that is non-finite in one of them) is *uncertain*: its label is not
+converged at the chosen setting.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .integrators import NOT_COMPUTED, run_batch
+from .params import ParameterError, Scene, param_array, state_array
+
+# The initial-condition options, in the order of the state vector (x, y, phi, vx, vy, vphi).
+IC_NAMES = ("x0", "y0", "phi0", "vx", "vy", "vphi")
+
+# name -> (label for plots, unit, long name)
+AXIS_INFO = {
+    "x0": ("$x_0$", "m", "initial horizontal position"),
+    "y0": ("$y_0$", "m", "initial height of the centroid"),
+    "phi0": (r"$\varphi_0$", "rad", "initial angle"),
+    "vx": ("$v_{x0}$", "m/s", "initial horizontal velocity"),
+    "vy": ("$v_{y0}$", "m/s", "initial vertical velocity"),
+    "vphi": (r"$v_{\varphi 0}$", "rad/s", "initial angular velocity"),
+}
+# The paper sweeps (vy0, vphi0) with x0 = 0, y0 = r, phi0 = 0, vx0 = 0; its ranges were on the
+# figures, not in the text. These are the ranges NOTES.md measured the method's accuracy on.
+DEFAULT_RANGES = {"vy": "0.05:2", "vphi": "-20:20"}
+DEFAULT_RES = "512"
+DEFAULT_CHUNK = "64"
+MAX_CELLS_PER_AXIS = 1 << 16
+
+# Status codes in a store: the run statuses (0 settled, 1 unsettled, 2 non-finite) plus:
+STATUS_NOT_COMPUTED = 255
+UNCERTAIN_NOT_COMPUTED = 255
+
+
+# -- parsing ------------------------------------------------------------------------------------
+def _parse_float(name: str, text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise ParameterError(f"--{name}: '{text}' is not a number or a LO:HI range") from None
+    if not math.isfinite(value):
+        raise ParameterError(f"--{name} must be finite, got '{text}'")
+    return value
+
+
+def parse_range(name: str, text: str | float) -> float | tuple[float, float]:
+    """``'0:2'`` -> (0.0, 2.0), a swept axis; ``'1.5'`` -> 1.5, a fixed value."""
+    if not isinstance(text, str):
+        return _parse_float(name, str(text))
+    text = text.strip()
+    if ":" not in text:
+        return _parse_float(name, text)
+    parts = text.split(":")
+    if len(parts) != 2 or not parts[0].strip() or not parts[1].strip():
+        raise ParameterError(f"--{name}: '{text}' is not a LO:HI range")
+    lo, hi = (_parse_float(name, part) for part in parts)
+    if not lo < hi:
+        raise ParameterError(f"--{name} {text}: empty range (LO must be below HI)")
+    return lo, hi
+
+
+def parse_pair(option: str, text: str, minimum: int = 1) -> tuple[int, int]:
+    """``'512'`` -> (512, 512), ``'512x256'`` -> (512, 256)."""
+    parts = str(text).lower().split("x")
+    try:
+        values = [int(part) for part in parts]
+    except ValueError:
+        raise ParameterError(f"--{option}: '{text}' is not N or NxM (whole numbers)") from None
+    if len(values) == 1:
+        values *= 2
+    if len(values) != 2:
+        raise ParameterError(f"--{option}: '{text}' is not N or NxM")
+    for v in values:
+        if v < minimum:
+            raise ParameterError(f"--{option} must be at least {minimum}, got '{text}'")
+        if v > MAX_CELLS_PER_AXIS:
+            raise ParameterError(f"--{option} must be at most {MAX_CELLS_PER_AXIS}, got '{text}'")
+    return values[0], values[1]
+
+
+# -- grid ---------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Axis:
+    name: str  # one of IC_NAMES
+    lo: float
+    hi: float
+    n: int
+
+    @property
+    def index(self) -> int:
+        return IC_NAMES.index(self.name)
+
+    @property
+    def coords(self) -> np.ndarray:
+        """Cell centres: linspace(lo, hi, n), both ends included."""
+        return np.linspace(self.lo, self.hi, self.n)
+
+    @property
+    def spacing(self) -> float:
+        return (self.hi - self.lo) / (self.n - 1)
+
+    @property
+    def label(self) -> str:
+        return AXIS_INFO[self.name][0]
+
+    @property
+    def units(self) -> str:
+        return AXIS_INFO[self.name][1]
+
+    @property
+    def long_name(self) -> str:
+        return AXIS_INFO[self.name][2]
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "lo": self.lo, "hi": self.hi, "n": self.n,
+                "units": self.units, "long_name": self.long_name}
+
+
+@dataclass(frozen=True)
+class Grid:
+    axes: tuple[Axis, Axis]
+    base_state: tuple[float, ...]  # the six initial values; the swept ones are overwritten
+    chunk: tuple[int, int]
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.axes[0].n, self.axes[1].n
+
+    @property
+    def dims(self) -> tuple[str, str]:
+        return self.axes[0].name, self.axes[1].name
+
+    @property
+    def n_cells(self) -> int:
+        return self.shape[0] * self.shape[1]
+
+    @property
+    def tile_grid(self) -> tuple[int, int]:
+        """Number of tiles along each axis."""
+        return tuple(-(-n // c) for n, c in zip(self.shape, self.chunk, strict=True))
+
+    def tiles(self) -> list[tuple[int, int]]:
+        t0, t1 = self.tile_grid
+        return [(i, j) for i in range(t0) for j in range(t1)]
+
+    def tile_slices(self, tile: tuple[int, int]) -> tuple[slice, slice]:
+        return tuple(slice(t * c, min((t + 1) * c, n))
+                     for t, c, n in zip(tile, self.chunk, self.shape, strict=True))
+
+    def tile_cells(self, tile: tuple[int, int]) -> int:
+        s0, s1 = self.tile_slices(tile)
+        return (s0.stop - s0.start) * (s1.stop - s1.start)
+
+    def tile_states(self, tile: tuple[int, int]) -> np.ndarray:
+        """Initial states of a tile's cells, row-major (C order over the tile), N x 6."""
+        s0, s1 = self.tile_slices(tile)
+        c0 = self.axes[0].coords[s0]
+        c1 = self.axes[1].coords[s1]
+        states = np.empty((c0.size * c1.size, 6), dtype=np.float64)
+        states[:] = np.asarray(self.base_state, dtype=np.float64)
+        states[:, self.axes[0].index] = np.repeat(c0, c1.size)
+        states[:, self.axes[1].index] = np.tile(c1, c0.size)
+        return states
+
+    def fixed(self) -> dict[str, float]:
+        swept = set(self.dims)
+        return {name: float(v) for name, v in zip(IC_NAMES, self.base_state, strict=True)
+                if name not in swept}
+
+    def to_dict(self) -> dict:
+        return {"dims": list(self.dims), "axes": [a.to_dict() for a in self.axes],
+                "fixed": self.fixed(), "chunk": list(self.chunk),
+                "cell_centres": "numpy.linspace(lo, hi, n): both ends included"}
+
+
+def make_grid(scene: Scene, ranges: dict[str, tuple[float, float]], res: tuple[int, int],
+              chunk: tuple[int, int]) -> Grid:
+    """The grid over the two swept ``ranges`` (name -> (lo, hi)), other values from ``scene``."""
+    names = [name for name in IC_NAMES if name in ranges]
+    unknown = set(ranges) - set(IC_NAMES)
+    if unknown:
+        raise ParameterError(f"cannot sweep {sorted(unknown)}; sweepable: {', '.join(IC_NAMES)}")
+    if len(names) != 2:
+        listed = ", ".join(names) or "none"
+        raise ParameterError(
+            f"exactly two initial conditions must be swept (LO:HI), got {len(names)} ({listed}); "
+            "vy and vphi sweep by default: fix one with a plain value (e.g. --vy 1.0) to sweep "
+            "another")
+    for n in res:
+        if n < 2:
+            raise ParameterError(f"--res must give at least 2 cells per axis, got {n}")
+    axes = tuple(Axis(name, float(ranges[name][0]), float(ranges[name][1]), int(n))
+                 for name, n in zip(names, res, strict=True))
+    chunk = tuple(min(int(c), n) for c, n in zip(chunk, res, strict=True))
+    return Grid(axes=axes, base_state=tuple(float(v) for v in state_array(scene)), chunk=chunk)
+
+
+# -- what a sweep computes ----------------------------------------------------------------------
+@dataclass(frozen=True)
+class SweepSpec:
+    """Everything a tile needs, as plain picklable values (shipped to Dask workers)."""
+
+    grid: Grid
+    params: tuple[float, ...]  # param_array(scene)
+    kernel_id: int
+    dt: float
+    rtol: float
+    t_end: float
+    stop_on_settle: bool
+    certify: bool = False
+    certify_dt: float = math.nan
+    certify_rtol: float = math.nan
+
+    @property
+    def array_names(self) -> tuple[str, ...]:
+        names = ("quarter_turns", "status", "settle_time", "steps")
+        return names + ("uncertain",) if self.certify else names
+
+
+def certify_setting(method, dt: float, rtol: float) -> tuple[float, float]:
+    """The tighter setting of the certifying run: a tenfold smaller error bound."""
+    if method.adaptive:
+        return dt, rtol / 10.0
+    return dt / 10.0 ** (1.0 / method.order), rtol
+
+
+def make_spec(scene: Scene, method, grid: Grid, certify: bool = False) -> SweepSpec:
+    integ = scene.integration
+    cdt, crtol = certify_setting(method, integ.dt, integ.rtol) if certify else (math.nan,
+                                                                                 math.nan)
+    return SweepSpec(grid=grid, params=tuple(float(v) for v in param_array(scene)),
+                     kernel_id=method.kernel_id, dt=float(integ.dt), rtol=float(integ.rtol),
+                     t_end=float(integ.t_end), stop_on_settle=bool(integ.stop_on_settle),
+                     certify=certify, certify_dt=cdt, certify_rtol=crtol)
+
+
+def method_attrs(scene: Scene, method) -> dict:
+    integ = scene.integration
+    return {"name": method.name, "kernel_id": method.kernel_id, "order": method.order,
+            "adaptive": method.adaptive, "symplectic": method.symplectic,
+            "dt": integ.dt, "rtol": integ.rtol, "t_end": integ.t_end,
+            "stop_on_settle": integ.stop_on_settle}
+
+
+def certify_attrs(spec: SweepSpec) -> dict | None:
+    if not spec.certify:
+        return None
+    return {"dt": spec.certify_dt, "rtol": spec.certify_rtol,
+            "rule": "every cell recomputed by the same method with a tenfold smaller error "
+                    "bound (adaptive: rtol/10; fixed step of order p: dt/10**(1/p)); "
+                    "uncertain = 1 where n differs or one run is non-finite"}
+
+
+@dataclass
+class TileResult:
+    tile: tuple[int, int]
+    arrays: dict[str, np.ndarray]  # name -> 2-D block of the tile
+    cpu_seconds: float
+    wall_seconds: float
+
+    @property
+    def cells(self) -> int:
+        return int(self.arrays["quarter_turns"].size)
+
+
+def _run(spec: SweepSpec, states: np.ndarray, dt: float, rtol: float):
+    n = states.shape[0]
+    q = np.empty(n, dtype=np.int16)
+    status = np.empty(n, dtype=np.uint8)
+    settle = np.empty(n, dtype=np.float32)
+    steps = np.empty(n, dtype=np.int64)
+    run_batch(spec.kernel_id, np.asarray(spec.params, dtype=np.float64), states, dt, rtol,
+              spec.t_end, spec.stop_on_settle, q, status, settle, steps)
+    return q, status, settle, steps
+
+
+def compute_tile(spec: SweepSpec, tile: tuple[int, int]) -> TileResult:
+    """Run every cell of one tile (and its certifying run); the GIL is released meanwhile."""
+    wall0, cpu0 = time.perf_counter(), time.thread_time()
+    states = spec.grid.tile_states(tile)
+    s0, s1 = spec.grid.tile_slices(tile)
+    shape = (s0.stop - s0.start, s1.stop - s1.start)
+    q, status, settle, steps = _run(spec, states, spec.dt, spec.rtol)
+    arrays = {"quarter_turns": q.reshape(shape), "status": status.reshape(shape),
+              "settle_time": settle.reshape(shape), "steps": steps.reshape(shape)}
+    if spec.certify:
+        q2, _, _, _ = _run(spec, states, spec.certify_dt, spec.certify_rtol)
+        # NOT_COMPUTED marks a non-finite run in both: differing n or one non-finite -> uncertain
+        both_nonfinite = (q == NOT_COMPUTED) & (q2 == NOT_COMPUTED)
+        arrays["uncertain"] = ((q != q2) & ~both_nonfinite).astype(np.uint8).reshape(shape)
+    return TileResult(tile=tuple(tile), arrays=arrays, cpu_seconds=time.thread_time() - cpu0,
+                      wall_seconds=time.perf_counter() - wall0)
+
+
+__all__ = ["AXIS_INFO", "Axis", "DEFAULT_CHUNK", "DEFAULT_RANGES", "DEFAULT_RES", "Grid",
+           "IC_NAMES", "STATUS_NOT_COMPUTED", "SweepSpec", "TileResult", "UNCERTAIN_NOT_COMPUTED",
+           "certify_attrs", "certify_setting", "compute_tile", "make_grid", "make_spec",
+           "method_attrs", "parse_pair", "parse_range"]

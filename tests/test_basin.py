@@ -1,0 +1,412 @@
+"""`coin basin`: grid parsing, the Zarr store, resume after kill -9 and Ctrl-C, parameter checks,
+rendering and statistics of partial stores, mirror symmetry, and --certify.
+
+Grids are tiny (the default method costs ~0.1 ms a trajectory once numba's cache is warm)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from coincli.basin_stats import basin_stats, wilson
+from coincli.cli import app
+from coincli.distributed import run_tile_task
+from coincli.integrators import NOT_COMPUTED, get
+from coincli.io import store
+from coincli.params import ParameterError, Scene
+from coincli.sweep import compute_tile, make_grid, make_spec, parse_pair, parse_range
+
+runner = CliRunner()
+SMALL = ["--res", "8", "--chunk", "4", "-q"]
+
+
+def coin(*args: str):
+    return runner.invoke(app, ["basin", *args])
+
+
+def coin_ok(*args: str):
+    result = coin(*args)
+    assert result.exit_code == 0, result.output
+    return result
+
+
+# -- comparing stores ----------------------------------------------------------------------------
+def _chunk_files(path: Path) -> dict[str, bytes]:
+    """Every file of the store except the measured cost and the group's metadata (whose `runs`
+    attribute records wall times)."""
+    out = {}
+    for root, _, files in os.walk(path):
+        for name in files:
+            full = Path(root) / name
+            rel = full.relative_to(path).as_posix()
+            if rel == "zarr.json" or rel.startswith("tile_seconds/c"):
+                continue
+            out[rel] = full.read_bytes()
+    return out
+
+
+def assert_same_store(a: Path, b: Path) -> None:
+    import zarr
+
+    ga, gb = zarr.open_group(str(a), mode="r"), zarr.open_group(str(b), mode="r")
+    names = sorted(ga.array_keys())
+    assert names == sorted(gb.array_keys())
+    for name in names:
+        if name == "tile_seconds":
+            continue
+        x, y = ga[name][:], gb[name][:]
+        assert x.dtype == y.dtype, name
+        assert x.tobytes() == y.tobytes(), f"array {name} differs"
+    fa, fb = _chunk_files(a), _chunk_files(b)
+    assert sorted(fa) == sorted(fb)
+    for rel in fa:
+        assert fa[rel] == fb[rel], f"file {rel} differs"
+    attrs_a = {k: v for k, v in ga.attrs.items() if k != "runs"}
+    attrs_b = {k: v for k, v in gb.attrs.items() if k != "runs"}
+    assert attrs_a == attrs_b
+
+
+def done_tiles(path: Path) -> int:
+    root = path / "done" / "c"
+    return sum(len(files) for _, _, files in os.walk(root)) if root.exists() else 0
+
+
+def _reset_sigint():
+    # children of a non-interactive shell inherit SIGINT as ignored
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def start_sweep(*args: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "coincli", "basin", *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            preexec_fn=_reset_sigint, cwd=Path(__file__).parent.parent)
+
+
+def wait_for_tiles(proc: subprocess.Popen, path: Path, n: int, timeout: float = 60) -> None:
+    end = time.monotonic() + timeout
+    while done_tiles(path) < n:
+        if proc.poll() is not None:
+            out, err = proc.communicate()
+            pytest.fail(f"sweep ended before {n} tiles were done: {err.decode()[-2000:]}")
+        if time.monotonic() > end:
+            proc.kill()
+            pytest.fail("no tile was written in time")
+        time.sleep(0.002)
+
+
+# -- parsing and validation ----------------------------------------------------------------------
+def test_parse_range_and_pairs():
+    assert parse_range("vy", "0:2") == (0.0, 2.0)
+    assert parse_range("vphi", " -20 : 20 ") == (-20.0, 20.0)
+    assert parse_range("vx", "1.5") == 1.5
+    assert parse_pair("res", "512") == (512, 512)
+    assert parse_pair("res", "512x256") == (512, 256)
+    for bad in ("2:1", "1:1", "nan:2", "0:inf", "a:b", "1:2:3", ":2", "nan"):
+        with pytest.raises(ParameterError):
+            parse_range("vy", bad)
+    for bad in ("0", "8x", "axb", "1x2x3"):
+        with pytest.raises(ParameterError):
+            parse_pair("res", bad)
+
+
+def test_grid_cell_centres_and_tiles():
+    scene = Scene()
+    grid = make_grid(scene, {"vy": (0.0, 1.0), "vphi": (-2.0, 2.0)}, (5, 3), (2, 2))
+    assert grid.dims == ("vy", "vphi")
+    np.testing.assert_array_equal(grid.axes[0].coords, np.linspace(0, 1, 5))
+    assert grid.tile_grid == (3, 2)
+    assert sum(grid.tile_cells(t) for t in grid.tiles()) == 15
+    states = grid.tile_states((2, 1))  # the corner tile: vy = 1, vphi = 2
+    assert states.shape == (1, 6)
+    np.testing.assert_array_equal(states[0], [0, scene.coin.r, 0, 0, 1.0, 2.0])
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--vy", "2:1"], "empty range"),
+    (["--vy", "nan:1"], "finite"),
+    (["--vy", "nan"], "finite"),
+    (["--vx", "0:1"], "exactly two"),
+    (["--vy", "1.0"], "exactly two"),
+    (["--method", "euler"], "unknown method"),
+    (["--preset", "nope"], "unknown preset"),
+    (["--method", "symplectic_euler", "--dt", "1e-3"], "stable step"),
+    (["--res", "1"], "--res"),
+    (["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "not both"),
+    (["--k", "-1"], "k must be positive"),
+])
+def test_bad_input_one_line_exit_2(tmp_path, args, message):
+    result = coin(str(tmp_path / "s.zarr"), *SMALL, *args)
+    assert result.exit_code == 2, result.output
+    assert message in result.output
+    assert "Traceback" not in result.output
+    assert not (tmp_path / "s.zarr").exists()
+
+
+# -- the store -----------------------------------------------------------------------------------
+def test_store_layout_and_xarray(tmp_path):
+    import xarray as xr
+    import zarr
+
+    path = tmp_path / "s.zarr"
+    coin_ok(str(path), "--vy", "0.1:0.7", "--res", "8x6", "--chunk", "4", "-q")
+    group = zarr.open_group(str(path), mode="r")
+    assert group["quarter_turns"].dtype == np.int16
+    assert group["quarter_turns"].fill_value == NOT_COMPUTED
+    assert group["status"].dtype == np.uint8 and group["status"].fill_value == 255
+    assert group["settle_time"].dtype == np.float32
+    assert group["quarter_turns"].chunks == (4, 4) and group["done"].chunks == (1, 1)
+    assert group["done"][:].tolist() == [[1, 1], [1, 1]]
+    attrs = dict(group.attrs)
+    assert attrs["sweep"]["dims"] == ["vy", "vphi"]
+    assert attrs["parameters"]["foundation"]["k"] == 1e4
+    assert attrs["parameters"]["initial"]["vy"] is None  # swept
+    assert attrs["method"]["name"] == "event" and attrs["version"]
+    assert len(attrs["runs"]) == 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no consolidated-metadata fallback warning
+        ds = xr.open_zarr(path)
+    assert ds["quarter_turns"].dims == ("vy", "vphi")
+    np.testing.assert_allclose(ds["vy"].values, np.linspace(0.1, 0.7, 8))
+    np.testing.assert_allclose(ds["vphi"].values, np.linspace(-20, 20, 6))
+    assert ds["vphi"].attrs["units"] == "rad/s"
+    assert int(ds["status"].max()) == 0  # all settled
+    n = float(ds["quarter_turns"].sel(vy=0.1, vphi=-20.0).values)
+    assert n == group["quarter_turns"][0, 0]
+    assert ds.attrs["parameters"]["coin"]["diameter"] == 0.02
+
+
+def test_tile_equal_to_fill_value_is_written(tmp_path):
+    # every cell non-finite would equal the fill values; simulate it through the writer
+    path = tmp_path / "s.zarr"
+    grid = make_grid(Scene(), {"vy": (0.1, 0.2), "vphi": (0.0, 1.0)}, (4, 4), (2, 2))
+    spec = make_spec(Scene(), get("event"), grid)
+    store.prepare(path, {"coin_basin": {}, "version": "t"}, spec)
+    result = compute_tile(spec, (0, 0))
+    result.arrays["quarter_turns"][:] = NOT_COMPUTED
+    result.arrays["status"][:] = 255
+    result.arrays["settle_time"][:] = np.nan
+    result.arrays["steps"][:] = -1
+    store.write_tile(path, spec, result)
+    for name in ("quarter_turns", "status", "settle_time", "steps", "done"):
+        assert (path / name / "c" / "0" / "0").is_file(), name
+
+
+def test_parameter_mismatch_is_refused(tmp_path):
+    path = str(tmp_path / "s.zarr")
+    coin_ok(path, *SMALL)
+    result = coin(path, *SMALL, "--k", "5000")
+    assert result.exit_code == 2
+    assert "k = 10000 in the store, 5000 here" in result.output
+    result = coin(path, *SMALL, "--vphi", "-10:20")
+    assert result.exit_code == 2 and "--vphi LO = -20 in the store, -10 here" in result.output
+    result = coin(path, "--res", "16", "--chunk", "4", "-q")
+    assert result.exit_code == 2 and "cells = 8 in the store, 16 here" in result.output
+    result = coin(path, *SMALL, "--certify")
+    assert result.exit_code == 2 and "certify" in result.output
+    # the same command resumes (nothing left to do); --overwrite replaces
+    assert "done already" in coin_ok(path, *SMALL).output
+    coin_ok(path, *SMALL, "--k", "5000", "--overwrite")
+    assert store.open_basin(path).attrs["parameters"]["foundation"]["k"] == 5000
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "keep.txt").write_text("x")
+    result = coin(str(tmp_path / "other"), *SMALL, "--overwrite")
+    assert result.exit_code == 2 and "not a Zarr store" in result.output
+    assert (tmp_path / "other" / "keep.txt").exists()
+
+
+def test_sweep_subcommand_alias_and_help(tmp_path):
+    a, b = tmp_path / "a.zarr", tmp_path / "b.zarr"
+    coin_ok(str(a), *SMALL)
+    coin_ok("sweep", str(b), *SMALL, "--threads", "1")
+    assert_same_store(a, b)
+    assert "render" in coin_ok("--help").output
+    assert "--certify" in coin_ok("sweep", "--help").output
+
+
+# -- resuming ------------------------------------------------------------------------------------
+KILL_ARGS = ["--res", "48", "--chunk", "4", "--threads", "1", "-q"]
+
+
+def test_resume_after_kill9_is_bit_identical(tmp_path):
+    killed = tmp_path / "killed.zarr"
+    proc = start_sweep(str(killed), *KILL_ARGS)
+    wait_for_tiles(proc, killed, 5)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    n = done_tiles(killed)
+    assert 5 <= n < 144, f"{n} tiles done when killed: not mid-sweep"
+    coin_ok(str(killed), *KILL_ARGS)  # resume
+    assert done_tiles(killed) == 144
+    clean = tmp_path / "clean.zarr"
+    coin_ok(str(clean), "--res", "48", "--chunk", "4", "--threads", "2", "-q")
+    assert_same_store(killed, clean)
+
+
+def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
+    path = tmp_path / "s.zarr"
+    proc = start_sweep(str(path), *KILL_ARGS)
+    wait_for_tiles(proc, path, 3)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err.decode()
+    assert b"Traceback" not in err and b"resume" in err
+    basin = store.open_basin(path)
+    assert 3 <= basin.done.sum() < basin.done.size
+    # every flagged tile is complete
+    assert (basin.arrays["status"][basin.computed] != 255).all()
+    runs = basin.attrs["runs"]
+    assert runs[-1]["interrupted"] is True
+    coin_ok(str(path), *KILL_ARGS)
+    assert store.open_basin(path).done.all()
+
+
+# -- distributed ---------------------------------------------------------------------------------
+def test_dask_runs_give_the_same_store(tmp_path):
+    from distributed import LocalCluster
+
+    args = ["--vy", "0.05:2", "--res", "16", "--chunk", "8", "-q"]
+    local = tmp_path / "local.zarr"
+    coin_ok(str(local), *args)
+    workers = tmp_path / "workers.zarr"
+    coin_ok(str(workers), *args, "--workers", "2")  # a 2-process LocalCluster
+    assert_same_store(local, workers)
+    assert store.open_basin(workers).attrs["runs"][0]["mode"] == "dask"
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                      dashboard_address=None) as cluster:
+        remote = tmp_path / "remote.zarr"
+        coin_ok(str(remote), *args, "--scheduler", cluster.scheduler_address)
+    assert_same_store(local, remote)
+
+
+def test_task_function_is_importable_and_writes_its_tile(tmp_path):
+    path = tmp_path / "s.zarr"
+    grid = make_grid(Scene(), {"vy": (0.1, 0.5), "vphi": (-5.0, 5.0)}, (4, 4), (2, 2))
+    spec = make_spec(Scene(), get("event"), grid)
+    store.prepare(path, {"coin_basin": {}, "version": "t"}, spec)
+    tile, cells, cpu = run_tile_task(str(path), spec, (1, 0))
+    assert tile == (1, 0) and cells == 4 and cpu >= 0
+    assert store.read_done(path).tolist() == [[0, 0], [1, 0]]
+
+
+# -- pictures and statistics ---------------------------------------------------------------------
+def _partial_store(tmp_path, certify=False) -> Path:
+    """A 8 x 8 sweep with 2 of its 4 tiles computed."""
+    path = tmp_path / "partial.zarr"
+    scene = Scene()
+    grid = make_grid(scene, {"vy": (0.3, 1.9), "vphi": (-15.0, 15.0)}, (8, 8), (4, 4))
+    spec = make_spec(scene, get("event"), grid, certify=certify)
+    attrs = {"coin_basin": {"format": 1}, "version": "test", "parameters": scene.to_dict(),
+             "sweep": grid.to_dict(), "method": {"name": "event", "adaptive": True,
+                                                 "rtol": 1e-7, "dt": 1e-6, "t_end": 2.0},
+             "certify": None}
+    store.prepare(path, attrs, spec)
+    for tile in ((0, 0), (1, 1)):
+        run_tile_task(str(path), spec, tile)
+    return path
+
+
+@pytest.mark.parametrize("certify", [False, True])
+def test_render_and_stats_on_a_partial_store(tmp_path, certify):
+    path = _partial_store(tmp_path, certify)
+    png = tmp_path / "basin.png"
+    coin_ok("render", str(path), "-o", str(png), "--dpi", "60", "--n-max", "40")
+    assert png.stat().st_size > 5000
+    from matplotlib.image import imread
+
+    image = imread(png)
+    assert image.shape[0] > 200 and image.shape[2] in (3, 4)
+    stats = json.loads(coin_ok("stats", str(path), "--json").output)
+    assert stats["cells"] == 64 and stats["computed"] == 32 and stats["not_computed"] == 32
+    assert stats["tiles_done"] == 2 and stats["tiles"] == 4
+    assert sum(r["count"] for r in stats["outcomes"]) == stats["labelled"] == 32
+    assert stats["cost"]["cpu_seconds"] > 0
+    assert stats["certified"] is certify
+    text = coin_ok("stats", str(path)).output
+    assert "not computed" in text and "standing" in text
+    basin = store.open_basin(path)
+    assert (basin.arrays["status"][~basin.computed] == 255).all()
+
+
+def test_render_rerun_recording(tmp_path):
+    path = _partial_store(tmp_path)
+    rrd = tmp_path / "basin.rrd"
+    coin_ok("render", str(path), "-o", str(tmp_path / "b.png"), "--dpi", "50", "--rrd", str(rrd))
+    assert rrd.stat().st_size > 1000
+
+
+def test_render_and_stats_errors(tmp_path):
+    result = coin("render", str(tmp_path / "missing.zarr"))
+    assert result.exit_code == 2 and "not a Zarr store" in result.output
+    result = coin("stats", str(tmp_path / "missing.zarr"))
+    assert result.exit_code == 2
+
+
+def test_render_and_stats_of_an_empty_store(tmp_path):
+    path = tmp_path / "empty.zarr"
+    grid = make_grid(Scene(), {"vy": (0.1, 0.5), "vphi": (-5.0, 5.0)}, (4, 4), (2, 2))
+    store.prepare(path, {"coin_basin": {}, "version": "t", "sweep": grid.to_dict(),
+                         "parameters": Scene().to_dict(),
+                         "method": {"name": "event", "adaptive": True, "rtol": 1e-7,
+                                    "dt": 1e-6, "t_end": 2.0}},
+                  make_spec(Scene(), get("event"), grid))
+    coin_ok("render", str(path), "-o", str(tmp_path / "e.png"), "--dpi", "40")
+    stats = json.loads(coin_ok("stats", str(path), "--json").output)  # valid JSON: no NaN
+    assert stats["computed"] == 0 and stats["standing"]["probability"] is None
+    assert "nothing computed yet" in coin_ok("stats", str(path)).output
+
+
+def test_wilson_and_stats_pure():
+    lo, hi = wilson(635, 262144)  # the paper's count
+    assert lo < 635 / 262144 < hi
+    assert math.isclose(lo, 0.002240, rel_tol=2e-3) and math.isclose(hi, 0.002620, rel_tol=2e-3)
+    assert wilson(0, 10)[0] == 0.0 and wilson(10, 10)[1] == 1.0
+    q = np.array([[0, 1, 2, NOT_COMPUTED], [-1, 0, 0, NOT_COMPUTED]], dtype=np.int16)
+    st = np.array([[0, 0, 1, 2], [0, 0, 0, 255]], dtype=np.uint8)
+    unc = np.array([[0, 1, 0, 0], [0, 0, 0, 255]], dtype=np.uint8)
+    s = basin_stats(q, st, unc)
+    assert (s["computed"], s["not_computed"], s["non_finite"], s["unsettled"]) == (7, 1, 1, 1)
+    assert s["labelled"] == 6 and s["standing"]["count"] == 2
+    assert s["uncertain"]["count"] == 1 and s["uncertain"]["standing_certain"]["count"] == 1
+    assert {r["n"]: r["count"] for r in s["outcomes"]} == {-1: 1, 0: 3, 1: 1, 2: 1}
+
+
+# -- physics -------------------------------------------------------------------------------------
+def test_mirror_symmetry_vphi_to_minus_vphi():
+    """Reflecting x -> -x maps (vphi0, n) to (-vphi0, -n) at low vy0, where labels are robust."""
+    scene = Scene()
+    grid = make_grid(scene, {"vy": (0.1, 0.75), "vphi": (-20.0, 20.0)}, (8, 9), (8, 9))
+    result = compute_tile(make_spec(scene, get("event"), grid), (0, 0))
+    q = result.arrays["quarter_turns"].astype(int)
+    assert (result.arrays["status"] == 0).all()
+    np.testing.assert_array_equal(q, -q[:, ::-1])
+    assert np.abs(q).max() >= 2  # not trivially all zero
+
+
+def test_certify_flags_chaotic_cells_only(tmp_path):
+    """rtol 1e-4 against rtol 1e-5: cells with vy0 >= 1.8 m/s change, none below 0.8 m/s."""
+    path = tmp_path / "c.zarr"
+    coin_ok(str(path), "--vy", "0.2:2", "--res", "16", "--chunk", "8", "--rtol", "1e-4",
+            "--certify", "-q")
+    basin = store.open_basin(path)
+    assert basin.attrs["certify"]["rtol"] == pytest.approx(1e-5)
+    unc = basin.arrays["uncertain"]
+    vy = basin.coords[0]
+    assert set(np.unique(unc)) <= {0, 1}
+    assert unc[vy < 0.8].sum() == 0
+    assert unc[vy >= 1.8].sum() > 0
+    stats = json.loads(coin_ok("stats", str(path), "--json").output)
+    u = stats["uncertain"]
+    assert u["count"] == int(unc.sum()) and 0 < u["fraction"] < 1
+    assert u["certain"] + u["count"] == stats["labelled"]
+    coin_ok("render", str(path), "-o", str(tmp_path / "c.png"), "--dpi", "50")

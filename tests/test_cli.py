@@ -1,0 +1,216 @@
+"""The `coin` command line: machine-readable output, presets, and one-line errors (exit code 2,
+no traceback) for every kind of bad input."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from coincli.cli import app
+
+runner = CliRunner()
+REPO = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(autouse=True)
+def in_tmp(tmp_path, monkeypatch):
+    """Run every command in a scratch directory (simulate may write a recording by default)."""
+    monkeypatch.chdir(tmp_path)
+    return tmp_path
+
+
+def run(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def assert_one_line_error(result, *fragments):
+    assert result.exit_code == 2, (result.exit_code, result.stdout, result.stderr)
+    # a typer.Exit/SystemExit, not an exception escaping the command
+    assert result.exception is None or isinstance(result.exception, SystemExit), \
+        repr(result.exception)
+    assert result.stdout == ""
+    err = result.stderr.strip()
+    assert err, "the error must be reported on stderr"
+    assert len(err.splitlines()) == 1, err
+    assert "Traceback" not in err
+    assert err.startswith("error:"), err
+    for fragment in fragments:
+        assert fragment in err, (fragment, err)
+    return err
+
+
+# -- simulate --json ---------------------------------------------------------------------------
+
+def test_simulate_json_fig2(in_tmp):
+    result = run("simulate", "--vy", "1.197", "--vphi", "3.508", "--json", "--no-rrd")
+    assert result.exit_code == 0, (result.stdout, result.stderr, result.exception)
+    data = json.loads(result.stdout)  # one JSON object and nothing else on stdout
+    assert isinstance(data, dict)
+    for key in ("quarter_turns", "settled", "settle_time", "final_state", "method", "dt", "steps",
+                "wall_time"):
+        assert key in data, key
+    assert set(data["final_state"]) == {"x", "y", "phi", "vx", "vy", "vphi"}
+    assert isinstance(data["quarter_turns"], int)
+    assert data["settled"] is True
+    assert 0.0 < data["settle_time"] <= 2.0
+    assert data["steps"] > 0 and data["wall_time"] >= 0.0
+    assert data["parameters"]["initial"]["vy"] == 1.197
+    assert data["parameters"]["initial"]["vphi"] == 3.508
+    assert list(in_tmp.iterdir()) == [], "--no-rrd must write no file"
+
+
+def test_simulate_json_with_a_recording_is_still_pure_json(in_tmp):
+    result = run("simulate", "--vy", "0.3", "--vphi", "5", "--json", "--rrd", in_tmp / "t.rrd")
+    assert result.exit_code == 0, (result.stdout, result.stderr, result.exception)
+    assert json.loads(result.stdout)["settled"] is True
+    assert (in_tmp / "t.rrd").stat().st_size > 0
+
+
+def test_simulate_json_options_reach_the_scene():
+    result = run("simulate", "--vy", "0.3", "--vphi", "-5", "--method", "rk4", "--dt", "2e-6",
+                 "--t-end", "0.05", "--full", "--json", "--no-rrd")
+    assert result.exit_code == 0, (result.stdout, result.stderr, result.exception)
+    data = json.loads(result.stdout)
+    assert data["method"] == "rk4" and data["dt"] == 2e-6
+    assert data["steps"] == 25_000
+    assert data["t_final"] == pytest.approx(0.05)
+
+
+def test_simulate_unsettled_json():
+    result = run("simulate", "--vy", "1.5", "--vphi", "10", "--t-end", "0.05", "--json",
+                 "--no-rrd")
+    assert result.exit_code == 0, (result.stdout, result.stderr, result.exception)
+    data = json.loads(result.stdout)
+    assert data["settled"] is False and data["status"] == "unsettled"
+    assert data["settle_time"] is None
+
+
+# -- bad input: one line on stderr, exit code 2 ------------------------------------------------
+
+@pytest.mark.parametrize("args,fragment", [
+    (["--mass", "0"], "mass"),
+    (["--mass", "-1"], "mass"),
+    (["--diameter", "0"], "diameter"),
+    (["--thickness", "-1"], "thickness"),
+    (["--inertia", "0"], "inertia"),
+    (["--k", "0"], "k must"),
+    (["--k", "-3"], "k must"),
+    (["--c", "-0.1"], "c must"),
+    (["--vy", "nan"], "vy"),
+    (["--vphi", "inf"], "vphi"),
+    (["--dt", "0"], "dt"),
+    (["--t-end", "-1"], "t_end"),
+    (["--preset", "nope"], "nope"),
+    (["--method", "nope"], "nope"),
+])
+def test_bad_values(args, fragment):
+    assert_one_line_error(run("simulate", "--vy", "0.3", *args), fragment)
+
+
+def test_step_beyond_stable_limit_names_it():
+    err = assert_one_line_error(run("simulate", "--method", "symplectic_euler", "--dt", "1e-3"),
+                                "stable step", "symplectic_euler")
+    assert "0.000329" in err or "3.29e-04" in err  # the limit for the paper's parameters
+    # --force runs it anyway (and says whether it went non-finite through its exit code)
+    forced = run("simulate", "--method", "symplectic_euler", "--dt", "1e-3", "--force",
+                 "--t-end", "0.2", "--json", "--no-rrd")
+    assert forced.exit_code in (0, 1), (forced.stderr, forced.exception)
+    assert json.loads(forced.stdout)["dt"] == 1e-3
+
+
+@pytest.mark.parametrize("command", ["stability", "methods"])
+def test_bad_values_other_commands(command):
+    assert_one_line_error(run(command, "--mass", "0"), "mass")
+    assert_one_line_error(run(command, "--preset", "nope"), "nope")
+
+
+PRESET_FILES = {
+    "syntax.toml": ('name = "x"\n[coin\nmass = 1\n', ["malformed"]),
+    "unknown_key.toml": ('[coin]\nmas = 0.003\n', ["mas", "[coin]"]),
+    "unknown_section.toml": ('[colour]\nred = 1\n', ["colour"]),
+    "wrong_type.toml": ('[coin]\nmass = "heavy"\n', ["mass", "heavy"]),
+    "wrong_type_table.toml": ('coin = 3\n', ["coin"]),
+    "wrong_type_bool.toml": ('[coin]\nmass = true\n', ["mass"]),
+    "negative.toml": ('[foundation]\nk = -5.0\n', ["k must"]),
+    "stop_flag.toml": ('[integration]\nstop_on_settle = "false"\n', ["stop_on_settle"]),
+}
+
+
+@pytest.mark.parametrize("filename", list(PRESET_FILES))
+def test_malformed_preset_file(in_tmp, filename):
+    text, fragments = PRESET_FILES[filename]
+    path = in_tmp / filename
+    path.write_text(text)
+    assert_one_line_error(run("simulate", "--preset", path, "--no-rrd"), filename, *fragments)
+
+
+def test_missing_preset_file(in_tmp):
+    assert_one_line_error(run("simulate", "--preset", in_tmp / "absent.toml"), "absent.toml")
+
+
+@pytest.mark.parametrize("name", ["[bold]", "[/x]", "a[red]b"])
+def test_error_messages_are_printed_verbatim(name):
+    """User text inside an error message (a preset name, a path) is not rich markup: it must be
+    printed as given, not swallowed or crash the error report."""
+    err = assert_one_line_error(run("simulate", "--preset", name), name)
+    assert name in err
+
+
+def test_preset_file_with_overrides(in_tmp):
+    path = in_tmp / "mine.toml"
+    path.write_text('name = "mine"\n[foundation]\nk = 250.0\nc = 0.05\n[initial]\nvy = 0.3\n')
+    result = run("stability", "--preset", path, "--json")
+    assert result.exit_code == 0, (result.stderr, result.exception)
+    data = json.loads(result.stdout)
+    assert data["k"] == 250.0 and data["standing_static"] is False
+    result = run("stability", "--preset", path, "--k", "400", "--json")
+    assert json.loads(result.stdout)["k"] == 400.0
+
+
+# -- presets, methods, module entry point --------------------------------------------------------
+
+def test_presets_lists_the_shipped_presets():
+    result = run("presets")
+    assert result.exit_code == 0, (result.stderr, result.exception)
+    for name in ("paper", "soft", "thick"):
+        assert name in result.stdout
+    data = json.loads(run("presets", "--json").stdout)
+    assert {"paper", "soft", "thick"} <= set(data)
+    assert data["paper"]["coin"]["mass"] == pytest.approx(3.14159e-3, rel=1e-5)
+    assert data["soft"]["foundation"]["k"] < 308.96
+    assert data["thick"]["coin"]["thickness"] > data["paper"]["coin"]["thickness"]
+
+
+def test_methods_json():
+    data = json.loads(run("methods", "--json").stdout)
+    names = [m["name"] for m in data["methods"]]
+    assert {"symplectic_euler", "verlet", "rk4", "dopri5", "event"} <= set(names)
+    se = next(m for m in data["methods"] if m["name"] == "symplectic_euler")
+    assert se["stable_step"] == pytest.approx(3.29e-4, rel=0.01)
+    assert data["omega_max"] == pytest.approx(5322.4, rel=1e-4)
+
+
+def test_python_m_coincli_help():
+    proc = subprocess.run([sys.executable, "-m", "coincli", "--help"], capture_output=True,
+                          text=True, cwd=REPO, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    for command in ("simulate", "stability", "presets", "methods"):
+        assert command in proc.stdout
+
+
+def test_installed_script_bad_input_has_no_traceback():
+    """The real console script, not the test runner: one line on stderr, exit code 2."""
+    coin = Path(sys.executable).parent / "coin"
+    if not coin.exists():
+        pytest.skip("console script not installed")
+    proc = subprocess.run([str(coin), "simulate", "--mass", "-1", "--no-rrd"],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    assert len(proc.stderr.strip().splitlines()) == 1
+    assert "Traceback" not in proc.stderr and "mass" in proc.stderr

@@ -1,0 +1,107 @@
+"""`coin stability` reproduces the paper's section 3 figures (eqs. 7-13, NOTES.md)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+from typer.testing import CliRunner
+
+from coincli.cli import app
+from coincli.presets import load
+from coincli.stability import analyse
+
+runner = CliRunner()
+
+
+def invoke(*args):
+    result = runner.invoke(app, list(args))
+    assert result.exit_code == 0, (result.stdout, result.stderr, result.exception)
+    return result
+
+
+def words(text: str) -> str:
+    """The text with every run of whitespace (rich's line wrapping included) made one space."""
+    return " ".join(text.split())
+
+
+def test_paper_figures_from_analyse():
+    rep = analyse(load("paper").scene)
+    assert f"{rep.rigid.ratio:.1f}" == "181.4"
+    assert f"{rep.elastic.ratio:.1f}" == "187.2"
+    assert f"{rep.k_min:.1f}" == "154.9"
+    assert f"{rep.k_cr:.2f}" == "308.96"
+    assert math.degrees(rep.phi_cr) == pytest.approx(84.289, abs=1e-3)
+    assert rep.lying_static and rep.standing_static and rep.single_corner_contact
+
+
+def test_formulas_independently():
+    """Eqs. 8-13 recomputed from the raw numbers (eq. 13 with the denominator 2 (r - r_d))."""
+    m, g, k = math.pi * 1e-3, 9.81, 1.0e4
+    r_d, r_t = 0.01, 0.001
+    r = math.hypot(r_d, r_t)
+    w = m * g
+    rep = analyse(load("paper").scene)
+    assert rep.rigid.v_max == pytest.approx(w * r, rel=1e-14)
+    assert rep.rigid.v_min1 == pytest.approx(w * r_t, rel=1e-14)
+    assert rep.rigid.v_min2 == pytest.approx(w * r_d, rel=1e-14)
+    assert rep.rigid.ratio == pytest.approx((r - r_t) / (r - r_d), rel=1e-12)
+    sink = w / (2 * k)
+    assert rep.elastic.v_max == pytest.approx(w * (r - w / k), rel=1e-14)
+    assert rep.elastic.v_min1 == pytest.approx(w * (r_t - sink), rel=1e-14)
+    assert rep.elastic.v_min2 == pytest.approx(w * (r_d - sink), rel=1e-14)
+    assert rep.elastic.ratio == pytest.approx((r - w / k - r_t + sink) / (r - w / k - r_d + sink),
+                                              rel=1e-12)
+    assert rep.k_min == pytest.approx(w * r / (2 * r_t ** 2), rel=1e-14)
+    assert rep.k_cr == pytest.approx(w / (2 * (r - r_d)), rel=1e-14)
+    assert rep.k_cr > 0
+    assert rep.e_crit == pytest.approx(w * (r - w / (2 * k)), rel=1e-14)
+
+
+def test_paper_figures_from_cli_json():
+    data = json.loads(invoke("stability", "--json").stdout)
+    assert round(data["rigid"]["ratio"], 1) == 181.4
+    assert round(data["elastic"]["ratio"], 1) == 187.2
+    assert round(data["k_min"], 1) == 154.9
+    assert round(data["k_cr"], 2) == 308.96
+    assert data["standing_static"] is True and data["lying_static"] is True
+    assert data["e_crit"] == pytest.approx(load("paper").scene.e_crit, rel=1e-14)
+    assert data["parameters"]["coin"]["mass"] == pytest.approx(math.pi * 1e-3)
+
+
+def test_paper_figures_in_the_table():
+    out = words(invoke("stability").stdout)
+    for figure in ("181.4", "187.2", "154.9 N/m", "308.96 N/m"):
+        assert figure in out
+    assert "cannot be at rest" not in out
+
+
+def test_soft_foundation_says_no_coin_can_stand():
+    scene = load("soft").scene
+    assert scene.foundation.k < analyse(scene).k_cr
+    rep = analyse(scene)
+    assert not rep.standing_static and rep.lying_static
+    out = words(invoke("stability", "--preset", "soft").stdout)
+    assert "a standing coin cannot be at rest" in out
+    assert "standing (phi = pi/2): static" not in out
+    data = json.loads(invoke("stability", "--preset", "soft", "--json").stdout)
+    assert data["standing_static"] is False
+
+
+def test_k_override_below_k_cr():
+    out = words(invoke("stability", "--k", "300").stdout)
+    assert "a standing coin cannot be at rest" in out
+    out = words(invoke("stability", "--k", "320").stdout)
+    assert "cannot be at rest" not in out
+
+
+def test_mass_of_3_14_grams():
+    """NOTES.md: the text's 3.14 g gives k_min 154.8 and k_cr 308.8; the ratios do not change."""
+    data = json.loads(invoke("stability", "--mass", "3.14e-3", "--json").stdout)
+    assert round(data["k_min"], 1) == 154.8
+    assert round(data["k_cr"], 1) == 308.8
+    assert round(data["rigid"]["ratio"], 1) == 181.4
+    assert round(data["elastic"]["ratio"], 1) == 187.2
+    out = words(invoke("stability", "--mass", "3.14e-3").stdout)
+    assert "154.8 N/m" in out
