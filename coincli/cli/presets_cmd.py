@@ -19,8 +19,8 @@ def presets_command(json_out: JsonOpt = False) -> None:
                              **p.scene.to_dict()} for p in found})
         return
     table = Table(title=f"Presets ({presets_mod.presets_dir()})", title_justify="left")
-    for col in ("name", "d [mm]", "t [mm]", "m [g]", "I (kg m^2)", "k (N/m)", "c (N s/m)",
-                "method", "description"):
+    for col in ("name", "d (mm)", "t (mm)", "m (g)", "I (kg m^2)", "k (N/m)", "c (N s/m)",
+                "integration"):
         table.add_column(col, overflow="fold")
     for p in found:
         s = p.scene
@@ -32,5 +32,9 @@ def presets_command(json_out: JsonOpt = False) -> None:
         name = f"{p.name} (default)" if p.name == presets_mod.DEFAULT_PRESET else p.name
         table.add_row(name, f"{s.coin.diameter * 1e3:g}", f"{s.coin.thickness * 1e3:g}",
                       f"{s.coin.mass * 1e3:.5g}", f"{s.coin.inertia:.4g}",
-                      f"{s.foundation.k:g}", f"{s.foundation.c:g}", method, p.description)
+                      f"{s.foundation.k:g}", f"{s.foundation.c:g}", method)
     console.print(table)
+    for p in found:
+        console.print(f"[bold]{p.name}[/]: {p.description}", highlight=False)
+    for p in found:
+        console.print(f"[bold]{p.name}[/]: {p.description}", highlight=False)

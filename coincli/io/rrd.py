@@ -200,7 +200,7 @@ def _contact_sets(t: np.ndarray, heights: np.ndarray, events: np.ndarray) -> np.
     return contact
 
 
-ARROW_PEAK_DIAMETERS = 1.5  # the largest contact force of a run is drawn this many diameters long
+ARROW_PEAK_DIAMETERS = 1.0  # the largest contact force of a run is drawn this many diameters long
 
 
 def force_arrows(frames: Frames, weight: float, diameter: float) -> np.ndarray:
@@ -283,7 +283,9 @@ def blueprint(frames: Frames | None = None, scene=None):
                                   background=(250, 250, 250, 255),
                                   overrides={PATH: trail}, **view2d),
                 rrb.Tabs(
-                    rrb.TextLogView(name="contact events", origin=EVENTS),
+                    rrb.TextLogView(name="contact events", origin=EVENTS,
+                                    columns=rrb.TextLogColumns(
+                                        text_log_columns=["LogLevel", "Body"])),
                     rrb.TextDocumentView(name="parameters", origin=INFO),
                 ),
                 row_shares=[5, 1],
@@ -315,7 +317,7 @@ def _visual_bounds(frames: Frames, scene):
     d = scene.coin.diameter
     arrows = force_arrows(frames, scene.coin.mass * scene.g, d)
     points = np.concatenate([frames.corners.reshape(-1, 2),
-                             (frames.corners + arrows).reshape(-1, 2)]) * MM
+                             (frames.corners - arrows).reshape(-1, 2)]) * MM
     d *= MM
     x0, x1 = float(points[:, 0].min()) - 0.5 * d, float(points[:, 0].max()) + 0.5 * d
     y0, y1 = min(float(points[:, 1].min()), 0.0) - 0.25 * d, float(points[:, 1].max()) + 0.25 * d
@@ -404,12 +406,12 @@ def _log_static(rec, rr, trajectory, frames: Frames, log_every: float | None) ->
                                     show_labels=False, draw_order=10.0), static=True)
     rec.log(CORNERS, rr.Points2D.from_fields(labels=["0", "1", "2", "3"], show_labels=False,
                                              radii=0.6, draw_order=30.0), static=True)
-    rec.log(FORCES, rr.Arrows2D.from_fields(colors=[FORCE_COLOUR], radii=0.25, draw_order=25.0),
-            static=True)
+    rec.log(FORCES, rr.Arrows2D.from_fields(colors=[FORCE_COLOUR], radii=0.25, draw_order=25.0,
+                                            show_labels=False), static=True)  # |F| on hover
     rec.log(PATH, rr.LineStrips2D.from_fields(colors=[PATH_COLOUR], radii=0.12,
                                               draw_order=5.0), static=True)
     for name, label, colour in ENERGY_SERIES:
-        style = dict(colors=[colour], names=[label], widths=[2.0])
+        style = dict(colors=[colour], names=[label], widths=[2.0], aggregation_policy="MinMax")
         if name == "e_crit":
             style["widths"] = [1.5]
         rec.log(f"{ENERGY}/{name}", rr.SeriesLines(**style), static=True)
@@ -421,8 +423,9 @@ def _log_static(rec, rr, trajectory, frames: Frames, log_every: float | None) ->
                                          widths=[2.0], interpolation_mode="StepAfter"),
             static=True)
     for i, colour in enumerate(CORNER_SERIES_COLOURS):
-        rec.log(f"{PENETRATION}/corner{i}", rr.SeriesLines(colors=[colour],
-                                                          names=[f"corner {i}"], widths=[2.0]),
+        rec.log(f"{PENETRATION}/corner{i}",
+                rr.SeriesLines(colors=[colour], names=[f"corner {i}"], widths=[2.0],
+                               aggregation_policy="MinMax"),  # zoomed out, keep the peaks
                 static=True)
 
     params = _flat_parameters(trajectory, log_every)
@@ -485,9 +488,10 @@ def _info_markdown(trajectory, frames: Frames, log_every: float | None) -> str:
               + f" of simulated time, plus the exact state at each of the {len(frames.events)} "
               "contact events); timeline `sim_time`.", "",
               "Scene in mm with y up: the coin (gold, its +y face purple), its corners (red when "
-              "in contact, blue when free), the contact forces (orange arrows from the corners "
-              "they act on, labelled with |F|; length grows with log(1 + |F|/mg), the "
-              f"largest force of the run {ARROW_PEAK_DIAMETERS:g} diameters long) and the path "
+              "in contact, blue when free), the contact forces (orange arrows from the ground "
+              "into the corners they act on, |F| in their labels; length grows with "
+              "log(1 + |F|/mg), the largest force of the run "
+              f"{ARROW_PEAK_DIAMETERS:g} diameter(s) long) and the path "
               "of the centroid up to the current time (grey)."]
     if trajectory.notes:
         lines += [""] + [f"*Note:* {note}" for note in trajectory.notes]
@@ -540,7 +544,7 @@ def _send_scene(rec, rr, trajectory, frames: Frames) -> None:
     mask = frames.contact.reshape(-1)
     arrows = force_arrows(frames, scene.coin.mass * scene.g, scene.coin.diameter)
     vectors = arrows.reshape(-1, 2)[mask] * MM
-    origins = frames.corners.reshape(-1, 2)[mask] * MM  # the tail at the point of application
+    origins = frames.corners.reshape(-1, 2)[mask] * MM - vectors  # the tip on the corner
     magnitude = np.hypot(frames.forces[..., 0], frames.forces[..., 1]).reshape(-1)[mask]
     labels = np.char.mod("%.3g N", magnitude).tolist()
     rec.send_columns(FORCES, indexes=index, columns=rr.Arrows2D.columns(
@@ -586,14 +590,15 @@ def _send_text_log(rec, rr, trajectory, frames: Frames) -> None:
         corner, kind = int(row[1]), int(row[2])
         times.append(float(row[0]))
         if kind > 0:
-            texts.append(f"corner {corner} touches down (contact onset)")
+            texts.append(f"t = {row[0]:.9f} s: corner {corner} touches down (contact onset)")
         else:
-            texts.append(f"corner {corner} lifts off")
+            texts.append(f"t = {row[0]:.9f} s: corner {corner} lifts off")
         levels.append("DEBUG" if kind < 0 else "INFO")
     end = trajectory.t_final
     if trajectory.settled and not math.isnan(trajectory.settle_time):
         times.append(trajectory.settle_time)
-        texts.append(f"settled: energy below E_crit = {trajectory.e_crit * MJ:.4g} mJ, "
+        texts.append(f"t = {trajectory.settle_time:.9f} s: settled, energy below E_crit = "
+                     f"{trajectory.e_crit * MJ:.4g} mJ, "
                      f"n = {trajectory.quarter_turns} is final ({trajectory.pose})")
         levels.append("INFO")
         if trajectory.scene.integration.stop_on_settle:
