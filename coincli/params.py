@@ -86,7 +86,7 @@ class Integration:
 
     method: str = "event"
     dt: float = 1.0e-6
-    rtol: float = 1.0e-7
+    rtol: float = 1.0e-6
     t_end: float = 2.0
     stop_on_settle: bool = True
 

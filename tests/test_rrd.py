@@ -222,7 +222,7 @@ def test_contact_events_are_on_the_timeline(fig2):
 def test_parameters_and_version_are_stored(fig2):
     tr, _, _, rec = fig2
     doc = rec.static("/info").column("TextDocument:text").to_pylist()[0][0]
-    assert __version__ in doc and "event" in doc and "rtol = 1e-07" in doc
+    assert __version__ in doc and "event" in doc and f"rtol = {tr.scene.integration.rtol:g}" in doc
     params = rec.static("/info/parameters")
     value = {name: params.column(name).to_pylist()[0] for name in params.column_names
              if not name.startswith("rerun")}

@@ -102,7 +102,7 @@ def plot_study(study, path: Path, title: str = "") -> None:
     ax_label.set_ylabel(f"label error on the {study.robust_cells} robust cells "
                         f"(0 drawn at {floor:.1e})")
     ax_label.set_title("Basin label error vs cost")
-    ax_label.legend(loc="upper right", fontsize=8)
+    ax_label.legend(loc="lower right", fontsize=8)
     if title:
         fig.suptitle(title, fontsize=10)
     fig.savefig(path, dpi=130)
