@@ -7,7 +7,7 @@ BIN    := $(VENV)/bin
 COIN   := $(BIN)/coin
 OUT    ?= out
 
-.PHONY: install demo test test-fast bench lint docs clean
+.PHONY: install demo test bench lint docs clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -33,6 +33,18 @@ test: install
 
 bench: install
 	$(COIN) bench
+
+# Regenerate every picture and table under docs/ (about 20 minutes on 2 cores; the screenshot
+# needs Debian's xvfb and mesa-vulkan-drivers).
+docs: install
+	$(COIN) accuracy --res 32 -o docs/accuracy.png --table docs/accuracy.json
+	$(COIN) basin $(OUT)/docs-basin.zarr --overwrite
+	$(COIN) basin render $(OUT)/docs-basin.zarr -o docs/basin.png
+	$(COIN) basin $(OUT)/docs-certified.zarr --certify --overwrite
+	$(COIN) basin render $(OUT)/docs-certified.zarr -o docs/basin-certified.png
+	$(COIN) simulate --vy 1.197 --vphi 3.508 --rrd $(OUT)/fig2.rrd
+	xvfb-run -a -s '-screen 0 1600x1000x24' $(BIN)/rerun --window-size 1600x1000 \
+		--screenshot-to docs/simulate-fig2.png $(OUT)/fig2.rrd
 
 lint: install
 	$(BIN)/ruff check coincli tests
