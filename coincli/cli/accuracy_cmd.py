@@ -15,8 +15,20 @@ from ..integrators import METHODS
 from ..params import ParameterError
 from . import app
 from .common import (
-    COpt, DiameterOpt, GOpt, InertiaOpt, JsonOpt, KOpt, MassOpt, PresetOpt, ThicknessOpt,
-    build_scene, console, err_console, print_json, user_errors,
+    COpt,
+    DiameterOpt,
+    GOpt,
+    InertiaOpt,
+    JsonOpt,
+    KOpt,
+    MassOpt,
+    PresetOpt,
+    ThicknessOpt,
+    build_scene,
+    console,
+    err_console,
+    print_json,
+    user_errors,
 )
 
 
@@ -66,8 +78,9 @@ def accuracy_command(
     """Chart accuracy against cost for every method, or (--stability) find where they fail.
 
     Trajectory error: the state of five throws ~0.06 s after their first impact against the
-    event method at rtol 1e-12. Label error: the fraction of robust cells of a basin grid whose n differs from
-    that reference; robust cells are those where it agrees with RK4 at h = 2.5e-7.
+    event method at rtol 1e-12. Label error: the fraction of robust cells of a basin grid whose
+    n differs from that reference; robust cells are those where it agrees with RK4 at
+    h = 2.5e-7.
     """
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,

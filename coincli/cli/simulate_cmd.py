@@ -78,7 +78,8 @@ def simulate_command(
     """Run one throw and print its outcome: n quarter turns, lying or standing, when it settled.
     The throw is also recorded for the Rerun viewer (coin.rrd unless --rrd/--no-rrd).
 
-    Example (the throw of the paper's fig. 2, which stands there): coin simulate --vy 1.197 --vphi 3.508
+    Example (the throw of the paper's fig. 2, which stands there):
+    coin simulate --vy 1.197 --vphi 3.508
     """
     rrd_path = None if no_rrd else rrd
     recording = rrd_path is not None or spawn or connect is not None

@@ -101,20 +101,24 @@ def error_scales(p, rtol, scale):
 
 
 @jit
-def dense_state(rc, theta, out):
-    """State at fraction theta of the last step from its continuous extension."""
+def dense_component(rc, theta, j):
+    """Component j of the state at fraction theta of the last step (continuous extension)."""
     one_minus = 1.0 - theta
+    return rc[0, j] + theta * (rc[1, j] + one_minus * (
+        rc[2, j] + theta * (rc[3, j] + one_minus * rc[4, j])))
+
+
+@jit
+def dense_state(rc, theta, out):
     for j in range(6):
-        out[j] = rc[0, j] + theta * (rc[1, j] + one_minus * (
-            rc[2, j] + theta * (rc[3, j] + one_minus * rc[4, j])))
+        out[j] = dense_component(rc, theta, j)
 
 
 @jit
 def dense_corner_height(p, rc, theta, i):
-    one_minus = 1.0 - theta
-    y = rc[0, 1] + theta * (rc[1, 1] + one_minus * (rc[2, 1] + theta * (rc[3, 1] + one_minus * rc[4, 1])))
-    phi = rc[0, 2] + theta * (rc[1, 2] + one_minus * (rc[2, 2] + theta * (rc[3, 2] + one_minus * rc[4, 2])))
-    return y + SX[i] * p[P_RD] * math.sin(phi) + SY[i] * p[P_RT] * math.cos(phi)
+    phi = dense_component(rc, theta, 2)
+    return (dense_component(rc, theta, 1) + SX[i] * p[P_RD] * math.sin(phi)
+            + SY[i] * p[P_RT] * math.cos(phi))
 
 
 @jit
@@ -155,11 +159,8 @@ def _corner_heights_at(p, rc, theta, s_start, s_end, out):
     elif theta == 1.0:
         y, phi = s_end[1], s_end[2]
     else:
-        one_minus = 1.0 - theta
-        y = rc[0, 1] + theta * (rc[1, 1] + one_minus * (rc[2, 1] + theta * (
-            rc[3, 1] + one_minus * rc[4, 1])))
-        phi = rc[0, 2] + theta * (rc[1, 2] + one_minus * (rc[2, 2] + theta * (
-            rc[3, 2] + one_minus * rc[4, 2])))
+        y = dense_component(rc, theta, 1)
+        phi = dense_component(rc, theta, 2)
     c = math.cos(phi)
     sn = math.sin(phi)
     for i in range(4):

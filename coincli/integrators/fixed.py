@@ -185,6 +185,16 @@ def record_events(events, n_events, t, old_mask, new_mask, x, y, phi, vx, vy, vp
 
 
 @jit
+def store_state(out, x, y, phi, vx, vy, vphi):
+    out[0] = x
+    out[1] = y
+    out[2] = phi
+    out[3] = vx
+    out[4] = vy
+    out[5] = vphi
+
+
+@jit
 def record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi):
     if n_samples < samples.shape[0]:
         row = samples[n_samples]
@@ -247,12 +257,7 @@ def integrate_fixed(method, p, state, dt, t_end, stop_on_settle, sample_dt, samp
                 n_samples = record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi)
                 next_sample += sample_dt
             if status != SETTLED:
-                cur[0] = x
-                cur[1] = y
-                cur[2] = phi
-                cur[3] = vx
-                cur[4] = vy
-                cur[5] = vphi
+                store_state(cur, x, y, phi, vx, vy, vphi)
                 if total_energy(p, cur) < e_crit:
                     status = SETTLED
                     settle_time = t
@@ -261,23 +266,13 @@ def integrate_fixed(method, p, state, dt, t_end, stop_on_settle, sample_dt, samp
                         break
     if record and n_samples > 0 and samples[n_samples - 1, 0] < t:
         n_samples = record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi)
-    cur[0] = x
-    cur[1] = y
-    cur[2] = phi
-    cur[3] = vx
-    cur[4] = vy
-    cur[5] = vphi
+    store_state(cur, x, y, phi, vx, vy, vphi)
     if status == SETTLED and not total_energy(p, cur) < e_crit:
         # Damping only removes energy: a run that fell below E_crit and ends above it has been
         # pumped by an unstable step. Its certificate is void.
         status = UNSETTLED
         n_well = NO_WELL
         settle_time = math.nan
-    final[0] = x
-    final[1] = y
-    final[2] = phi
-    final[3] = vx
-    final[4] = vy
-    final[5] = vphi
+    store_state(final, x, y, phi, vx, vy, vphi)
     return t, steps, status, settle_time, n_well, n_samples, n_events
 
