@@ -45,8 +45,10 @@ class StabilityReport:
     k_cr: float
     e_crit: float
     lying_static: bool
-    standing_static: bool
+    standing_static: bool  # by the paper's criterion, k > k_cr
     single_corner_contact: bool
+    standing_well_depth: float  # J, E_crit minus the exact resting energy of a standing coin
+    k_stand_exact: float  # N/m, the stiffness where that depth vanishes (k_cr / 2)
 
     def to_dict(self) -> dict:
         out = asdict(self)
@@ -69,7 +71,11 @@ def analyse(scene: Scene) -> StabilityReport:
                            v_min1=weight * (r_t - sink), v_min2=weight * (r_d - sink))
     k_min = weight * r / (2 * r_t**2)  # eq. 11
     k_cr = weight / (2 * (r - r_d))  # eq. 13 with the denominator's sign fixed
+    # Exact: a standing coin rests on two corners (stiffness 2k), energy m g r_d - (m g)^2 / 4k
+    # with the springs' energy counted. It is a well only while that is below E_crit.
+    standing_rest = weight * r_d - weight**2 / (4 * k)
     return StabilityReport(
         phi_cr=coin.phi_cr, rigid=rigid, elastic=elastic, k=k, k_min=k_min, k_cr=k_cr,
         e_crit=scene.e_crit, lying_static=True, standing_static=k > k_cr,
-        single_corner_contact=k >= k_min)
+        single_corner_contact=k >= k_min, standing_well_depth=scene.e_crit - standing_rest,
+        k_stand_exact=weight / (4 * (r - r_d)))

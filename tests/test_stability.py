@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 
 from coincli.cli import app
 from coincli.presets import load
+from coincli.simulate import simulate
 from coincli.stability import analyse
 
 runner = CliRunner()
@@ -105,3 +106,23 @@ def test_mass_of_3_14_grams():
     assert round(data["elastic"]["ratio"], 1) == 187.2
     out = words(invoke("stability", "--mass", "3.14e-3").stdout)
     assert "154.8 N/m" in out
+
+
+@pytest.mark.parametrize("k,stays", [(250.0, True), (170.0, True), (140.0, False)])
+def test_standing_rest_below_k_cr_follows_the_exact_energies(k, stays):
+    """The paper's k_cr = 309 N/m compares centroid heights only. With the springs' energy
+    counted, a standing coin keeps a well for k > k_cr / 2 = 154.5 N/m: a standing coin nudged
+    at k = 250 or 170 N/m stays standing, at 140 N/m it falls."""
+    scene = load("paper").scene.with_overrides(k=k)
+    rep = analyse(scene)
+    assert (rep.standing_well_depth > 0) is stays
+    assert rep.k_stand_exact == pytest.approx(rep.k_cr / 2)
+    weight = scene.coin.mass * scene.g
+    run = scene.with_overrides(y0=scene.coin.r_d - weight / (2 * k), phi0=math.pi / 2,
+                               vphi=0.01, t_end=1.0, stop_on_settle=False)
+    tr = simulate(run)
+    assert tr.status == "settled"
+    assert (tr.quarter_turns == 1) is stays
+    out = words(invoke("stability", "--k", str(k)).stdout)
+    assert "a standing coin cannot be at rest" in out
+    assert ("shallow standing well" in out) is stays

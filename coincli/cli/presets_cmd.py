@@ -36,5 +36,3 @@ def presets_command(json_out: JsonOpt = False) -> None:
     console.print(table)
     for p in found:
         console.print(f"[bold]{p.name}[/]: {p.description}", highlight=False)
-    for p in found:
-        console.print(f"[bold]{p.name}[/]: {p.description}", highlight=False)

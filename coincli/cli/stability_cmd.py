@@ -72,14 +72,27 @@ def stability_command(
                  "above it a standing coin can be at rest")
     crit.add_row("E_crit", f"{report.e_crit * mj:.6g} mJ",
                  "m g (r - m g / 2k): below it the count of quarter turns is final")
+    crit.add_row("standing well", f"{report.standing_well_depth * mj:.4g} mJ",
+                 "E_crit minus a standing coin's resting energy, springs counted "
+                 "(exact; > 0 for k > k_cr/2)")
     console.print(crit)
     states = ["lying (phi = 0): static"]
     if report.standing_static:
         states.append("standing (phi = pi/2): static")
     console.print("Static states for k = {:g} N/m: {}.".format(report.k, "; ".join(states)))
     if not report.standing_static:
-        console.print(f"[bold yellow]k = {report.k:g} N/m is below k_cr = {report.k_cr:.2f} "
-                      "N/m: a standing coin cannot be at rest; every coin ends lying.[/]")
+        if report.standing_well_depth > 0:
+            console.print(
+                f"[bold yellow]k = {report.k:g} N/m is below k_cr = {report.k_cr:.2f} N/m: by the "
+                "paper's criterion (eq. 13) a standing coin cannot be at rest.[/] Counting the "
+                "foundation's elastic energy, a shallow standing well of "
+                f"{report.standing_well_depth * mj:.3g} mJ remains down to k = "
+                f"{report.k_stand_exact:.1f} N/m, so a coin may still end standing.")
+        else:
+            console.print(f"[bold yellow]k = {report.k:g} N/m is below k_cr = {report.k_cr:.2f} "
+                          f"N/m and below k_cr / 2 = {report.k_stand_exact:.1f} N/m: a standing "
+                          "coin cannot be at rest (by the paper's criterion and by the exact "
+                          "energies); every coin ends lying.[/]")
     if not report.single_corner_contact:
         console.print(f"[yellow]k is below k_min = {report.k_min:.1f} N/m: a coin at phi_cr "
                       "sinks onto a second corner (eq. 10 does not hold).[/]")
