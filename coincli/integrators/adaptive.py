@@ -168,15 +168,14 @@ def _corner_heights_at(p, rc, theta, s_start, s_end, out):
 
 
 @jit
-def find_event(p, rc, h, mode, s_start, s_end):
+def find_event(p, rc, h, mode, s_start, s_end, before, after):
     """Earliest contact event inside the accepted step: (theta, mask of the corners that switch
     there), or (2.0, 0) if none. A rotating coin can dip a corner below the surface and lift it
     again within one long step, so the step is scanned in pieces of at most SCAN_TURN of rotation
     (the centroid's parabola is concave and cannot hide a dip by itself)."""
     turn = abs(s_end[2] - s_start[2])
     pieces = 1 + min(64, int(turn / SCAN_TURN))
-    before = np.empty(4)
-    after = np.empty(4)
+    # before/after: work arrays of 4 heights, allocated once per trajectory by the caller
     _corner_heights_at(p, rc, 0.0, s_start, s_end, before)
     lo = 0.0
     for piece in range(1, pieces + 1):
@@ -278,6 +277,8 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
     s_new = np.empty(6)
     tmp = np.empty(6)
     scale = np.empty(6)
+    before = np.empty(4)
+    after = np.empty(4)
     error_scales(p, rtol, scale)
     e_crit = critical_energy(p)
     record = samples.shape[0] > 0 and sample_dt > 0.0
@@ -376,7 +377,7 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
             rc[3, j] = d - h * k[6, j] - rc[2, j]
             rc[4, j] = h * (D1 * k[0, j] + D3 * k[2, j] + D4 * k[3, j] + D5 * k[4, j]
                             + D6 * k[5, j] + D7 * k[6, j])
-        theta_event, event_mask = find_event(p, rc, h, mode, s, s_new)
+        theta_event, event_mask = find_event(p, rc, h, mode, s, s_new, before, after)
         if event_mask != 0:
             dense_state(rc, theta_event, s_new)
             t_new = t + theta_event * h
