@@ -37,7 +37,7 @@ def load_preset_file(path: Path) -> Preset:
     try:
         with open(path, "rb") as fh:
             data = tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ParameterError(f"malformed preset file {path}: {exc}") from None
     except OSError as exc:
         raise ParameterError(f"cannot read preset file {path}: {exc.strerror}") from None

@@ -43,16 +43,13 @@ def coin_ok(*args: str):
 
 # -- comparing stores ----------------------------------------------------------------------------
 def _chunk_files(path: Path) -> dict[str, bytes]:
-    """Every file of the store except the measured cost and the group's metadata (whose `runs`
-    attribute records wall times)."""
+    """Every file of the store, metadata included (measured costs live beside the store, in
+    out.zarr.cost/, so the store itself must be bit-identical)."""
     out = {}
     for root, _, files in os.walk(path):
         for name in files:
             full = Path(root) / name
-            rel = full.relative_to(path).as_posix()
-            if rel == "zarr.json" or rel.startswith("tile_seconds/c"):
-                continue
-            out[rel] = full.read_bytes()
+            out[full.relative_to(path).as_posix()] = full.read_bytes()
     return out
 
 
@@ -63,8 +60,6 @@ def assert_same_store(a: Path, b: Path) -> None:
     names = sorted(ga.array_keys())
     assert names == sorted(gb.array_keys())
     for name in names:
-        if name == "tile_seconds":
-            continue
         x, y = ga[name][:], gb[name][:]
         assert x.dtype == y.dtype, name
         assert x.tobytes() == y.tobytes(), f"array {name} differs"
@@ -72,9 +67,7 @@ def assert_same_store(a: Path, b: Path) -> None:
     assert sorted(fa) == sorted(fb)
     for rel in fa:
         assert fa[rel] == fb[rel], f"file {rel} differs"
-    attrs_a = {k: v for k, v in ga.attrs.items() if k != "runs"}
-    attrs_b = {k: v for k, v in gb.attrs.items() if k != "runs"}
-    assert attrs_a == attrs_b
+    assert dict(ga.attrs) == dict(gb.attrs)
 
 
 def done_tiles(path: Path) -> int:
@@ -172,7 +165,8 @@ def test_store_layout_and_xarray(tmp_path):
     assert attrs["parameters"]["foundation"]["k"] == 1e4
     assert attrs["parameters"]["initial"]["vy"] is None  # swept
     assert attrs["method"]["name"] == "event" and attrs["version"]
-    assert len(attrs["runs"]) == 1
+    assert "runs" not in attrs and len(store.open_basin(path).runs) == 1
+    assert np.isfinite(store.open_basin(path).tile_seconds).all()
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no consolidated-metadata fallback warning
         ds = xr.open_zarr(path)
@@ -265,7 +259,7 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
     assert 3 <= basin.done.sum() < basin.done.size
     # every flagged tile is complete
     assert (basin.arrays["status"][basin.computed] != 255).all()
-    runs = basin.attrs["runs"]
+    runs = basin.runs
     assert runs[-1]["interrupted"] is True
     coin_ok(str(path), *KILL_ARGS)
     assert store.open_basin(path).done.all()
@@ -281,7 +275,7 @@ def test_dask_runs_give_the_same_store(tmp_path):
     workers = tmp_path / "workers.zarr"
     coin_ok(str(workers), *args, "--workers", "2")  # a 2-process LocalCluster
     assert_same_store(local, workers)
-    assert store.open_basin(workers).attrs["runs"][0]["mode"] == "dask"
+    assert store.open_basin(workers).runs[0]["mode"] == "dask"
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
                       dashboard_address=None) as cluster:
         remote = tmp_path / "remote.zarr"

@@ -63,7 +63,7 @@ def accuracy_command(
     res: Annotated[str, typer.Option("--res", help="Label grid, N or NxM (vy0 x vphi0).")] = "32",
     vy_range: Annotated[str, typer.Option("--vy-range", help="vy0 range LO:HI (m/s).")] = "0.05:2",
     vphi_range: Annotated[str, typer.Option("--vphi-range", help="vphi0 range LO:HI "
-                                            "[rad/s].")] = "-20:20",
+                                            "(rad/s).")] = "-20:20",
     methods: Annotated[str, typer.Option("--methods", help="Comma-separated methods.")] = ",".join(
         acc.LADDERS),
     quick: Annotated[bool, typer.Option("--quick", help="Two settings per method (a smoke "

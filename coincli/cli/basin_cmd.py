@@ -332,6 +332,11 @@ def render_command(
             raise ParameterError(f"-o {target}: the file name must end in .png")
         if n_max is not None and n_max < 1:
             raise ParameterError(f"--n-max must be at least 1, got {n_max}")
+        from ..io.rrd import check_rrd_path  # a writable file path (numpy-only module)
+
+        check_rrd_path(target)
+        if rrd is not None:
+            check_rrd_path(rrd)
         render_png(basin, target, title=title, dpi=dpi, n_max=n_max)
         console.print(f"wrote {target}")
         if rrd is not None:
@@ -360,7 +365,7 @@ def stats_command(
         basin = open_basin(path)
     a = basin.arrays
     stats = basin_stats(a["quarter_turns"], a["status"], a.get("uncertain"),
-                        basin.tile_seconds, basin.done, basin.attrs.get("runs"))
+                        basin.tile_seconds, basin.done, basin.runs)
     attrs = basin.attrs
     if json_out:
         print_json({"path": str(path), "version": __version__, "store_version": attrs["version"],

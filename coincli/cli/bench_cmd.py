@@ -16,9 +16,18 @@ from rich.table import Table
 
 from .. import bench
 from ..accuracy import Grid
+from ..params import ParameterError
 from . import app
 from .accuracy_cmd import parse_range, parse_res
-from .common import JsonOpt, PresetOpt, build_scene, console, print_json, user_errors
+from .common import (
+    JsonOpt,
+    PresetOpt,
+    build_scene,
+    console,
+    err_console,
+    print_json,
+    user_errors,
+)
 
 
 @app.command("bench")
@@ -32,7 +41,7 @@ def bench_command(
                                            "sweep timed at the end (0 to skip).")] = 512,
     vy_range: Annotated[str, typer.Option("--vy-range", help="vy0 range LO:HI (m/s).")] = "0.05:2",
     vphi_range: Annotated[str, typer.Option("--vphi-range", help="vphi0 range LO:HI "
-                                            "[rad/s].")] = "-20:20",
+                                            "(rad/s).")] = "-20:20",
     threads: Annotated[int, typer.Option("--threads", help="Threads for the label grids.")] = (
         os.cpu_count() or 1),
     preset: PresetOpt = "paper", json_out: JsonOpt = False,
@@ -41,6 +50,10 @@ def bench_command(
     setting (side by side), their label agreement with the converged reference, and the wall
     time of the full default basin on all cores."""
     with user_errors():
+        if threads < 1 or repeats < 1:
+            raise ParameterError("--threads and --repeats must be at least 1")
+        if basin_res != 0 and basin_res < 2:
+            raise ParameterError(f"--basin-res must be 0 (skip) or at least 2, got {basin_res}")
         scene = build_scene(preset)
         vy, vphi = parse_range(vy_range, "--vy-range"), parse_range(vphi_range, "--vphi-range")
         cost_grid = Grid.linear(vy, vphi, parse_res(cost_res))
@@ -99,6 +112,7 @@ def time_basin(res: int, say) -> dict:
                                str(res), "--quiet"], capture_output=True, text=True)
         wall = time.perf_counter() - start
         if proc.returncode != 0:
+            err_console.print(proc.stderr.strip(), markup=False, highlight=False)
             raise typer.Exit(code=proc.returncode)
         peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
     finally:

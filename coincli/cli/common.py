@@ -30,9 +30,9 @@ ThicknessOpt = Annotated[float | None, typer.Option("--thickness", help="Coin th
 MassOpt = Annotated[float | None, typer.Option("--mass", help="Coin mass m (kg).",
                                                rich_help_panel=PHYS)]
 InertiaOpt = Annotated[float | None, typer.Option("--inertia", help="Moment of inertia I "
-                                                  "[kg m^2].", rich_help_panel=PHYS)]
+                                                  "(kg m^2).", rich_help_panel=PHYS)]
 KOpt = Annotated[float | None, typer.Option("--k", help="Foundation stiffness per corner "
-                                            "[N/m].", rich_help_panel=PHYS)]
+                                            "(N/m).", rich_help_panel=PHYS)]
 COpt = Annotated[float | None, typer.Option("--c", help="Viscous damping per corner (N s/m).",
                                             rich_help_panel=PHYS)]
 GOpt = Annotated[float | None, typer.Option("--g", help="Gravity (m/s^2).", rich_help_panel=PHYS)]
@@ -48,7 +48,7 @@ VxOpt = Annotated[float | None, typer.Option("--vx", help="Initial horizontal ve
 VyOpt = Annotated[float | None, typer.Option("--vy", help="Initial vertical velocity (m/s).",
                                              rich_help_panel=INIT)]
 VphiOpt = Annotated[float | None, typer.Option("--vphi", help="Initial angular velocity "
-                                               "[rad/s].", rich_help_panel=INIT)]
+                                               "(rad/s).", rich_help_panel=INIT)]
 
 MethodOpt = Annotated[str | None, typer.Option("--method", help="Integration method (see "
                                                "`coin methods`).", rich_help_panel=INTEG)]
@@ -82,7 +82,8 @@ def user_errors():
         yield
     except ParameterError as exc:
         raise fail(str(exc)) from None
-    except (FileExistsError, FileNotFoundError, PermissionError, IsADirectoryError) as exc:
+    except (FileExistsError, FileNotFoundError, PermissionError, IsADirectoryError,
+            NotADirectoryError) as exc:
         raise fail(str(exc)) from None
 
 
@@ -93,7 +94,25 @@ def build_scene(preset: str, **overrides) -> Scene:
 
 
 def print_json(data) -> None:
-    sys.stdout.write(json.dumps(data, indent=2, default=_json_default) + "\n")
+    """One JSON object on stdout; NaN and infinities (no such JSON values) become null."""
+    sys.stdout.write(json.dumps(_finite(data), indent=2, default=_json_default,
+                                allow_nan=False) + "\n")
+
+
+def _finite(value):
+    import math
+
+    import numpy as np
+
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _finite(value.tolist())
+    if isinstance(value, (float, np.floating)) and not math.isfinite(value):
+        return None
+    return value
 
 
 def _json_default(obj):

@@ -221,8 +221,10 @@ def flight_state(p, s, tau, out):
 @jit
 def time_to_touchdown(p, s, t_max):
     """Time until the first corner touches the surface in free flight from ``s`` (or t_max if
-    none does before), and that corner (-1 if none). Conservative advancement with the
-    second-order lower bound h(t + sig) >= h + h' sig - A sig^2 / 2, A = g + vphi^2 r."""
+    none does before), and the mask of the corners touching then (0 if none): a coin landing
+    flat touches with two corners at once, and taking only one would add a spurious torque.
+    Conservative advancement with the second-order lower bound
+    h(t + sig) >= h + h' sig - A sig^2 / 2, A = g + vphi^2 r."""
     g = p[P_G]
     w = s[5]
     bound = g + w * w * p[P_R]
@@ -234,18 +236,14 @@ def time_to_touchdown(p, s, t_max):
         c = math.cos(phi)
         sn = math.sin(phi)
         step = math.inf
-        lowest = -1
-        lowest_height = math.inf
-        lowest_rate = 0.0
+        touching = 0  # corners on the surface (within LANDING_GAP) and not rising
         for i in range(4):
             px = SX[i] * p[P_RD]
             py = SY[i] * p[P_RT]
             height = y + px * sn + py * c
             rate = vy + w * (px * c - py * sn)
-            if height < lowest_height:
-                lowest_height = height
-                lowest = i
-                lowest_rate = rate
+            if height <= LANDING_GAP and rate <= 0.0:
+                touching |= 1 << i
             hpos = max(height, 0.0)
             if bound > 0.0:
                 sig = (rate + math.sqrt(rate * rate + 2.0 * bound * hpos)) / bound
@@ -254,15 +252,29 @@ def time_to_touchdown(p, s, t_max):
             else:
                 sig = math.inf
             step = min(step, sig)
-        if lowest_height <= LANDING_GAP and lowest_rate <= 0.0:
-            return tau, lowest
+        if touching != 0:
+            return tau, touching
         if step < 1e-15:
-            # resting on the surface with no downward speed: it is a touch-down
-            return tau, lowest
+            # resting on the surface with no downward speed: it is a touch-down of the lowest
+            return tau, _lowest_corner_mask(p, y, phi)
         tau += step
         if tau >= t_max:
-            return t_max, -1
-    return tau, lowest
+            return t_max, 0
+    return tau, _lowest_corner_mask(p, s[1] + (s[4] - 0.5 * g * tau) * tau, s[2] + w * tau)
+
+
+@jit
+def _lowest_corner_mask(p, y, phi):
+    c = math.cos(phi)
+    sn = math.sin(phi)
+    lowest = 0
+    lowest_height = math.inf
+    for i in range(4):
+        height = y + SX[i] * p[P_RD] * sn + SY[i] * p[P_RT] * c
+        if height < lowest_height:
+            lowest_height = height
+            lowest = i
+    return 1 << lowest
 
 
 @jit
@@ -303,7 +315,7 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
         n_well = well_index(p, s[2])
     while t < t_end and not (status == SETTLED and stop_on_settle):
         if mode == 0 and exact_flight:
-            tau, corner = time_to_touchdown(p, s, t_end - t)
+            tau, touching = time_to_touchdown(p, s, t_end - t)
             if record:
                 while next_sample <= t + tau and n_samples < samples.shape[0]:
                     flight_state(p, s, next_sample - t, tmp)
@@ -312,10 +324,10 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
                     next_sample += sample_dt
             flight_state(p, s, tau, tmp)
             s[:] = tmp
-            t = t + tau if corner >= 0 else t_end
+            t = t + tau if touching != 0 else t_end
             steps += 1
-            if corner >= 0:
-                new_mode = mode | (1 << corner)
+            if touching != 0:
+                new_mode = mode | touching
                 n_events = record_events(events, n_events, t, mode, new_mode,
                                          s[0], s[1], s[2], s[3], s[4], s[5])
                 mode = new_mode

@@ -3,7 +3,7 @@
 Layout (dims named after the two swept initial conditions, e.g. ``vy`` and ``vphi``)::
 
     out.zarr/                       group; attributes: coin_basin, version, parameters, sweep,
-                                    method, certify, runs
+                                    method, certify
       vy, vphi                      float64 cell centres, linspace(LO, HI, n)
       quarter_turns  (vy, vphi)     int16, fill -32768 = no label (not computed or non-finite)
       status         (vy, vphi)     uint8, 0 settled, 1 unsettled at t_end, 2 non-finite,
@@ -13,7 +13,10 @@ Layout (dims named after the two swept initial conditions, e.g. ``vy`` and ``vph
       uncertain      (vy, vphi)     uint8, only with --certify: 0 certain, 1 uncertain,
                                     255 not computed
       done           (tile_vy, tile_vphi)  uint8, 1 = the tile is complete; chunked (1, 1)
-      tile_seconds   (tile_vy, tile_vphi)  float64 CPU seconds the tile took; chunked (1, 1)
+    out.zarr.cost/                  what the sweep cost, kept beside the store so that the store
+      tile_I_J.json                 itself is bit-identical however it was computed: each tile's
+      runs.jsonl                    CPU seconds (written by whoever computed it, before its
+                                    ``done`` flag) and one line per invocation (wall time, mode)
 
 Every data array is chunked exactly like the tiles, so one tile is one chunk in every array and
 concurrent writers (threads, Dask workers) never touch the same file. A tile's ``done`` flag is
@@ -21,10 +24,10 @@ written after all its data, so a tile is either complete and flagged, or recompu
 (recomputing gives the same bytes). Chunks are written through Zarr's LocalStore (plain paths:
 write to a temporary file, then rename), with ``write_empty_chunks`` on so that a tile equal to
 the fill value is still written. The store is created in a temporary directory and renamed into
-place, and its metadata consolidated once at creation: no array's metadata changes afterwards
-(only the group's own ``runs`` attribute, which lives outside the consolidated part), so
-``xarray.open_zarr(path)`` opens it directly. ``quarter_turns`` carries ``missing_value`` so
-xarray masks cells without a label to NaN (``mask_and_scale=False`` keeps the int16 values).
+place, and its metadata consolidated once at creation: nothing in the store's metadata changes
+afterwards, so ``xarray.open_zarr(path)`` opens it directly. ``quarter_turns`` carries
+``missing_value`` so xarray masks cells without a label to NaN (``mask_and_scale=False`` keeps
+the int16 values).
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ import json
 import math
 import os
 import shutil
+import threading
 import time
 import warnings
 from dataclasses import dataclass
@@ -140,8 +144,7 @@ def _create(path: Path, attrs: dict, spec: SweepSpec) -> None:
     tmp = path.with_name(f".{path.name}.creating-{os.getpid()}")
     if tmp.exists():
         shutil.rmtree(tmp)
-    group = zarr.open_group(str(tmp), mode="w-", zarr_format=3,
-                            attributes={**attrs, "runs": []})
+    group = zarr.open_group(str(tmp), mode="w-", zarr_format=3, attributes=attrs)
     d0, d1 = grid.dims
     for axis in grid.axes:
         arr = group.create_array(axis.name, shape=(axis.n,), chunks=(axis.n,), dtype="float64",
@@ -160,19 +163,18 @@ def _create(path: Path, attrs: dict, spec: SweepSpec) -> None:
     group.create_array("done", shape=tiles, chunks=(1, 1), dtype="uint8", fill_value=0,
                        dimension_names=tdims,
                        attributes={"long_name": "1 = tile complete (written after its data)"})
-    group.create_array("tile_seconds", shape=tiles, chunks=(1, 1), dtype="float64",
-                       fill_value=math.nan, dimension_names=tdims,
-                       attributes={"long_name": "CPU time of the tile", "units": "s"})
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # "consolidated metadata is not part of the v3 spec"
         zarr.consolidate_metadata(str(tmp))
     os.rename(tmp, path)
+    shutil.rmtree(cost_dir(path), ignore_errors=True)
+    cost_dir(path).mkdir()
 
 
 def _check_layout(group, spec: SweepSpec, path: Path) -> None:
     grid = spec.grid
     expected = {**{name: (grid.shape, grid.chunk) for name in spec.array_names},
-                "done": (grid.tile_grid, (1, 1)), "tile_seconds": (grid.tile_grid, (1, 1))}
+                "done": (grid.tile_grid, (1, 1))}
     present = set(group.array_keys())
     for name, (shape, chunks) in expected.items():
         if name not in present:
@@ -201,6 +203,7 @@ def prepare(path: str | os.PathLike, attrs: dict, spec: SweepSpec,
     if _is_store(path):
         if overwrite:
             shutil.rmtree(path)
+            shutil.rmtree(cost_dir(path), ignore_errors=True)
         else:
             group = zarr.open_group(str(path), mode="r")
             stored = dict(group.attrs)
@@ -229,8 +232,8 @@ def write_tile(path: str | os.PathLike, spec: SweepSpec, result: TileResult) -> 
     for name in spec.array_names:
         arr = group[name].with_config({"write_empty_chunks": True})
         arr[s0, s1] = result.arrays[name]
-    group["tile_seconds"].with_config({"write_empty_chunks": True})[i:i + 1, j:j + 1] = (
-        result.cpu_seconds)
+    _write_atomically(cost_dir(path) / f"tile_{i}_{j}.json",
+                      json.dumps({"cpu_seconds": result.cpu_seconds}))
     group["done"].with_config({"write_empty_chunks": True})[i:i + 1, j:j + 1] = 1
 
 
@@ -238,12 +241,48 @@ def read_done(path: str | os.PathLike) -> np.ndarray:
     return np.asarray(_zarr().open_group(str(path), mode="r")["done"][:])
 
 
+def cost_dir(path: str | os.PathLike) -> Path:
+    """Where a store's cost records live: beside it, ``out.zarr.cost/``."""
+    return Path(f"{os.fspath(path).rstrip(os.sep)}.cost")
+
+
+def _write_atomically(target: Path, text: str) -> None:
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = target.with_name(f".{target.name}.{os.getpid()}.{threading.get_ident()}")
+    tmp.write_text(text)
+    os.replace(tmp, target)
+
+
 def record_run(path: str | os.PathLike, run: dict) -> None:
-    """Append one invocation's record (wall time, tiles, mode) to the group's ``runs``."""
-    group = _zarr().open_group(str(path), mode="r+")
-    runs = list(group.attrs.get("runs", []))
-    runs.append(run)
-    group.attrs["runs"] = runs
+    """Append one invocation's record (wall time, tiles, mode) to ``out.zarr.cost/runs.jsonl``
+    (only the coordinating process writes it)."""
+    target = cost_dir(path) / "runs.jsonl"
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with open(target, "a") as fh:
+        fh.write(json.dumps(run) + "\n")
+
+
+def read_costs(path: str | os.PathLike, tile_grid: tuple[int, int]) -> tuple[np.ndarray, list]:
+    """Per-tile CPU seconds (NaN where unknown) and the run records of a store."""
+    seconds = np.full(tile_grid, math.nan)
+    folder = cost_dir(path)
+    for i in range(tile_grid[0]):
+        for j in range(tile_grid[1]):
+            f = folder / f"tile_{i}_{j}.json"
+            if f.is_file():
+                try:
+                    seconds[i, j] = json.loads(f.read_text())["cpu_seconds"]
+                except (ValueError, KeyError):
+                    pass  # a damaged cost record loses the cost, never the results
+    runs = []
+    log = folder / "runs.jsonl"
+    if log.is_file():
+        for line in log.read_text().splitlines():
+            try:
+                runs.append(json.loads(line))
+            except ValueError:
+                continue
+    return seconds, runs
 
 
 @dataclass
@@ -257,7 +296,8 @@ class Basin:
     coords: tuple[np.ndarray, np.ndarray]
     arrays: dict[str, np.ndarray]
     done: np.ndarray
-    tile_seconds: np.ndarray
+    tile_seconds: np.ndarray  # from out.zarr.cost/, NaN where unknown
+    runs: list
     chunk: tuple[int, int]
 
     @property
@@ -286,10 +326,10 @@ def open_basin(path: str | os.PathLike) -> Basin:
     present = set(group.array_keys())
     arrays = {name: np.asarray(group[name][:]) for name in ARRAYS if name in present}
     done = np.asarray(group["done"][:])
+    tile_seconds, runs = read_costs(p, done.shape)
     basin = Basin(path=str(path), attrs=attrs, dims=dims, axes=sweep["axes"],
                   coords=tuple(np.asarray(group[d][:]) for d in dims), arrays=arrays, done=done,
-                  tile_seconds=np.asarray(group["tile_seconds"][:]),
-                  chunk=tuple(sweep["chunk"]))
+                  tile_seconds=tile_seconds, runs=runs, chunk=tuple(sweep["chunk"]))
     missing = ~basin.computed
     for name, arr in arrays.items():
         arr[missing] = FILLS[name]
@@ -304,4 +344,4 @@ def run_record(started: float, wall: float, tiles: int, cells: int, mode: str, w
 
 
 __all__ = ["ARRAYS", "Basin", "differences", "open_basin", "prepare", "read_done",
-           "record_run", "run_record", "write_tile"]
+           "read_costs", "record_run", "run_record", "write_tile", "cost_dir"]
