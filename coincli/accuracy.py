@@ -20,7 +20,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .integrators import METHODS, NONFINITE, SETTLED, integrate, run_batch
+from .integrators import METHODS, NONFINITE, SETTLED
+from .integrators.kernels import final_state, label_states, warm_up
 from .model import total_energy
 from .params import Scene, param_array, state_array
 
@@ -125,20 +126,15 @@ def run_grid(scene: Scene, setting: Setting, grid: Grid, threads: int = 2,
     st_out = np.empty(n, np.uint8)
     integ = run_scene.integration
     kernel = METHODS[setting.method].kernel_id
-    # warm up (load the compiled kernel) before timing
-    run_batch(kernel, p, states[:1], integ.dt, integ.rtol, integ.dt * 4, True, n_out[:1],
-              st_out[:1], np.empty(1, np.float32), np.empty(1, np.int64))
+    warm_up(kernel, p, states[0], integ.dt, integ.rtol)  # before timing
     # interleave cells across threads so each gets a fair share of hard and easy cells
     parts = [np.arange(i, n, threads) for i in range(threads)]
 
     def work(idx):
         start = time.thread_time()
-        sub_n, sub_s = np.empty(idx.size, np.int16), np.empty(idx.size, np.uint8)
-        run_batch(kernel, p, np.ascontiguousarray(states[idx]), integ.dt, integ.rtol,
-                  integ.t_end, integ.stop_on_settle, sub_n, sub_s,
-                  np.empty(idx.size, np.float32), np.empty(idx.size, np.int64))
-        n_out[idx] = sub_n
-        st_out[idx] = sub_s
+        n_out[idx], st_out[idx], _, _ = label_states(kernel, p, states[idx], integ.dt,
+                                                     integ.rtol, integ.t_end,
+                                                     integ.stop_on_settle)
         return time.thread_time() - start
 
     wall = time.perf_counter()
@@ -166,10 +162,8 @@ def state_at(scene: Scene, setting: Setting, t: float) -> np.ndarray:
     """State at time t (no early stop). Fixed steps land on t exactly when dt divides it."""
     run_scene = setting.apply(scene, t_end=t, stop_on_settle=False)
     integ = run_scene.integration
-    final = np.empty(6)
-    integrate(METHODS[setting.method].kernel_id, param_array(run_scene), state_array(run_scene),
-              integ.dt, integ.rtol, t, False, 0.0, np.empty((0, 7)), np.empty((0, 9)), final)
-    return final
+    return final_state(METHODS[setting.method].kernel_id, param_array(run_scene),
+                       state_array(run_scene), integ.dt, integ.rtol, t, False)[0]
 
 
 def state_error(scene: Scene, a: np.ndarray, b: np.ndarray) -> float:
@@ -308,10 +302,8 @@ def fails(scene: Scene, method: str, dt: float) -> bool:
     integ = run_scene.integration
     p = param_array(run_scene)
     state0 = state_array(run_scene)
-    final = np.empty(6)
-    _, _, status, _, _, _, _ = integrate(
-        METHODS[method].kernel_id, p, state0, dt, integ.rtol, integ.t_end, False,
-        0.0, np.empty((0, 7)), np.empty((0, 9)), final)
+    final, status = final_state(METHODS[method].kernel_id, p, state0, dt, integ.rtol,
+                                integ.t_end, False)
     return status == NONFINITE or not total_energy(p, final) < total_energy(p, state0)
 
 

@@ -26,24 +26,12 @@ SY = (-1.0, -1.0, 1.0, 1.0)
 N_CORNERS = 4
 
 @jit
-def corner_offset(p, phi, i):
-    """Offset (d_x, d_y) of corner i from the centroid at angle phi."""
-    px = SX[i] * p[P_RD]
-    py = SY[i] * p[P_RT]
+def corner_heights_at(p, y, phi, out):
+    """Heights y_i of the four corners (negative = penetrating) written into out[0:4]."""
     c = math.cos(phi)
     s = math.sin(phi)
-    return px * c - py * s, px * s + py * c
-
-
-@jit
-def corner_heights(p, state, out):
-    """Heights y_i of the four corners (negative = penetrating) written into out[0:4]."""
-    c = math.cos(state[2])
-    s = math.sin(state[2])
     for i in range(4):
-        px = SX[i] * p[P_RD]
-        py = SY[i] * p[P_RT]
-        out[i] = state[1] + px * s + py * c
+        out[i] = y + SX[i] * p[P_RD] * s + SY[i] * p[P_RT] * c
 
 
 @jit
@@ -95,25 +83,35 @@ def accelerations_auto(p, x, y, phi, vx, vy, vphi):
 
 
 @jit
-def energies(p, state):
+def energies_at(p, y, phi, vx, vy, vphi):
     """(kinetic, gravitational m g y, elastic sum k y_i^2 / 2 over penetrating corners)."""
     m = p[P_MASS]
-    kinetic = 0.5 * m * (state[3] ** 2 + state[4] ** 2) + 0.5 * p[P_INERTIA] * state[5] ** 2
-    gravity = m * p[P_G] * state[1]
-    c = math.cos(state[2])
-    s = math.sin(state[2])
+    kinetic = 0.5 * m * (vx * vx + vy * vy) + 0.5 * p[P_INERTIA] * vphi * vphi
+    gravity = m * p[P_G] * y
+    c = math.cos(phi)
+    s = math.sin(phi)
     elastic = 0.0
     for i in range(4):
-        yi = state[1] + SX[i] * p[P_RD] * s + SY[i] * p[P_RT] * c
+        yi = y + SX[i] * p[P_RD] * s + SY[i] * p[P_RT] * c
         if yi < 0.0:
             elastic += 0.5 * p[P_K] * yi * yi
     return kinetic, gravity, elastic
 
 
 @jit
-def total_energy(p, state):
-    kinetic, gravity, elastic = energies(p, state)
+def energies(p, state):
+    return energies_at(p, state[1], state[2], state[3], state[4], state[5])
+
+
+@jit
+def total_energy_at(p, y, phi, vx, vy, vphi):
+    kinetic, gravity, elastic = energies_at(p, y, phi, vx, vy, vphi)
     return kinetic + gravity + elastic
+
+
+@jit
+def total_energy(p, state):
+    return total_energy_at(p, state[1], state[2], state[3], state[4], state[5])
 
 
 @jit

@@ -10,6 +10,7 @@ import numpy as np
 
 from .integrators import SETTLED, STATUS_NAMES, check_step, integrate
 from .integrators.fixed import EVENT_COLUMNS, SAMPLE_COLUMNS
+from .integrators.kernels import warm_up
 from .model import energies, rounded_quarter_turns
 from .params import STATE_NAMES, Scene, param_array, state_array, validate
 
@@ -75,13 +76,6 @@ class Trajectory:
         }
 
 
-def _warm_up(kernel_id, p, state0, integ, samples, events, final) -> None:
-    """Load the compiled kernel (from numba's cache) before the clock starts, so that
-    ``wall_time`` is the integration alone."""
-    integrate(kernel_id, p, state0, integ.dt, integ.rtol, integ.dt * 2, False, 0.0,
-              samples[:0], events[:0], final)
-
-
 def simulate(scene: Scene, sample_dt: float | None = None, record_events: bool = False,
              force: bool = False) -> Trajectory:
     """Integrate one trajectory. With ``sample_dt`` the state is kept every ``sample_dt`` seconds
@@ -98,7 +92,7 @@ def simulate(scene: Scene, sample_dt: float | None = None, record_events: bool =
         samples = np.empty((0, SAMPLE_COLUMNS))
     events = np.empty((MAX_EVENTS if record_events else 0, EVENT_COLUMNS))
     final = np.empty(6)
-    _warm_up(method.kernel_id, p, state0, integ, samples, events, final)
+    warm_up(method.kernel_id, p, state0, integ.dt, integ.rtol)  # before the clock starts
     start = time.perf_counter()
     t, steps, status, settle_time, n_well, n_samples, n_events = integrate(
         method.kernel_id, p, state0, integ.dt, integ.rtol, integ.t_end, integ.stop_on_settle,

@@ -31,7 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .integrators import NOT_COMPUTED, run_batch
+from .integrators import NOT_COMPUTED
+from .integrators.kernels import label_states
 from .params import ParameterError, Scene, param_array, state_array
 
 # The initial-condition options, in the order of the state vector (x, y, phi, vx, vy, vphi).
@@ -290,14 +291,8 @@ class TileResult:
 
 
 def _run(spec: SweepSpec, states: np.ndarray, dt: float, rtol: float):
-    n = states.shape[0]
-    q = np.empty(n, dtype=np.int16)
-    status = np.empty(n, dtype=np.uint8)
-    settle = np.empty(n, dtype=np.float32)
-    steps = np.empty(n, dtype=np.int64)
-    run_batch(spec.kernel_id, np.asarray(spec.params, dtype=np.float64), states, dt, rtol,
-              spec.t_end, spec.stop_on_settle, q, status, settle, steps)
-    return q, status, settle, steps
+    return label_states(spec.kernel_id, np.asarray(spec.params, dtype=np.float64), states, dt,
+                        rtol, spec.t_end, spec.stop_on_settle)
 
 
 def compute_tile(spec: SweepSpec, tile: tuple[int, int]) -> TileResult:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import os
 from pathlib import Path
 from typing import Annotated
@@ -11,6 +10,7 @@ import typer
 from rich.table import Table
 
 from .. import accuracy as acc
+from .. import sweep
 from ..integrators import METHODS
 from ..params import ParameterError
 from . import app
@@ -32,26 +32,16 @@ from .common import (
 )
 
 
-def parse_range(text: str, name: str) -> tuple[float, float]:
-    try:
-        lo, hi = (float(v) for v in text.split(":"))
-    except ValueError:
-        raise ParameterError(f"{name} must be LO:HI, got '{text}'") from None
-    if not (math.isfinite(lo) and math.isfinite(hi)) or lo >= hi:
-        raise ParameterError(f"{name} must be a non-empty finite range LO:HI, got '{text}'")
-    return lo, hi
+def parse_range(text: str, option: str) -> tuple[float, float]:
+    """A required LO:HI range (the sweep's parser, which also accepts a single value)."""
+    value = sweep.parse_range(option.lstrip("-"), text)
+    if not isinstance(value, tuple):
+        raise ParameterError(f"{option} must be a range LO:HI, got '{text}'")
+    return value
 
 
 def parse_res(text: str) -> tuple[int, int]:
-    try:
-        parts = [int(v) for v in text.lower().split("x")]
-    except ValueError:
-        raise ParameterError(f"--res must be N or NxM, got '{text}'") from None
-    if len(parts) == 1:
-        parts *= 2
-    if len(parts) != 2 or min(parts) < 2:
-        raise ParameterError(f"--res must be N or NxM with N, M >= 2, got '{text}'")
-    return parts[0], parts[1]
+    return sweep.parse_pair("res", text, minimum=2)
 
 
 @app.command("accuracy")

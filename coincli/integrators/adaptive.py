@@ -35,6 +35,7 @@ from ..model import (
     SY,
     accelerations,
     contact_mask,
+    corner_heights_at,
     critical_energy,
     jit,
     total_energy,
@@ -154,17 +155,13 @@ def locate_crossing(p, rc, h, i, level, lo, hi, g0, g1):
 
 @jit
 def _corner_heights_at(p, rc, theta, s_start, s_end, out):
+    """Corner heights at fraction theta of the step (the exact end states at 0 and 1)."""
     if theta == 0.0:
-        y, phi = s_start[1], s_start[2]
+        corner_heights_at(p, s_start[1], s_start[2], out)
     elif theta == 1.0:
-        y, phi = s_end[1], s_end[2]
+        corner_heights_at(p, s_end[1], s_end[2], out)
     else:
-        y = dense_component(rc, theta, 1)
-        phi = dense_component(rc, theta, 2)
-    c = math.cos(phi)
-    sn = math.sin(phi)
-    for i in range(4):
-        out[i] = y + SX[i] * p[P_RD] * sn + SY[i] * p[P_RT] * c
+        corner_heights_at(p, dense_component(rc, theta, 1), dense_component(rc, theta, 2), out)
 
 
 @jit

@@ -58,3 +58,29 @@ def run_batch(method, p, states, dt, rtol, t_end, stop_on_settle, quarter_turns,
         status[row] = run_status
         settle_time[row] = t_settle
         steps[row] = n_steps
+
+
+# -- plain-Python conveniences over the kernels (the shapes and dtypes every caller uses) --------
+def label_states(method, p, states, dt, rtol, t_end, stop_on_settle):
+    """Run every row of ``states``; return (quarter_turns, status, settle_time, steps)."""
+    n = states.shape[0]
+    outs = (np.empty(n, np.int16), np.empty(n, np.uint8), np.empty(n, np.float32),
+            np.empty(n, np.int64))
+    run_batch(method, p, np.ascontiguousarray(states), dt, rtol, t_end, stop_on_settle, *outs)
+    return outs
+
+
+def final_state(method, p, state, dt, rtol, t_end, stop_on_settle):
+    """(final state, status) of one run, nothing recorded on the way."""
+    final = np.empty(6)
+    _, _, status, _, _, _, _ = integrate(method, p, state, dt, rtol, t_end, stop_on_settle,
+                                         0.0, np.empty((0, 7)), np.empty((0, 9)), final)
+    return final, status
+
+
+def warm_up(method, p, state, dt, rtol):
+    """Load the compiled kernels (from numba's cache) for one method before a clock starts.
+    The arrays have the same types as in every real call, so the same specialisations load."""
+    final_state(method, p, np.ascontiguousarray(state, dtype=np.float64), dt, rtol, dt * 4,
+                False)
+    label_states(method, p, np.array([state], dtype=np.float64), dt, rtol, dt * 4, True)
