@@ -1,3 +1,35 @@
-"""coin: the plane model of a rigid coin impacting an elastic foundation."""
+"""coin: the plane model of a rigid coin impacting an elastic foundation.
+
+The public API (see :mod:`coincli.api` and the README's "Python API"):
+
+    import coincli
+    scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
+    run = coincli.simulate(scene)
+    ds = coincli.basin(scene, vy=(0.05, 2.0), vphi=(-20.0, 20.0), res=64)
+
+Names load on first use, so ``import coincli`` (and ``coin --help``) stays cheap.
+"""
 
 __version__ = "0.1.0"
+
+_API = ("Method", "Outcome", "Scene", "Status", "SweepPlan", "SweepProgress", "SweepReport",
+        "Trajectory", "basin", "basin_stats", "classify", "load_preset", "open_basin",
+        "plan_sweep", "render_basin", "simulate", "stability", "sweep")
+
+__all__ = ["__version__", *_API]
+
+
+def __getattr__(name: str):
+    if name == "Scene":
+        from .params import Scene
+
+        return Scene
+    if name in _API:
+        from . import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'coincli' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(__all__)

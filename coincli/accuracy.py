@@ -20,31 +20,26 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .integrators import METHODS, NONFINITE, SETTLED
-from .integrators.kernels import final_state, label_states, warm_up
+from .enums import Method, Status
+from .grid import Grid, make_grid
+from .integrators import METHODS, final_state, label_states, warm_up
 from .model import total_energy
-from .params import Scene, param_array, state_array
+from .params import Scene, model_params, run_settings, state_array
+from .stats import wilson
+
 
 # The two references. A: the event method at a tolerance far below any setting on the chart.
 # B: fixed-step RK4 -- no event location, no closed-form flight, no shared stepping code.
-REFERENCE_A = ("event", 1e-6, 1e-12)
-REFERENCE_B = ("rk4", 2.5e-7, 0.0)
-
-LADDERS: dict[str, list[float]] = {
-    "symplectic_euler": [1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7],
-    "verlet": [1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7],
-    "rk4": [2e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6],
-    "dopri5": [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
-    "event": [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
-}
-PAPER_SETTING = ("symplectic_euler", 1e-6)
-
-
 @dataclass(frozen=True)
 class Setting:
-    method: str
+    """One point of a study: a method and the knob that sets its accuracy."""
+
+    method: Method
     dt: float
     rtol: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "method", Method.parse(self.method))
 
     @property
     def adaptive(self) -> bool:
@@ -57,47 +52,40 @@ class Setting:
 
     @property
     def label(self) -> str:
-        return f"{self.method} {'rtol' if self.adaptive else 'h'}={self.knob:g}"
+        return f"{self.method.label} {'rtol' if self.adaptive else 'h'}={self.knob:g}"
 
     def apply(self, scene: Scene, **extra) -> Scene:
         return scene.with_overrides(method=self.method, dt=self.dt,
                                     rtol=self.rtol if self.adaptive else None, **extra)
 
 
-def ladder_settings(methods: list[str] | None = None) -> list[Setting]:
+REFERENCE_A = Setting(Method.EVENT, 1e-6, 1e-12)
+REFERENCE_B = Setting(Method.RK4, 2.5e-7, 0.0)
+
+LADDERS: dict[Method, list[float]] = {
+    Method.SYMPLECTIC_EULER: [1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7],
+    Method.VERLET: [1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7],
+    Method.RK4: [2e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6],
+    Method.DOPRI5: [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
+    Method.EVENT: [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
+}
+PAPER_SETTING = Setting(Method.SYMPLECTIC_EULER, 1e-6, 1e-7)
+
+
+def ladder_settings(methods: list[Method] | None = None) -> list[Setting]:
     out = []
-    for name in methods or list(LADDERS):
-        for knob in LADDERS[name]:
-            if METHODS[name].adaptive:
-                out.append(Setting(name, 1e-6, knob))
+    for method in methods or list(LADDERS):
+        for knob in LADDERS[method]:
+            if METHODS[method].adaptive:
+                out.append(Setting(method, 1e-6, knob))
             else:
-                out.append(Setting(name, knob, 1e-7))
+                out.append(Setting(method, knob, 1e-7))
     return out
 
 
-# -- grids --------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Grid:
-    """A (vy0, vphi0) grid with the other initial conditions from the scene."""
-
-    vy: np.ndarray
-    vphi: np.ndarray
-
-    @classmethod
-    def linear(cls, vy_range=(0.05, 2.0), vphi_range=(-20.0, 20.0), res=(32, 32)) -> Grid:
-        return cls(np.linspace(*vy_range, res[0]), np.linspace(*vphi_range, res[1]))
-
-    def states(self, scene: Scene) -> np.ndarray:
-        base = state_array(scene)
-        vy, vphi = np.meshgrid(self.vy, self.vphi, indexing="ij")
-        states = np.tile(base, (vy.size, 1))
-        states[:, 4] = vy.ravel()
-        states[:, 5] = vphi.ravel()
-        return states
-
-    @property
-    def shape(self) -> tuple[int, int]:
-        return (self.vy.size, self.vphi.size)
+def vy_vphi_grid(scene: Scene, vy=(0.05, 2.0), vphi=(-20.0, 20.0), res=(32, 32)) -> Grid:
+    """The (vy0, vphi0) grid of the studies, the other initial conditions from the scene."""
+    return make_grid(scene, {"vy": tuple(vy), "vphi": tuple(vphi)}, tuple(res), tuple(res))
 
 
 @dataclass
@@ -119,22 +107,20 @@ def run_grid(scene: Scene, setting: Setting, grid: Grid, threads: int = 2,
     releases the GIL). CPU time is the thread time of the workers, so it does not count the
     other processes of a shared machine."""
     run_scene = setting.apply(scene, stop_on_settle=stop_on_settle, t_end=t_end)
-    p = param_array(run_scene)
-    states = grid.states(run_scene)
+    p = model_params(run_scene)
+    settings = run_settings(run_scene.integration)
+    states = grid.states()
     n = states.shape[0]
     n_out = np.empty(n, np.int16)
     st_out = np.empty(n, np.uint8)
-    integ = run_scene.integration
-    kernel = METHODS[setting.method].kernel_id
-    warm_up(kernel, p, states[0], integ.dt, integ.rtol)  # before timing
+    warm_up(p, settings, states[0])  # before timing
     # interleave cells across threads so each gets a fair share of hard and easy cells
     parts = [np.arange(i, n, threads) for i in range(threads)]
 
     def work(idx):
         start = time.thread_time()
-        n_out[idx], st_out[idx], _, _ = label_states(kernel, p, states[idx], integ.dt,
-                                                     integ.rtol, integ.t_end,
-                                                     integ.stop_on_settle)
+        labels = label_states(p, settings, states[idx])
+        n_out[idx], st_out[idx] = labels.quarter_turns, labels.status
         return time.thread_time() - start
 
     wall = time.perf_counter()
@@ -147,7 +133,7 @@ def run_grid(scene: Scene, setting: Setting, grid: Grid, threads: int = 2,
 def label_error(run: GridRun, reference: np.ndarray, robust: np.ndarray) -> float:
     """Fraction of robust cells whose label differs from the reference (a non-finite or
     unsettled cell counts as wrong)."""
-    ok = (run.quarter_turns == reference) & (run.status == SETTLED)
+    ok = (run.quarter_turns == reference) & (run.status == Status.SETTLED)
     return float(np.mean(~ok[robust])) if robust.any() else math.nan
 
 
@@ -161,9 +147,8 @@ TRAJECTORY_THROWS = [(0.4, 6.0, 0.15), (0.6, -9.0, 0.18), (0.75, 3.0, 0.21), (0.
 def state_at(scene: Scene, setting: Setting, t: float) -> np.ndarray:
     """State at time t (no early stop). Fixed steps land on t exactly when dt divides it."""
     run_scene = setting.apply(scene, t_end=t, stop_on_settle=False)
-    integ = run_scene.integration
-    return final_state(METHODS[setting.method].kernel_id, param_array(run_scene),
-                       state_array(run_scene), integ.dt, integ.rtol, t, False)[0]
+    return final_state(model_params(run_scene), run_settings(run_scene.integration),
+                       state_array(run_scene))[0]
 
 
 def state_error(scene: Scene, a: np.ndarray, b: np.ndarray) -> float:
@@ -225,52 +210,77 @@ class Study:
         return min(ok, key=lambda p: p.cpu_per_trajectory) if ok else None
 
 
-def wilson_upper(fraction: float, n: int, z: float = 1.96) -> float:
-    """Upper end of the 95 % Wilson score interval of a proportion observed on n trials."""
+def wilson_upper(fraction: float, n: int) -> float:
+    """Upper end of the 95 % Wilson interval of a proportion observed on n trials."""
     if n == 0 or not math.isfinite(fraction):
         return math.inf
-    centre = fraction + z * z / (2 * n)
-    spread = z * math.sqrt(fraction * (1 - fraction) / n + z * z / (4 * n * n))
-    return (centre + spread) / (1 + z * z / n)
+    return wilson(round(fraction * n), n)[1]
+
+
+@dataclass
+class References:
+    """The two converged references on a grid and the cells where they agree."""
+
+    a: GridRun
+    b: GridRun
+
+    @property
+    def robust(self) -> np.ndarray:
+        """Cells where both references settle to the same n: the only cells on which a label
+        can be called right or wrong (elsewhere no affordable computation decides n)."""
+        return ((self.a.status == Status.SETTLED) & (self.b.status == Status.SETTLED)
+                & (self.a.quarter_turns == self.b.quarter_turns))
+
+    @property
+    def agreement(self) -> float:
+        """Fraction of all cells where the references give the same n."""
+        return float(np.mean(self.a.quarter_turns == self.b.quarter_turns))
+
+
+def run_references(scene: Scene, grid: Grid, threads: int = 2, progress=None) -> References:
+    say = progress or (lambda text: None)
+    say(f"reference A: {REFERENCE_A.label}")
+    ref_a = run_grid(scene, REFERENCE_A, grid, threads)
+    say(f"reference B: {REFERENCE_B.label}")
+    return References(ref_a, run_grid(scene, REFERENCE_B, grid, threads))
 
 
 def run_study(scene: Scene, grid: Grid, settings: list[Setting], threads: int = 2,
               progress=None) -> Study:
     """The whole work-precision study. ``progress(text)`` is called before each piece."""
     say = progress or (lambda text: None)
-    ref_a_setting = Setting(*REFERENCE_A)
-    ref_b_setting = Setting(*REFERENCE_B)
-    say(f"reference A: {ref_a_setting.label}")
-    ref_a = run_grid(scene, ref_a_setting, grid, threads)
-    say(f"reference B: {ref_b_setting.label}")
-    ref_b = run_grid(scene, ref_b_setting, grid, threads)
-    settled = (ref_a.status == SETTLED) & (ref_b.status == SETTLED)
-    robust = settled & (ref_a.quarter_turns == ref_b.quarter_turns)
-    traj_ref = reference_states(scene, ref_a_setting)
-    traj_check = reference_states(scene, replace(ref_a_setting, method="dopri5"))
+    refs = run_references(scene, grid, threads, say)
+    ref_a, ref_b, robust = refs.a, refs.b, refs.robust
+    traj_ref = reference_states(scene, REFERENCE_A)
+    traj_check = reference_states(scene, replace(REFERENCE_A, method=Method.DOPRI5))
     gap = float(np.median([state_error(scene, a, b) for a, b in zip(traj_ref, traj_check,
                                                                      strict=True)]))
-    study = Study(grid, ref_a, ref_b, robust, float(np.mean(ref_a.quarter_turns
-                                                            == ref_b.quarter_turns)), gap)
+    study = Study(grid, ref_a, ref_b, robust, refs.agreement, gap)
     for setting in settings:
         say(setting.label)
         run = run_grid(scene, setting, grid, threads)
         study.points.append(Point(
             setting, trajectory_error(scene, setting, traj_ref),
             label_error(run, ref_a.quarter_turns, robust), run.cpu_per_trajectory,
-            int(np.sum(run.status == NONFINITE)), int(np.sum(run.status == 1))))
+            int(np.sum(run.status == Status.NONFINITE)),
+            int(np.sum(run.status == Status.UNSETTLED))))
     # The paper's setting: symplectic Euler, h = 1e-6, always 2 s. Its labels are those of the
     # same step stopped early (the early stop is certified), so only its cost needs measuring,
     # on a few cells of the grid.
-    paper = Setting(PAPER_SETTING[0], PAPER_SETTING[1], 1e-7)
+    paper = PAPER_SETTING
     same = next((p for p in study.points if p.setting == paper), None)
     if same is not None:
         say("paper's setting (2 s runs, cost only)")
-        cells = Grid(grid.vy[:: max(1, grid.vy.size // 4)][:4],
-                     grid.vphi[:: max(1, grid.vphi.size // 4)][:4])
+        cells = sample_grid(grid, 4)
         cost = run_grid(scene, paper, cells, threads, stop_on_settle=False, t_end=2.0)
         study.paper_point = replace(same, cpu_per_trajectory=cost.cpu_per_trajectory)
     return study
+
+
+def sample_grid(grid: Grid, per_axis: int) -> Grid:
+    """A coarse grid of ``per_axis`` cells per axis over the same ranges (a cheap subset)."""
+    axes = tuple(replace(axis, n=min(per_axis, axis.n)) for axis in grid.axes)
+    return replace(grid, axes=axes, chunk=tuple(a.n for a in axes))
 
 
 # -- where fixed-step methods fail ----------------------------------------------------------------
@@ -284,7 +294,7 @@ STABILITY_TIME = 0.5  # s
 
 @dataclass
 class StabilityLimit:
-    method: str
+    method: Method
     predicted: float
     measured: float  # smallest step seen to fail (bisection)
 
@@ -296,20 +306,19 @@ def resting_scene(scene: Scene) -> Scene:
                                 t_end=STABILITY_TIME, stop_on_settle=False)
 
 
-def fails(scene: Scene, method: str, dt: float) -> bool:
+def fails(scene: Scene, method: Method | str, dt: float) -> bool:
     """A step fails if the kicked resting coin goes non-finite or gains energy."""
     run_scene = resting_scene(scene).with_overrides(method=method, dt=dt)
-    integ = run_scene.integration
-    p = param_array(run_scene)
+    p = model_params(run_scene)
     state0 = state_array(run_scene)
-    final, status = final_state(METHODS[method].kernel_id, p, state0, dt, integ.rtol,
-                                integ.t_end, False)
-    return status == NONFINITE or not total_energy(p, final) < total_energy(p, state0)
+    final, status = final_state(p, run_settings(run_scene.integration), state0)
+    return status == Status.NONFINITE or not total_energy(p, final) < total_energy(p, state0)
 
 
-def measured_limit(scene: Scene, method: str, iterations: int = 12) -> StabilityLimit:
+def measured_limit(scene: Scene, method: Method | str, iterations: int = 12) -> StabilityLimit:
     """Bisect, between 0.25x and 4x the predicted stable step, for the step where runs start
     to fail."""
+    method = Method.parse(method)
     predicted = METHODS[method].stable_step(scene)
     lo, hi = 0.25 * predicted, 4.0 * predicted
     if fails(scene, method, lo):

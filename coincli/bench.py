@@ -11,21 +11,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .accuracy import REFERENCE_A, REFERENCE_B, Grid, Setting, run_grid
-from .integrators import METHODS, SETTLED
-from .integrators.kernels import label_states, warm_up
-from .params import Scene, param_array
+from .accuracy import Setting, run_grid, run_references
+from .enums import Method, Status
+from .grid import Grid
+from .integrators import label_states, warm_up
+from .params import Scene, model_params, run_settings
 
 # Each method's default setting: for the fixed-step methods the paper's step (on the chart none
 # of them reaches 1 % label error at any affordable step), for the adaptive ones the cheapest
 # tolerance under 1 % label error with 95 % confidence on the chart (docs/accuracy.png).
-METHOD_DEFAULTS = {
-    "symplectic_euler": Setting("symplectic_euler", 1e-6, 1e-6),
-    "verlet": Setting("verlet", 1e-6, 1e-6),
-    "rk4": Setting("rk4", 1e-6, 1e-6),
-    "dopri5": Setting("dopri5", 1e-6, 1e-6),
-    "event": Setting("event", 1e-6, 1e-6),
-}
+METHOD_DEFAULTS = {method: Setting(method, 1e-6, 1e-6) for method in Method}
 PAPER = "paper (symplectic Euler h=1e-6, full 2 s)"
 
 
@@ -42,12 +37,11 @@ class CostRow:
 def time_cells(scene: Scene, setting: Setting, states: np.ndarray, full_run: bool) -> float:
     """Seconds per trajectory for one pass over ``states`` on this thread."""
     run_scene = setting.apply(scene, stop_on_settle=not full_run, t_end=2.0)
-    integ = run_scene.integration
-    p = param_array(run_scene)
-    kernel = METHODS[setting.method].kernel_id
-    warm_up(kernel, p, states[0], integ.dt, integ.rtol)  # load the compiled kernel first
+    p = model_params(run_scene)
+    settings = run_settings(run_scene.integration)
+    warm_up(p, settings, states[0])  # load the compiled kernel first
     start = time.thread_time()
-    label_states(kernel, p, states, integ.dt, integ.rtol, integ.t_end, integ.stop_on_settle)
+    label_states(p, settings, states)
     return (time.thread_time() - start) / states.shape[0]
 
 
@@ -56,9 +50,9 @@ def side_by_side(scene: Scene, cost_grid: Grid, repeats: int = 3,
     """Cost of every default setting and of the paper's, interleaved round by round on the same
     cells so that machine noise hits them alike; the median of the rounds is reported."""
     say = progress or (lambda text: None)
-    states = cost_grid.states(scene)
-    entries = [(name, s, False) for name, s in METHOD_DEFAULTS.items()]
-    entries.append((PAPER, METHOD_DEFAULTS["symplectic_euler"], True))
+    states = cost_grid.states()
+    entries = [(method.label, s, False) for method, s in METHOD_DEFAULTS.items()]
+    entries.append((PAPER, METHOD_DEFAULTS[Method.SYMPLECTIC_EULER], True))
     times: dict[str, list[float]] = {name: [] for name, _, _ in entries}
     for r in range(repeats):
         for name, setting, full in entries:
@@ -78,21 +72,16 @@ class LabelCheck:
 def label_check(scene: Scene, grid: Grid, rows: list[CostRow], threads: int,
                 progress=None) -> LabelCheck:
     say = progress or (lambda text: None)
-    say("label reference A (event rtol=1e-12)")
-    ref_a = run_grid(scene, Setting(*REFERENCE_A), grid, threads)
-    say("label reference B (rk4 h=2.5e-7)")
-    ref_b = run_grid(scene, Setting(*REFERENCE_B), grid, threads)
-    robust = ((ref_a.status == SETTLED) & (ref_b.status == SETTLED)
-              & (ref_a.quarter_turns == ref_b.quarter_turns))
+    refs = run_references(scene, grid, threads, say)
+    robust = refs.robust
     for row in rows:
         if row.full_run:
             continue  # the same labels as the early-stopped run of the same setting
         say(f"labels: {row.name}")
         run = run_grid(scene, row.setting, grid, threads)
-        same = (run.quarter_turns == ref_a.quarter_turns) & (run.status == SETTLED)
+        same = (run.quarter_turns == refs.a.quarter_turns) & (run.status == Status.SETTLED)
         row.label_agreement = float(same[robust].mean())
     paper = next(r for r in rows if r.full_run)
     paper.label_agreement = next(r.label_agreement for r in rows
                                  if r.setting == paper.setting and not r.full_run)
-    return LabelCheck(robust, ref_a.quarter_turns,
-                      float(np.mean(ref_a.quarter_turns == ref_b.quarter_turns)))
+    return LabelCheck(robust, refs.a.quarter_turns, refs.agreement)

@@ -1,33 +1,137 @@
-"""The numba decorator every kernel uses, with a cache that cannot go stale.
+"""Kernels: plain Python functions that numba compiles on first use, with a cache that cannot go
+stale and that leaves numba's settings for other code alone.
 
-numba's on-disk cache checks only the timestamp of the file that defines a function, not of the
-files whose kernels it calls, so editing ``adaptive.py`` would leave ``kernels.integrate``
-running the old code. The cache directory is therefore keyed by a hash of every kernel source.
+Why kernels are not ``numba.njit`` at import: importing numba costs about 0.4 s and loading the
+cached machine code as much again, and most commands need neither (``coin --help``, a table, one
+short throw). So :func:`kernel` only registers a function and returns it unchanged: it runs as
+ordinary Python until :func:`compiled` is first called. That call imports numba, wraps every
+registered kernel in a cached ``njit`` dispatcher and rebinds the names in the ``coincli``
+modules to the dispatchers (numba resolves a kernel's callees through its module's globals), so
+from then on every caller in the package runs compiled code. Kernels are written in the subset
+of Python that numba compiles and CPython runs alike, with the same operations in the same
+order, so both give the same floats (a test runs one throw both ways and compares every bit).
+
+The cache: numba checks only the timestamp of the file that defines a function, not of the
+files whose kernels it calls, so an edit to a callee could leave stale machine code in use. Our
+cache locator (used only for files of this package) stamps every entry with a hash of all kernel
+sources and keeps it in ``~/.cache/coincli`` (or ``$NUMBA_CACHE_DIR/coincli``).
 """
 
 from __future__ import annotations
 
 import hashlib
+import inspect
 import os
+import sys
+import threading
 from pathlib import Path
 
-import numba
-import numba.core.config
-
 _PACKAGE = Path(__file__).resolve().parent
-_KERNEL_SOURCES = ["jit.py", "params.py", "model.py", "integrators/fixed.py",
-                   "integrators/adaptive.py", "integrators/kernels.py"]
+# Every module that defines kernels: all are imported before numba sees any of them, so that a
+# kernel's callees are dispatchers whatever was imported first.
+KERNEL_MODULES = ("coincli.model", "coincli.integrators.common", "coincli.integrators.fixed",
+                  "coincli.integrators.adaptive", "coincli.integrators.batch")
+_KERNELS: list = []  # the registered Python functions, in definition order
+_DISPATCHERS: dict = {}  # Python function -> numba dispatcher (after activation)
+_LOCK = threading.Lock()
 
 
-def _cache_dir() -> str:
+def kernel(fn):
+    """Register ``fn`` as a kernel (see the module docstring); returns it unchanged."""
+    if _DISPATCHERS:
+        raise RuntimeError(f"kernel {fn.__qualname__} defined after numba was activated: add its "
+                           "module to coincli.jit.KERNEL_MODULES")
+    _KERNELS.append(fn)
+    return fn
+
+
+def is_active() -> bool:
+    """Whether the kernels have been handed to numba in this process."""
+    return bool(_DISPATCHERS)
+
+
+def compiled(fn):
+    """The numba dispatcher of kernel ``fn`` (activating numba for every kernel first)."""
+    if not _DISPATCHERS:
+        _activate()
+    return _DISPATCHERS.get(fn, fn)  # fn may already be a dispatcher (rebound name)
+
+
+def python(fn):
+    """The plain Python form of a kernel (also after activation), e.g. to apply the model's
+    formulas to numpy arrays."""
+    return getattr(fn, "py_func", fn)
+
+
+def cache_dir() -> Path:
+    base = os.environ.get("NUMBA_CACHE_DIR")
+    if base:
+        return Path(base) / "coincli"
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "coincli"
+
+
+def sources_digest() -> str:
+    """Hash of every file that defines a kernel or a type the kernels use."""
+    files = sorted({inspect.getfile(fn) for fn in _KERNELS}
+                   | {str(_PACKAGE / name) for name in ("jit.py", "params.py", "enums.py")})
     digest = hashlib.sha256()
-    for name in _KERNEL_SOURCES:
-        digest.update((_PACKAGE / name).read_bytes())
-    base = os.environ.get("NUMBA_CACHE_DIR") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "coincli")
-    return os.path.join(base, f"numba-{numba.__version__}-{digest.hexdigest()[:16]}")
+    for name in files:
+        digest.update(Path(name).read_bytes())
+    return digest.hexdigest()[:16]
 
 
-numba.core.config.CACHE_DIR = _cache_dir()
+def _activate() -> None:
+    with _LOCK:
+        if _DISPATCHERS:
+            return
+        import importlib
 
-jit = numba.njit(cache=True, fastmath=False, nogil=True)
+        import numba
+
+        for module in KERNEL_MODULES:
+            importlib.import_module(module)
+
+        _install_locator(numba)
+        dispatchers = {fn: numba.njit(cache=True, nogil=True)(fn) for fn in _KERNELS}
+        # rebind every name in the package that refers to a kernel, so that numba finds
+        # dispatchers when it resolves a kernel's callees and Python callers run compiled code
+        for name, module in list(sys.modules.items()):
+            if module is None or not (name == "coincli" or name.startswith("coincli.")):
+                continue
+            for attr, value in list(vars(module).items()):
+                if callable(value) and value in dispatchers:
+                    setattr(module, attr, dispatchers[value])
+        _DISPATCHERS.update(dispatchers)
+
+
+def _install_locator(numba) -> None:
+    """Put a cache locator for this package's files in front of numba's own ones."""
+    try:
+        from numba.core.caching import CacheImpl, _CacheLocator, _SourceFileBackedLocatorMixin
+    except ImportError:  # another numba layout: fall back to numba's default caching
+        return
+    stamp = sources_digest()
+    root = cache_dir() / f"numba-{numba.__version__}"
+
+    class CoincliCacheLocator(_SourceFileBackedLocatorMixin, _CacheLocator):
+        def __init__(self, py_func, py_file):
+            self._py_file = py_file
+            self._lineno = py_func.__code__.co_firstlineno
+            self._cache_path = str(root / self.get_suitable_cache_subpath(py_file))
+
+        def get_cache_path(self):
+            return self._cache_path
+
+        def get_source_stamp(self):
+            return stamp
+
+        @classmethod
+        def from_function(cls, py_func, py_file):
+            if not Path(py_file).resolve().is_relative_to(_PACKAGE):
+                return None  # not ours: numba's own locators decide
+            return super().from_function(py_func, py_file)
+
+    CacheImpl._locator_classes.insert(0, CoincliCacheLocator)
+
+
+__all__ = ["cache_dir", "compiled", "is_active", "kernel", "python", "sources_digest"]

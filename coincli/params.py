@@ -3,23 +3,20 @@ integration settings.
 
 Everything is a frozen dataclass so that a scene can be hashed, compared and stored verbatim in
 every output (Zarr attributes, Rerun recordings). Kernels never see these objects: they get the
-plain float64 arrays built by :func:`param_array` and :func:`state_array`, which is what lets
-numba cache its compiled code.
+named tuples of plain floats built once from a scene by :func:`model_params` (the coin, the
+foundation, gravity and what follows from them) and :func:`run_settings` (how to integrate), and
+the float64 state vector of :func:`state_array`; that is what lets numba cache its compiled code.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field, fields, replace
+from typing import NamedTuple
 
-import numpy as np
-
-# Layout of the parameter array handed to every kernel (see param_array).
-P_MASS, P_INERTIA, P_RD, P_RT, P_K, P_C, P_G, P_R = range(8)
-N_PARAMS = 8
+from .enums import Method
 
 # Layout of the state vector.
-X, Y, PHI, VX, VY, VPHI = range(6)
 STATE_NAMES = ("x", "y", "phi", "vx", "vy", "vphi")
 
 
@@ -84,11 +81,18 @@ class Integration:
     outcome is certain (total energy below E_crit); the paper's own runs always last ``t_end``.
     """
 
-    method: str = "event"
+    method: Method = Method.EVENT
     dt: float = 1.0e-6
     rtol: float = 1.0e-6
     t_end: float = 2.0
     stop_on_settle: bool = True
+
+    def __post_init__(self):
+        # presets, stores and options name the method; the scene holds the member
+        try:
+            object.__setattr__(self, "method", Method.parse(self.method))
+        except ValueError as exc:
+            raise ParameterError(str(exc)) from None
 
 
 @dataclass(frozen=True)
@@ -112,8 +116,11 @@ class Scene:
 
     # -- conversions ----------------------------------------------------------------------------
     def to_dict(self) -> dict:
+        """The nested plain-value form (as in a preset file, a store's or a recording's
+        attributes): y0 resolved, the method by name."""
         d = asdict(self)
         d["initial"]["y0"] = self.y0
+        d["integration"]["method"] = self.integration.method.label
         return d
 
     def with_overrides(self, **overrides) -> Scene:
@@ -207,27 +214,56 @@ def validate(scene: Scene) -> Scene:
         raise ParameterError(f"rtol must be between 1e-14 and 0.1, got {i.rtol:g}")
     if i.t_end / i.dt > 1e12:
         raise ParameterError(f"--t-end / --dt is {i.t_end / i.dt:.3g} steps; at most 1e12")
-    if not isinstance(i.method, str):
-        raise ParameterError(f"method must be a name, got {i.method!r}")
     if not isinstance(i.stop_on_settle, bool):
         raise ParameterError(f"stop_on_settle must be true or false, got {i.stop_on_settle!r}")
     return scene
 
 
-def param_array(scene: Scene) -> np.ndarray:
-    """The float64 parameter vector every kernel takes (layout: the P_* constants)."""
-    p = np.empty(N_PARAMS, dtype=np.float64)
-    p[P_MASS] = scene.coin.mass
-    p[P_INERTIA] = scene.coin.inertia
-    p[P_RD] = scene.coin.r_d
-    p[P_RT] = scene.coin.r_t
-    p[P_K] = scene.foundation.k
-    p[P_C] = scene.foundation.c
-    p[P_G] = scene.g
-    p[P_R] = scene.coin.r
-    return p
+class ModelParams(NamedTuple):
+    """What the kernels know of a scene's physics: the coin, the foundation, gravity, and the
+    constants that follow from them (computed once here, not in every step)."""
+
+    mass: float  # kg
+    inertia: float  # kg m^2
+    r_d: float  # m, half the diameter
+    r_t: float  # m, half the thickness
+    k: float  # N/m, foundation stiffness per corner
+    c: float  # N s/m, damping per corner
+    g: float  # m/s^2
+    r: float  # m, half diagonal
+    e_crit: float  # J, below it the count of quarter turns is final
+    phi_cr: float  # rad, the diagonal is vertical
 
 
-def state_array(scene: Scene) -> np.ndarray:
+def model_params(scene: Scene) -> ModelParams:
+    coin = scene.coin
+    return ModelParams(mass=float(coin.mass), inertia=float(coin.inertia), r_d=float(coin.r_d),
+                       r_t=float(coin.r_t), k=float(scene.foundation.k),
+                       c=float(scene.foundation.c), g=float(scene.g), r=float(coin.r),
+                       e_crit=float(scene.e_crit), phi_cr=float(coin.phi_cr))
+
+
+class RunSettings(NamedTuple):
+    """How a kernel integrates one trajectory."""
+
+    method: int  # a Method value
+    dt: float  # s, the step of a fixed-step method, the first step of an adaptive one
+    rtol: float  # relative tolerance of an adaptive method
+    t_end: float  # s
+    stop_on_settle: bool  # stop as soon as the outcome is certain
+    sample_dt: float  # s between recorded samples (0: record none)
+
+
+def run_settings(integration: Integration, sample_dt: float = 0.0) -> RunSettings:
+    return RunSettings(method=int(integration.method), dt=float(integration.dt),
+                       rtol=float(integration.rtol), t_end=float(integration.t_end),
+                       stop_on_settle=bool(integration.stop_on_settle),
+                       sample_dt=float(sample_dt))
+
+
+def state_array(scene: Scene):
+    """The initial state as a float64 array (x, y, phi, vx, vy, vphi)."""
+    import numpy as np  # here only: the command line reads parameters without numpy
+
     s = scene.initial
     return np.array([s.x0, scene.y0, s.phi0, s.vx, s.vy, s.vphi], dtype=np.float64)

@@ -10,9 +10,8 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+from .defaults import DEFAULT_PRESET
 from .params import ParameterError, Scene, scene_from_dict, validate
-
-DEFAULT_PRESET = "paper"
 
 
 def presets_dir() -> Path:

@@ -10,13 +10,7 @@ from typer.testing import CliRunner
 
 from coincli import accuracy as acc
 from coincli.cli import app
-from coincli.integrators import METHODS
-from coincli.presets import load
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load("paper").scene
+from coincli.integrators import info
 
 
 def test_wilson_upper_bound():
@@ -29,21 +23,21 @@ def test_wilson_upper_bound():
 @pytest.mark.parametrize("method", ["symplectic_euler", "verlet", "rk4"])
 def test_measured_failure_step_matches_prediction(paper, method):
     limit = acc.measured_limit(paper, method, iterations=10)
-    assert limit.predicted == METHODS[method].stable_step(paper)
+    assert limit.predicted == info(method).stable_step(paper)
     assert abs(limit.measured / limit.predicted - 1) < 0.02
     assert not acc.fails(paper, method, 0.8 * limit.predicted)
     assert acc.fails(paper, method, 1.25 * limit.predicted)
 
 
 def test_trajectory_error_falls_with_tolerance(paper):
-    refs = acc.reference_states(paper, acc.Setting(*acc.REFERENCE_A))
+    refs = acc.reference_states(paper, acc.REFERENCE_A)
     coarse = acc.trajectory_error(paper, acc.Setting("event", 1e-6, 1e-5), refs)
     fine = acc.trajectory_error(paper, acc.Setting("event", 1e-6, 1e-8), refs)
     assert fine < coarse / 100 and fine < 1e-5
 
 
 def test_study_on_a_tiny_grid(paper):
-    grid = acc.Grid.linear((0.1, 0.7), (-15.0, 15.0), (3, 3))
+    grid = acc.vy_vphi_grid(paper, (0.1, 0.7), (-15.0, 15.0), (3, 3))
     settings = [acc.Setting("event", 1e-6, 1e-4), acc.Setting("event", 1e-6, 1e-8),
                 acc.Setting("symplectic_euler", 1e-6, 1e-7)]
     study = acc.run_study(paper, grid, settings, threads=2)
@@ -87,15 +81,16 @@ def test_stability_command_json():
 def test_bench_side_by_side_on_a_few_cells(paper):
     from coincli import bench
 
-    rows = bench.side_by_side(paper, acc.Grid.linear((0.3, 0.6), (-5.0, 5.0), (2, 1)), repeats=1)
+    cost_grid = acc.vy_vphi_grid(paper, (0.3, 0.6), (-5.0, 5.0), (2, 2))
+    rows = bench.side_by_side(paper, cost_grid, repeats=1)
     by_name = {r.name: r for r in rows}
     paper_row = by_name[bench.PAPER]
     assert paper_row.full_run
     # the default event method is at least 300x cheaper than the paper's setting (issue target;
     # measured ~4000x), even on a loaded machine
     assert paper_row.seconds_per_trajectory / by_name["event"].seconds_per_trajectory > 300
-    check = bench.label_check(paper, acc.Grid.linear((0.2, 0.6), (-10.0, 10.0), (2, 2)), rows,
-                              threads=2)
+    label_grid = acc.vy_vphi_grid(paper, (0.2, 0.6), (-10.0, 10.0), (2, 2))
+    check = bench.label_check(paper, label_grid, rows, threads=2)
     assert check.robust.all()
     assert all(r.label_agreement == 1.0 for r in rows)
     assert check.reference.shape == (2, 2)

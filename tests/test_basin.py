@@ -19,13 +19,13 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from coincli.basin_stats import basin_stats, wilson
 from coincli.cli import app
-from coincli.distributed import run_tile_task
-from coincli.integrators import NOT_COMPUTED, get
+from coincli.grid import compute_tile, make_grid, make_spec, parse_pair, parse_range
+from coincli.integrators import NO_LABEL, info
 from coincli.io import store
+from coincli.io.runner import run_tile_task
 from coincli.params import ParameterError, Scene
-from coincli.sweep import compute_tile, make_grid, make_spec, parse_pair, parse_range
+from coincli.stats import basin_stats, wilson
 
 runner = CliRunner()
 SMALL = ["--res", "8", "--chunk", "4", "-q"]
@@ -155,7 +155,7 @@ def test_store_layout_and_xarray(tmp_path):
     coin_ok(str(path), "--vy", "0.1:0.7", "--res", "8x6", "--chunk", "4", "-q")
     group = zarr.open_group(str(path), mode="r")
     assert group["quarter_turns"].dtype == np.int16
-    assert group["quarter_turns"].fill_value == NOT_COMPUTED
+    assert group["quarter_turns"].fill_value == NO_LABEL
     assert group["status"].dtype == np.uint8 and group["status"].fill_value == 255
     assert group["settle_time"].dtype == np.float32
     assert group["quarter_turns"].chunks == (4, 4) and group["done"].chunks == (1, 1)
@@ -165,8 +165,8 @@ def test_store_layout_and_xarray(tmp_path):
     assert attrs["parameters"]["foundation"]["k"] == 1e4
     assert attrs["parameters"]["initial"]["vy"] is None  # swept
     assert attrs["method"]["name"] == "event" and attrs["version"]
-    assert "runs" not in attrs and len(store.open_basin(path).runs) == 1
-    assert np.isfinite(store.open_basin(path).tile_seconds).all()
+    assert "runs" not in attrs and len(store.read_basin(path).runs) == 1
+    assert np.isfinite(store.read_basin(path).tile_seconds).all()
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no consolidated-metadata fallback warning
         ds = xr.open_zarr(path)
@@ -184,10 +184,10 @@ def test_tile_equal_to_fill_value_is_written(tmp_path):
     # every cell non-finite would equal the fill values; simulate it through the writer
     path = tmp_path / "s.zarr"
     grid = make_grid(Scene(), {"vy": (0.1, 0.2), "vphi": (0.0, 1.0)}, (4, 4), (2, 2))
-    spec = make_spec(Scene(), get("event"), grid)
+    spec = make_spec(Scene(), info("event"), grid)
     store.prepare(path, {"coin_basin": {}, "version": "t"}, spec)
     result = compute_tile(spec, (0, 0))
-    result.arrays["quarter_turns"][:] = NOT_COMPUTED
+    result.arrays["quarter_turns"][:] = NO_LABEL
     result.arrays["status"][:] = 255
     result.arrays["settle_time"][:] = np.nan
     result.arrays["steps"][:] = -1
@@ -211,7 +211,7 @@ def test_parameter_mismatch_is_refused(tmp_path):
     # the same command resumes (nothing left to do); --overwrite replaces
     assert "done already" in coin_ok(path, *SMALL).output
     coin_ok(path, *SMALL, "--k", "5000", "--overwrite")
-    assert store.open_basin(path).attrs["parameters"]["foundation"]["k"] == 5000
+    assert store.read_basin(path).attrs["parameters"]["foundation"]["k"] == 5000
     (tmp_path / "other").mkdir()
     (tmp_path / "other" / "keep.txt").write_text("x")
     result = coin(str(tmp_path / "other"), *SMALL, "--overwrite")
@@ -255,14 +255,14 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err.decode()
     assert b"Traceback" not in err and b"resume" in err
-    basin = store.open_basin(path)
+    basin = store.read_basin(path)
     assert 3 <= basin.done.sum() < basin.done.size
     # every flagged tile is complete
     assert (basin.arrays["status"][basin.computed] != 255).all()
     runs = basin.runs
     assert runs[-1]["interrupted"] is True
     coin_ok(str(path), *KILL_ARGS)
-    assert store.open_basin(path).done.all()
+    assert store.read_basin(path).done.all()
 
 
 # -- distributed ---------------------------------------------------------------------------------
@@ -275,7 +275,7 @@ def test_dask_runs_give_the_same_store(tmp_path):
     workers = tmp_path / "workers.zarr"
     coin_ok(str(workers), *args, "--workers", "2")  # a 2-process LocalCluster
     assert_same_store(local, workers)
-    assert store.open_basin(workers).runs[0]["mode"] == "dask"
+    assert store.read_basin(workers).runs[0]["mode"] == "dask"
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
                       dashboard_address=None) as cluster:
         remote = tmp_path / "remote.zarr"
@@ -286,7 +286,7 @@ def test_dask_runs_give_the_same_store(tmp_path):
 def test_task_function_is_importable_and_writes_its_tile(tmp_path):
     path = tmp_path / "s.zarr"
     grid = make_grid(Scene(), {"vy": (0.1, 0.5), "vphi": (-5.0, 5.0)}, (4, 4), (2, 2))
-    spec = make_spec(Scene(), get("event"), grid)
+    spec = make_spec(Scene(), info("event"), grid)
     store.prepare(path, {"coin_basin": {}, "version": "t"}, spec)
     tile, cells, cpu = run_tile_task(str(path), spec, (1, 0))
     assert tile == (1, 0) and cells == 4 and cpu >= 0
@@ -299,7 +299,7 @@ def _partial_store(tmp_path, certify=False) -> Path:
     path = tmp_path / "partial.zarr"
     scene = Scene()
     grid = make_grid(scene, {"vy": (0.3, 1.9), "vphi": (-15.0, 15.0)}, (8, 8), (4, 4))
-    spec = make_spec(scene, get("event"), grid, certify=certify)
+    spec = make_spec(scene, info("event"), grid, certify=certify)
     attrs = {"coin_basin": {"format": 1}, "version": "test", "parameters": scene.to_dict(),
              "sweep": grid.to_dict(), "method": {"name": "event", "adaptive": True,
                                                  "rtol": 1e-7, "dt": 1e-6, "t_end": 2.0},
@@ -328,7 +328,7 @@ def test_render_and_stats_on_a_partial_store(tmp_path, certify):
     assert stats["certified"] is certify
     text = coin_ok("stats", str(path)).output
     assert "not computed" in text and "standing" in text
-    basin = store.open_basin(path)
+    basin = store.read_basin(path)
     assert (basin.arrays["status"][~basin.computed] == 255).all()
 
 
@@ -353,7 +353,7 @@ def test_render_and_stats_of_an_empty_store(tmp_path):
                          "parameters": Scene().to_dict(),
                          "method": {"name": "event", "adaptive": True, "rtol": 1e-7,
                                     "dt": 1e-6, "t_end": 2.0}},
-                  make_spec(Scene(), get("event"), grid))
+                  make_spec(Scene(), info("event"), grid))
     coin_ok("render", str(path), "-o", str(tmp_path / "e.png"), "--dpi", "40")
     stats = json.loads(coin_ok("stats", str(path), "--json").output)  # valid JSON: no NaN
     assert stats["computed"] == 0 and stats["standing"]["probability"] is None
@@ -365,7 +365,7 @@ def test_wilson_and_stats_pure():
     assert lo < 635 / 262144 < hi
     assert math.isclose(lo, 0.002240, rel_tol=2e-3) and math.isclose(hi, 0.002620, rel_tol=2e-3)
     assert wilson(0, 10)[0] == 0.0 and wilson(10, 10)[1] == 1.0
-    q = np.array([[0, 1, 2, NOT_COMPUTED], [-1, 0, 0, NOT_COMPUTED]], dtype=np.int16)
+    q = np.array([[0, 1, 2, NO_LABEL], [-1, 0, 0, NO_LABEL]], dtype=np.int16)
     st = np.array([[0, 0, 1, 2], [0, 0, 0, 255]], dtype=np.uint8)
     unc = np.array([[0, 1, 0, 0], [0, 0, 0, 255]], dtype=np.uint8)
     s = basin_stats(q, st, unc)
@@ -380,7 +380,7 @@ def test_mirror_symmetry_vphi_to_minus_vphi():
     """Reflecting x -> -x maps (vphi0, n) to (-vphi0, -n) at low vy0, where labels are robust."""
     scene = Scene()
     grid = make_grid(scene, {"vy": (0.1, 0.75), "vphi": (-20.0, 20.0)}, (8, 9), (8, 9))
-    result = compute_tile(make_spec(scene, get("event"), grid), (0, 0))
+    result = compute_tile(make_spec(scene, info("event"), grid), (0, 0))
     q = result.arrays["quarter_turns"].astype(int)
     assert (result.arrays["status"] == 0).all()
     np.testing.assert_array_equal(q, -q[:, ::-1])
@@ -392,7 +392,7 @@ def test_certify_flags_chaotic_cells_only(tmp_path):
     path = tmp_path / "c.zarr"
     coin_ok(str(path), "--vy", "0.2:2", "--res", "16", "--chunk", "8", "--rtol", "1e-4",
             "--certify", "-q")
-    basin = store.open_basin(path)
+    basin = store.read_basin(path)
     assert basin.attrs["certify"]["rtol"] == pytest.approx(1e-5)
     unc = basin.arrays["uncertain"]
     vy = basin.coords[0]

@@ -7,9 +7,9 @@ import json
 import pytest
 from typer.testing import CliRunner
 
+from coincli import simulate
 from coincli.cli import app
 from coincli.presets import load
-from coincli.simulate import simulate
 
 
 def invoke(*args):

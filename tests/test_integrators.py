@@ -10,24 +10,20 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import run_kernel
 
-from coincli.integrators import METHODS, integrate
+from coincli import simulate
+from coincli.enums import Status
+from coincli.integrators import METHODS, info
 from coincli.model import energies, rounded_quarter_turns, well_index
-from coincli.params import ParameterError, param_array, state_array
+from coincli.params import ParameterError, model_params, state_array
 from coincli.presets import load
-from coincli.simulate import simulate
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import reference as R  # noqa: E402
 
-NO_SAMPLES = np.empty((0, 7))
-FIXED = [name for name, m in METHODS.items() if not m.adaptive]
-ADAPTIVE = [name for name, m in METHODS.items() if m.adaptive]
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load("paper").scene
+FIXED = [m.name for m in METHODS.values() if not m.adaptive]
+ADAPTIVE = [m.name for m in METHODS.values() if m.adaptive]
 
 
 # -- convergence order on a smooth problem -------------------------------------------------------
@@ -44,12 +40,9 @@ def smooth_start(scene):
 
 
 def run_smooth(scene, name, dt=1e-6, rtol=1e-7):
-    p = param_array(scene)
-    final = np.empty(6)
-    events = np.empty((50, 9))
-    out = integrate(METHODS[name].kernel_id, p, smooth_start(scene), dt, rtol, T_SMOOTH, False,
-                    0.0, NO_SAMPLES, events, final)
-    n_events, steps = out[6], out[1]
+    run = run_kernel(scene, smooth_start(scene), method=name, dt=dt, rtol=rtol, t_end=T_SMOOTH,
+                     max_events=50)
+    final, events, n_events, steps = run.final, run.events, run.result.n_events, run.result.steps
     # only the two initial onsets (corners 0 and 1, at t = 0): the contact set never changes
     assert n_events == 2, events[:n_events]
     assert np.all(events[:2, 0] == 0.0) and set(events[:2, 1]) == {0.0, 1.0}
@@ -68,7 +61,7 @@ def smooth_error(final, ref):
 
 @pytest.mark.parametrize("name", FIXED)
 def test_fixed_step_convergence_order(paper, smooth_reference, name):
-    order = METHODS[name].order
+    order = info(name).order
     steps = [4e-5, 2e-5, 1e-5] if order >= 4 else [2e-5, 1e-5, 5e-6]
     errors = [smooth_error(run_smooth(paper, name, dt=h)[0], smooth_reference) for h in steps]
     observed = [math.log2(errors[i] / errors[i + 1]) for i in range(len(errors) - 1)]
@@ -102,7 +95,7 @@ def test_adaptive_convergence_order(paper, smooth_reference, name):
     for i in range(len(errors) - 1):
         assert 2.0 < errors[i] / errors[i + 1] < 50.0, errors
     slope = np.polyfit(np.log(steps), np.log(errors), 1)[0]
-    assert abs(-slope - METHODS[name].order) < 0.7, f"{name}: error ~ steps^{slope:.2f}"
+    assert abs(-slope - info(name).order) < 0.7, f"{name}: error ~ steps^{slope:.2f}"
 
 
 # -- stable step ---------------------------------------------------------------------------------
@@ -114,9 +107,9 @@ STABILITY_THROWS = [dict(vy=1.197, vphi=3.508),                       # the pape
 def at_rest_at_end(scene, name, dt, throw):
     scene = scene.with_overrides(method=name, dt=dt, t_end=2.0, stop_on_settle=False, **throw)
     tr = simulate(scene, force=True)
-    if tr.status == "non-finite":
+    if tr.status == Status.NONFINITE:
         return False, "non-finite"
-    kinetic, gravity, elastic = energies(param_array(scene), tr.final_state)
+    kinetic, gravity, elastic = energies(model_params(scene), tr.final_state)
     total = kinetic + gravity + elastic
     ok = total < scene.e_crit and kinetic < 1e-12 * scene.e_crit
     return ok, (f"E/E_crit = {total / scene.e_crit:.3g}, "
@@ -125,7 +118,7 @@ def at_rest_at_end(scene, name, dt, throw):
 
 @pytest.mark.parametrize("name", FIXED)
 def test_stable_below_and_unstable_above_predicted_step(paper, name):
-    limit = METHODS[name].stable_step(paper)
+    limit = info(name).stable_step(paper)
     omega = math.sqrt(2 * paper.foundation.k * paper.coin.r_d ** 2 / paper.coin.inertia)
     assert 1.0 / omega < limit < 3.0 / omega
     for throw in STABILITY_THROWS:
@@ -140,20 +133,20 @@ def test_stable_step_predictions(paper):
     2 / omega_max because of damping (NOTES.md: unstable near 3.8e-4 s without it)."""
     omega = math.sqrt(2 * paper.foundation.k * paper.coin.r_d ** 2 / paper.coin.inertia)
     assert omega == pytest.approx(5322.4, rel=1e-4)
-    se = METHODS["symplectic_euler"].stable_step(paper)
+    se = info("symplectic_euler").stable_step(paper)
     assert se < 2 / omega
     assert se == pytest.approx(3.29e-4, rel=0.01)
-    undamped = METHODS["symplectic_euler"].stable_step(load("undamped").scene)
+    undamped = info("symplectic_euler").stable_step(load("undamped").scene)
     assert undamped == pytest.approx(2 / omega, rel=1e-3)
-    assert METHODS["rk4"].stable_step(load("undamped").scene) == pytest.approx(
+    assert info("rk4").stable_step(load("undamped").scene) == pytest.approx(
         2 * math.sqrt(2) / omega, rel=1e-3)
     for name in ADAPTIVE:
-        assert METHODS[name].stable_step(paper) is None
+        assert info(name).stable_step(paper) is None
 
 
 @pytest.mark.parametrize("name", FIXED)
 def test_simulate_refuses_a_step_beyond_the_limit(paper, name):
-    limit = METHODS[name].stable_step(paper)
+    limit = info(name).stable_step(paper)
     scene = paper.with_overrides(method=name, dt=1.25 * limit, vy=0.3, t_end=0.01)
     with pytest.raises(ParameterError, match="stable step"):
         simulate(scene)
@@ -274,7 +267,7 @@ def test_exact_flight_matches_fine_rk4(paper):
     scene = paper.with_overrides(method="event", t_end=t_end, **throw)
     tr = simulate(scene, sample_dt=0.01, record_events=True)
     assert len(tr.events) == 0
-    assert tr.status == "unsettled" and tr.t_final == pytest.approx(t_end, rel=1e-12)
+    assert tr.status == Status.UNSETTLED and tr.t_final == pytest.approx(t_end, rel=1e-12)
     assert tr.steps <= 2  # closed-form flight: no stepping
     s = tuple(state_array(scene))
     t_prev = 0.0
@@ -369,7 +362,7 @@ def early_stop_cells():
 
 
 def check_early_stop(paper, name, vy, vphi):
-    p = param_array(paper)
+    p = model_params(paper)
     scene = paper.with_overrides(method=name, vy=vy, vphi=vphi)
     early = simulate(scene)
     full = simulate(scene.with_overrides(stop_on_settle=False, t_end=2.0))
@@ -400,11 +393,11 @@ def test_early_stop_label_fixed_step(paper, vy, vphi):
     check_early_stop(paper, "symplectic_euler", vy, vphi)
 
 
-@pytest.mark.parametrize("name", list(METHODS))
+@pytest.mark.parametrize("name", [m.label for m in METHODS])
 def test_unsettled_run_is_reported_unsettled(paper, name):
     scene = paper.with_overrides(method=name, vy=1.5, vphi=10.0, t_end=0.05)
     tr = simulate(scene)
-    assert tr.status == "unsettled" and not tr.settled
+    assert tr.status == Status.UNSETTLED and not tr.settled
     assert math.isnan(tr.settle_time)
     assert tr.t_final == pytest.approx(0.05)
     assert tr.energy_final > tr.e_crit

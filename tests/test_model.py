@@ -10,30 +10,19 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import run_kernel
 
-from coincli import model
-from coincli.integrators import METHODS, integrate
-from coincli.integrators.fixed import RK4, SYMPLECTIC_EULER
-from coincli.params import param_array, state_array
-from coincli.presets import load
-from coincli.simulate import simulate
-from coincli.stability import analyse
+from coincli import model, simulate
+from coincli.enums import Status
+from coincli.integrators import METHODS, info
+from coincli.jit import compiled
+from coincli.params import model_params, state_array
+from coincli.statics import analyse
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import reference as R  # noqa: E402
 
-NO_SAMPLES = np.empty((0, 7))
 NO_EVENTS = np.empty((0, 9))
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load("paper").scene
-
-
-@pytest.fixture(scope="module")
-def undamped():
-    return load("undamped").scene
 
 
 def random_state(rng, P, n_pen):
@@ -97,31 +86,32 @@ def test_reference_signs():
 
 @pytest.mark.parametrize("n_pen", [0, 1, 2, 3, 4])
 def test_accelerations_and_energies_match_reference(paper, n_pen):
-    p = param_array(paper)
+    p = model_params(paper)
     P = R.Params.from_scene(paper)
     rng = np.random.default_rng(100 + n_pen)
     for _ in range(200):
         st = random_state(rng, P, n_pen)
-        assert model.contact_mask(p, st[1], st[2]) == R.mask(P, st[1], st[2])
-        got = model.accelerations_auto(p, *st)
+        assert compiled(model.contact_mask)(p, st[1], st[2]) == R.mask(P, st[1], st[2])
+        got = compiled(model.accelerations_auto)(p, *st)
         want = R.accelerations(P, st)
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * max(map(abs, want)))
-        got_e = model.energies(p, np.array(st))
+        got_e = compiled(model.energies)(p, np.array(st))
         want_e = R.energies(P, st)
         np.testing.assert_allclose(got_e, want_e, rtol=1e-12, atol=1e-15 * sum(want_e))
-        assert model.total_energy(p, np.array(st)) == pytest.approx(sum(want_e), rel=1e-12)
+        total = compiled(model.total_energy)(p, np.array(st))
+        assert total == pytest.approx(sum(want_e), rel=1e-12)
 
 
 def test_accelerations_with_given_mask_extend_the_force_law(paper):
     """The adaptive integrators evaluate the force of a fixed set of corners whatever their
     height (the force law extended beyond the surface)."""
-    p = param_array(paper)
+    p = model_params(paper)
     P = R.Params.from_scene(paper)
     rng = np.random.default_rng(3)
     for _ in range(100):
         st = random_state(rng, P, int(rng.integers(0, 5)))
         m = int(rng.integers(0, 16))
-        got = model.accelerations(p, *st, m)
+        got = compiled(model.accelerations)(p, *st, m)
         want = R.accelerations(P, st, {i for i in range(4) if m >> i & 1})
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * max(map(abs, want)))
 
@@ -134,20 +124,16 @@ def impact_state(P):
     return (0.0, -lowest + 5e-5, phi, 0.2, -0.5, 3.0)
 
 
-@pytest.mark.parametrize("method,kernel_id", [("symplectic_euler", SYMPLECTIC_EULER),
-                                              ("rk4", RK4)])
-def test_fixed_step_run_matches_reference_to_rounding(paper, method, kernel_id):
-    p = param_array(paper)
+@pytest.mark.parametrize("method", ["symplectic_euler", "rk4"])
+def test_fixed_step_run_matches_reference_to_rounding(paper, method):
     P = R.Params.from_scene(paper)
     s0 = impact_state(P)
     h, n = 1e-6, 2000
     want, kept = R.integrate(P, method, s0, h, n, every=1)
     masks = {R.mask(P, s[1], s[2]) for s in kept}
     assert len(masks) >= 2, "the run must go through a contact onset"
-    final = np.empty(6)
-    events = np.empty((100, 9))
-    t, steps, *_ , n_events = integrate(kernel_id, p, np.array(s0), h, 1e-7, n * h, False,
-                                        0.0, NO_SAMPLES, events, final)
+    run = run_kernel(paper, s0, method=method, dt=h, t_end=n * h, max_events=100)
+    t, steps, n_events, final = run.result.t, run.result.steps, run.result.n_events, run.final
     assert steps == n and t == pytest.approx(n * h)
     assert n_events >= 1
     scale = np.array([P.r, P.r, 1.0, 1.0, 1.0, 1.0 / P.r])
@@ -165,21 +151,21 @@ def test_fixed_step_run_matches_reference_to_rounding(paper, method, kernel_id):
 def test_well_index(paper, phi_deg, well):
     """phi_cr = atan(r_d / r_t) = 84.29 deg: a lying well reaches out to +-84.29 deg, a standing
     one only +-5.71 deg; so 46 deg is still lying (round(2 phi / pi) would say 1)."""
-    p = param_array(paper)
+    p = model_params(paper)
     phi = math.radians(phi_deg)
-    assert model.well_index(p, phi) == well
+    assert compiled(model.well_index)(p, phi) == well
 
 
 def test_well_index_edges(paper):
-    p = param_array(paper)
+    p = model_params(paper)
     phi_cr = paper.coin.phi_cr
     eps = 1e-9
-    assert model.well_index(p, phi_cr - eps) == 0
-    assert model.well_index(p, phi_cr + eps) == 1
-    assert model.well_index(p, math.pi - phi_cr - eps) == 1
-    assert model.well_index(p, math.pi - phi_cr + eps) == 2
-    assert model.well_index(p, -phi_cr - eps) == -1
-    assert model.rounded_quarter_turns(math.radians(46.0)) == 1
+    assert compiled(model.well_index)(p, phi_cr - eps) == 0
+    assert compiled(model.well_index)(p, phi_cr + eps) == 1
+    assert compiled(model.well_index)(p, math.pi - phi_cr - eps) == 1
+    assert compiled(model.well_index)(p, math.pi - phi_cr + eps) == 2
+    assert compiled(model.well_index)(p, -phi_cr - eps) == -1
+    assert compiled(model.rounded_quarter_turns)(math.radians(46.0)) == 1
 
 
 def test_e_crit_formula(paper):
@@ -188,7 +174,7 @@ def test_e_crit_formula(paper):
     want = m * g * (r - m * g / (2 * k))
     assert want == pytest.approx(3.09680e-4, abs=1e-9)
     assert paper.e_crit == pytest.approx(want, rel=1e-14)
-    assert model.critical_energy(param_array(paper)) == pytest.approx(want, rel=1e-14)
+    assert model_params(paper).e_crit == pytest.approx(want, rel=1e-14)
     assert analyse(paper).e_crit == pytest.approx(want, rel=1e-14)
     # E_crit is the potential energy balanced on a corner with the foundation's energy counted:
     # centroid at r - mg/k, one corner pressed in by mg/k
@@ -207,13 +193,13 @@ def test_coin_at_equilibrium_stays(paper, method):
     y_eq = paper.coin.r_t - sink
     scene = paper.with_overrides(method=method, y0=y_eq, t_end=0.2, stop_on_settle=False)
     tr = simulate(scene, sample_dt=1e-3)
-    assert tr.status == "settled" and tr.settle_time == 0.0
+    assert tr.status == Status.SETTLED and tr.settle_time == 0.0
     dev = np.abs(tr.samples[:, 2] - y_eq).max()
     # a fixed step keeps the equilibrium to rounding; an adaptive one to its tolerance (it walks
     # at the stability limit of the rocking mode, its error estimate holding that noise at
     # about rtol times the coin's size)
     bound = 1e-9 * sink if method == "symplectic_euler" else 1e-3 * sink
-    if METHODS[method].adaptive:
+    if info(method).adaptive:
         bound = max(bound, 10 * scene.integration.rtol * paper.coin.r)
     assert dev < bound
     assert np.abs(tr.samples[:, 3]).max() < 1e-9  # phi
@@ -227,11 +213,11 @@ def test_coin_laid_flat_sinks_by_mg_over_2k(paper, method):
     scene = paper.with_overrides(method=method, y0=paper.coin.r_t, t_end=0.5,
                                  stop_on_settle=False)
     tr = simulate(scene, sample_dt=1e-3)
-    assert tr.status == "settled"
+    assert tr.status == Status.SETTLED
     late = tr.samples[tr.samples[:, 0] >= 0.3]
     # fixed steps settle to rounding; adaptive ones hold rest to their tolerance (rtol * r)
     bound = 1e-3 * sink
-    if METHODS[method].adaptive:
+    if info(method).adaptive:
         bound = max(bound, 10 * scene.integration.rtol * paper.coin.r)
     assert np.abs(late[:, 2] - y_eq).max() < bound
     assert abs(tr.final_state[1] - y_eq) < bound
@@ -263,7 +249,7 @@ def test_energy_conserved_without_damping(undamped, method):
     scene = undamped.with_overrides(method=method, vy=1.0, vphi=5.0, t_end=1.0,
                                     stop_on_settle=False, **settings)
     tr = simulate(scene, sample_dt=1e-3, record_events=True)
-    assert tr.status == "unsettled" and tr.t_final == pytest.approx(1.0)
+    assert tr.status == Status.UNSETTLED and tr.t_final == pytest.approx(1.0)
     onsets = tr.events[tr.events[:, 2] > 0]
     assert len(onsets) >= 6, "the throw must go through several impacts"
     P = R.Params.from_scene(scene)
@@ -307,7 +293,7 @@ MIRROR_THROWS = [(0.3, 5.0), (0.55, 8.0), (0.65, 4.0), (0.7, 16.0), (0.8, 10.0),
                  (1.197, 3.508)]
 
 
-@pytest.mark.parametrize("method", list(METHODS))
+@pytest.mark.parametrize("method", [m.label for m in METHODS])
 def test_mirror_symmetry(paper, method):
     """(vy, -vphi) is the mirror image of (vy, vphi): it must end with -n quarter turns."""
     labels = []
@@ -320,7 +306,7 @@ def test_mirror_symmetry(paper, method):
     assert any(n != 0 for n in labels)
 
 
-@pytest.mark.parametrize("method", list(METHODS))
+@pytest.mark.parametrize("method", [m.label for m in METHODS])
 def test_mirror_symmetry_of_the_state(paper, method):
     """Over a short run through two impacts the mirrored state is the mirror image to near
     rounding: x, phi, vx, vphi change sign, y and vy do not."""

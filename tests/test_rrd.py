@@ -14,14 +14,14 @@ import pyarrow as pa
 import pytest
 from typer.testing import CliRunner
 
-from coincli import __version__
+from coincli import __version__, simulate
 from coincli.cli import app
+from coincli.io import frames as frames_io
 from coincli.io import rrd as rrd_io
 from coincli.model import accelerations
 from coincli.model import energies as model_energies
-from coincli.params import Scene, param_array
+from coincli.params import Scene, model_params
 from coincli.presets import load
-from coincli.simulate import simulate
 
 rr = pytest.importorskip("rerun")
 from rerun.chunk import RrdReader  # noqa: E402
@@ -91,7 +91,7 @@ def fig2(tmp_path_factory):
     tr = simulate(fig2_scene(), sample_dt=LOG_EVERY, record_events=True)
     path = tmp_path_factory.mktemp("rrd") / "fig2.rrd"
     info = rrd_io.write_recording(tr, rrd=path, log_every=LOG_EVERY)
-    return tr, rrd_io.build_frames(tr), info, Recording(path)
+    return tr, frames_io.build_frames(tr), info, Recording(path)
 
 
 @pytest.fixture(scope="module")
@@ -103,7 +103,7 @@ def fig2_verlet(tmp_path_factory):
     tr = simulate(scene, sample_dt=LOG_EVERY, record_events=True)
     path = tmp_path_factory.mktemp("rrd") / "verlet.rrd"
     rrd_io.write_recording(tr, rrd=path, log_every=LOG_EVERY)
-    return tr, rrd_io.build_frames(tr), Recording(path)
+    return tr, frames_io.build_frames(tr), Recording(path)
 
 
 def ns(seconds) -> np.ndarray:
@@ -257,7 +257,7 @@ def test_blueprint_is_stored(fig2):
 
 def test_energies_and_forces_match_the_model(fig2):
     tr, frames, _, _ = fig2
-    p = param_array(tr.scene)
+    p = model_params(tr.scene)
     for row in range(0, len(frames), 7):
         state = frames.state[row]
         kinetic, gravity, elastic = model_energies(p, state)
@@ -329,6 +329,6 @@ def test_cli_bad_recording_options_fail_in_one_line(tmp_path, monkeypatch, args,
 
 
 def test_rerun_is_not_imported_by_the_model():
-    code = ("import sys, coincli.simulate, coincli.integrators, coincli.io.rrd, coincli.cli; "
+    code = ("import sys, coincli.throw, coincli.integrators, coincli.io.rrd, coincli.cli; "
             "assert 'rerun' not in sys.modules, 'rerun imported'")
     subprocess.run([sys.executable, "-c", code], check=True)

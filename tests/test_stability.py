@@ -8,10 +8,11 @@ import math
 import pytest
 from typer.testing import CliRunner
 
+from coincli import simulate
 from coincli.cli import app
+from coincli.enums import Status
 from coincli.presets import load
-from coincli.simulate import simulate
-from coincli.stability import analyse
+from coincli.statics import analyse
 
 runner = CliRunner()
 
@@ -121,7 +122,7 @@ def test_standing_rest_below_k_cr_follows_the_exact_energies(k, stays):
     run = scene.with_overrides(y0=scene.coin.r_d - weight / (2 * k), phi0=math.pi / 2,
                                vphi=0.01, t_end=1.0, stop_on_settle=False)
     tr = simulate(run)
-    assert tr.status == "settled"
+    assert tr.status == Status.SETTLED
     assert (tr.quarter_turns == 1) is stays
     out = words(invoke("stability", "--k", str(k)).stdout)
     assert "a standing coin cannot be at rest" in out

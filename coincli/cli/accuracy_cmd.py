@@ -9,9 +9,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from .. import accuracy as acc
-from .. import sweep
-from ..integrators import METHODS
+from ..enums import Method
 from ..params import ParameterError
 from . import app
 from .common import (
@@ -34,14 +32,25 @@ from .common import (
 
 def parse_range(text: str, option: str) -> tuple[float, float]:
     """A required LO:HI range (the sweep's parser, which also accepts a single value)."""
-    value = sweep.parse_range(option.lstrip("-"), text)
+    from ..grid import parse_range as parse
+
+    value = parse(option.lstrip("-"), text)
     if not isinstance(value, tuple):
         raise ParameterError(f"{option} must be a range LO:HI, got '{text}'")
     return value
 
 
 def parse_res(text: str) -> tuple[int, int]:
-    return sweep.parse_pair("res", text, minimum=2)
+    from ..grid import parse_pair
+
+    return parse_pair("res", text, minimum=2)
+
+
+def parse_methods(text: str) -> list[Method]:
+    try:
+        return [Method.parse(name) for name in text.split(",") if name.strip()]
+    except ValueError as exc:
+        raise ParameterError(str(exc)) from None
 
 
 @app.command("accuracy")
@@ -55,7 +64,7 @@ def accuracy_command(
     vphi_range: Annotated[str, typer.Option("--vphi-range", help="vphi0 range LO:HI "
                                             "(rad/s).")] = "-20:20",
     methods: Annotated[str, typer.Option("--methods", help="Comma-separated methods.")] = ",".join(
-        acc.LADDERS),
+        m.label for m in Method),
     quick: Annotated[bool, typer.Option("--quick", help="Two settings per method (a smoke "
                                         "test, not a chart to trust).")] = False,
     threads: Annotated[int, typer.Option("--threads", help="Threads.")] = os.cpu_count() or 1,
@@ -72,21 +81,19 @@ def accuracy_command(
     n differs from that reference; robust cells are those where it agrees with RK4 at
     h = 2.5e-7.
     """
+    from .. import accuracy as acc
+
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
                             inertia=inertia, k=k, c=c, g=g)
         if stability:
             run_stability(scene, json_out)
             return
-        names = [m.strip() for m in methods.split(",") if m.strip()]
-        for name in names:
-            if name not in METHODS:
-                raise ParameterError(f"unknown method '{name}'; available: "
-                                     f"{', '.join(METHODS)}")
+        names = parse_methods(methods)
         if threads < 1:
             raise ParameterError("--threads must be at least 1")
-        grid = acc.Grid.linear(parse_range(vy_range, "--vy-range"),
-                               parse_range(vphi_range, "--vphi-range"), parse_res(res))
+        grid = acc.vy_vphi_grid(scene, parse_range(vy_range, "--vy-range"),
+                                parse_range(vphi_range, "--vphi-range"), parse_res(res))
         if out.suffix.lower() != ".png":
             raise ParameterError(f"--out must be a .png file, got {out}")
         table = table or out.with_suffix(".json")
@@ -116,7 +123,7 @@ def accuracy_command(
     console.print(f"chart: {out}   table: {table}")
 
 
-def print_study(study: acc.Study) -> None:
+def print_study(study) -> None:
     cells = study.robust.size
     console.print(f"References on {cells} cells: event rtol=1e-12 and rk4 h=2.5e-7 agree on "
                   f"{study.reference_agreement:.1%}; the {study.robust_cells} cells where both "
@@ -130,7 +137,7 @@ def print_study(study: acc.Study) -> None:
     best = study.best_under(0.01)
     for p in study.points:
         mark = " <- cheapest < 1 % (95 % conf.)" if best is p else ""
-        table.add_row(p.setting.method, f"{'rtol' if p.setting.adaptive else 'h'}="
+        table.add_row(p.setting.method.label, f"{'rtol' if p.setting.adaptive else 'h'}="
                       f"{p.setting.knob:g}", f"{p.cpu_per_trajectory * 1e3:.3g} ms",
                       f"{p.trajectory_error:.2e}", f"{p.label_error:.2%}{mark}",
                       str(p.nonfinite), str(p.unsettled))
@@ -142,12 +149,15 @@ def print_study(study: acc.Study) -> None:
 
 
 def run_stability(scene, json_out: bool) -> None:
+    from .. import accuracy as acc
+    from ..integrators import METHODS
+
     rows = []
     with console.status("bisecting the failing step of each fixed-step method"):
         for method in METHODS.values():
             if method.adaptive:
                 continue
-            limit = acc.measured_limit(scene, method.name)
+            limit = acc.measured_limit(scene, method.method)
             rows.append({"method": method.name, "predicted_stable_step": limit.predicted,
                          "measured_failure_step": limit.measured,
                          "ratio": limit.measured / limit.predicted})

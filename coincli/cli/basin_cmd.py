@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import signal
-import time
+import threading
 from pathlib import Path
 from typing import Annotated
 
@@ -27,19 +27,8 @@ from rich.text import Text
 from typer.core import TyperGroup
 
 from .. import __version__
-from ..integrators import check_step
+from ..defaults import DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES
 from ..params import ParameterError
-from ..sweep import (
-    DEFAULT_CHUNK,
-    DEFAULT_RANGES,
-    DEFAULT_RES,
-    certify_attrs,
-    make_grid,
-    make_spec,
-    method_attrs,
-    parse_pair,
-    parse_range,
-)
 from . import app
 from .common import (
     INIT,
@@ -104,6 +93,9 @@ VyRange = Annotated[str, _ic("vy", "Initial vertical velocity, m/s.")]
 VphiRange = Annotated[str, _ic("vphi", "Initial angular velocity, rad/s.")]
 
 
+DEFAULT_TEXT = {name: f"{lo:g}:{hi:g}" for name, (lo, hi) in DEFAULT_RANGES.items()}
+
+
 class RateColumn(ProgressColumn):
     def __init__(self, unit: str):
         super().__init__()
@@ -119,8 +111,12 @@ class _Stop:
     """First Ctrl-C: finish the tiles in flight, then stop. Second: stop at once."""
 
     def __init__(self):
-        self.requested = False
+        self.event = threading.Event()
         self.previous = None
+
+    @property
+    def requested(self) -> bool:
+        return self.event.is_set()
 
     def __enter__(self):
         self.previous = signal.getsignal(signal.SIGINT)
@@ -136,7 +132,7 @@ class _Stop:
     def _handle(self, signum, frame):
         if self.requested:
             raise KeyboardInterrupt
-        self.requested = True
+        self.event.set()
         err_console.print("[yellow]interrupt:[/] finishing the tiles in flight, then stopping "
                           "(Ctrl-C again to stop at once; rerun the same command to resume)")
 
@@ -152,13 +148,13 @@ def sweep_command(
                                          "(a directory, e.g. out.zarr).",
                                          metavar="STORE")],
     x0: X0Range = None, y0: Y0Range = None, phi0: Phi0Range = None, vx: VxRange = None,
-    vy: VyRange = DEFAULT_RANGES["vy"], vphi: VphiRange = DEFAULT_RANGES["vphi"],
+    vy: VyRange = DEFAULT_TEXT["vy"], vphi: VphiRange = DEFAULT_TEXT["vphi"],
     res: Annotated[str, typer.Option("--res", help="Cells per axis: N, or NxM (N along the "
                                      "first swept axis, M along the second).",
-                                     rich_help_panel=SWEEP)] = DEFAULT_RES,
+                                     rich_help_panel=SWEEP)] = str(DEFAULT_RES),
     chunk: Annotated[str, typer.Option("--chunk", help="Tile size in cells, N or NxM: the "
                                        "unit of work, of writing and of resuming.",
-                                       rich_help_panel=SWEEP)] = DEFAULT_CHUNK,
+                                       rich_help_panel=SWEEP)] = str(DEFAULT_CHUNK),
     certify: Annotated[bool, typer.Option("--certify", help="Compute every cell again with "
                                           "a tenfold smaller error bound (rtol/10; fixed step "
                                           "dt/10^(1/order)) and flag the cells whose n changes "
@@ -192,108 +188,53 @@ def sweep_command(
 
     Example: coin basin out.zarr --vy 0:2 --vphi -20:20 --res 512
     """  # noqa: E501
-    started = time.time()
+    from .. import api
+
     with user_errors():
-        ranges, fixed = {}, {}
-        for name, text in (("x0", x0), ("y0", y0), ("phi0", phi0), ("vx", vx), ("vy", vy),
-                           ("vphi", vphi)):
-            if text is None:
-                continue
-            value = parse_range(name, text)
-            if isinstance(value, tuple):
-                ranges[name] = value
-            else:
-                fixed[name] = value
-        scene = build_scene(preset, **fixed, diameter=diameter, thickness=thickness, mass=mass,
+        scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
                             inertia=inertia, k=k, c=c, g=g, method=method, dt=dt, rtol=rtol,
                             t_end=t_end, stop_on_settle=stop_on_settle)
-        grid = make_grid(scene, ranges, parse_pair("res", res, 2), parse_pair("chunk", chunk, 1))
-        for axis in grid.axes:  # every swept value must make a valid scene too
-            for value in (axis.lo, axis.hi):
-                build_scene(preset, **fixed, **{axis.name: value}, diameter=diameter,
-                            thickness=thickness, mass=mass, inertia=inertia, k=k, c=c, g=g)
-        chosen = check_step(scene, force=force)
-        if workers is not None and scheduler is not None:
-            raise ParameterError("give --workers (a local cluster) or --scheduler (an existing "
-                                 "one), not both")
-        for option, value in (("--threads", threads), ("--workers", workers)):
-            if value is not None and value < 1:
-                raise ParameterError(f"{option} must be at least 1, got {value}")
-        if threads is not None and (workers is not None or scheduler is not None):
-            raise ParameterError("--threads is for a local run; a Dask run uses one thread per "
-                                 "worker")
-        if scheduler is not None and "://" not in scheduler:
-            raise ParameterError(f"--scheduler '{scheduler}' is not an address like "
-                                 "tcp://HOST:PORT")
-        spec = make_spec(scene, chosen, grid, certify=certify)
-        parameters = scene.to_dict()
-        for name in grid.dims:
-            parameters["initial"][name] = None  # swept: see sweep.axes
-        attrs = {"coin_basin": {"format": 1, "command": "coin basin"}, "version": __version__,
-                 "parameters": parameters, "sweep": grid.to_dict(),
-                 "method": method_attrs(scene, chosen), "certify": certify_attrs(spec)}
-        from ..io import store
-
-        done = store.prepare(path, attrs, spec, overwrite=overwrite)
-    tiles = [t for t in grid.tiles() if not done[t]]
-    total_tiles = len(grid.tiles())
-    if not tiles:
-        console.print(f"{path}: all {total_tiles} tiles are done already "
-                      f"({grid.n_cells:,} cells). Next: coin basin render {path}; "
-                      f"coin basin stats {path}")
-        return
-    from ..distributed import run_dask, run_threads, usable_cores
-
-    if scheduler is not None or workers is not None:
-        mode, n_workers = "dask", workers or 0
-        # workers open the store by this path: make it absolute (same path on every machine)
-        runner = run_dask(str(path.resolve()), spec, tiles, scheduler=scheduler,
-                          workers=workers)
-    else:
-        mode, n_workers = "threads", threads or usable_cores()
-        runner = run_threads(str(path), spec, tiles, n_workers)
-    cells_todo = sum(grid.tile_cells(t) for t in tiles)
-    already = total_tiles - len(tiles)
+        plan = api.plan_sweep(scene, res=res, chunk=chunk, certify=certify, force=force, x0=x0,
+                              y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
+        api.check_where(threads, workers, scheduler)
+    grid = plan.grid
     progress = Progress(
         TextColumn("[bold]basin[/]"), BarColumn(),
         TextColumn("{task.fields[tiles]}/{task.fields[ntiles]} tiles"),
         RateColumn("cells" if certify else "traj"), TimeElapsedColumn(),
         TextColumn("ETA"), TimeRemainingColumn(),
         console=err_console, disable=quiet, transient=False)
-    task = progress.add_task("sweep", total=cells_todo, tiles=already, ntiles=total_tiles)
-    computed = cells = 0
-    wall0 = time.perf_counter()
-    interrupted = False
+    task = None
+
+    def show(update) -> None:
+        nonlocal task
+        if task is None:
+            task = progress.add_task("sweep", total=update.cells_todo, tiles=0,
+                                     ntiles=update.tiles_total)
+        progress.update(task, completed=update.cells_done, tiles=update.tiles_done)
+
     try:
-        with _Stop() as stop, progress:
-            for _tile, tile_cells, _cpu in runner:
-                computed += 1
-                cells += tile_cells
-                progress.update(task, advance=tile_cells, tiles=already + computed)
-                if stop.requested:
-                    interrupted = True
-                    break
-            runner.close()  # cancel what is queued, wait for the tiles in flight
-    except KeyboardInterrupt:
-        interrupted = True
-        runner.close()
+        with user_errors(), _Stop() as stop, progress:
+            report = api.sweep(plan, path, overwrite=overwrite, threads=threads,
+                               workers=workers, scheduler=scheduler, progress=show,
+                               stop=stop.event)
     except OSError as exc:  # e.g. no scheduler at that address
         raise fail(f"cannot run the sweep: {exc}") from None
-    wall = time.perf_counter() - wall0
-    done_now = store.read_done(path)
-    n_done = int(done_now.sum())
-    cells = sum(grid.tile_cells(t) for t in tiles if done_now[t])  # tiles in flight included
-    store.record_run(path, store.run_record(started, wall, n_done - already, cells, mode,
-                                            n_workers, interrupted))
-    rate = cells / wall if wall > 0 else math.nan
-    where = (f"{n_workers} threads" if mode == "threads"
-             else f"Dask ({scheduler or f'{n_workers} local workers'})")
-    console.print(f"{path}: {n_done}/{total_tiles} tiles done; this run computed "
-                  f"{n_done - already} tiles ({cells:,} cells) in {wall:.1f} s wall, "
-                  f"{rate:,.0f} {'cells' if certify else 'trajectories'}/s on {where}.")
-    if interrupted or n_done < total_tiles:
-        err_console.print(f"[yellow]stopped:[/] {total_tiles - n_done} tiles left; run the same "
-                          "command again to resume.")
+    total = report.tiles_total
+    if report.tiles_before == total:
+        console.print(f"{path}: all {total} tiles are done already ({grid.n_cells:,} cells). "
+                      f"Next: coin basin render {path}; coin basin stats {path}")
+        return
+    rate = report.cells / report.wall_seconds if report.wall_seconds > 0 else math.nan
+    where = (f"{report.workers} threads" if report.mode == "threads"
+             else f"Dask ({scheduler or f'{report.workers} local workers'})")
+    console.print(f"{path}: {report.tiles_done}/{total} tiles done; this run computed "
+                  f"{report.tiles_computed} tiles ({report.cells:,} cells) in "
+                  f"{report.wall_seconds:.1f} s wall, {rate:,.0f} "
+                  f"{'cells' if certify else 'trajectories'}/s on {where}.")
+    if not report.complete:
+        err_console.print(f"[yellow]stopped:[/] {total - report.tiles_done} tiles left; run the "
+                          "same command again to resume.")
         raise typer.Exit(code=130)
     console.print(f"Next: coin basin render {path} -o basin.png; coin basin stats {path}")
 
@@ -318,26 +259,26 @@ def render_command(
 
     n < 0 (clockwise) yellow to red, n > 0 (counter-clockwise) green to blue, n = 0 white, standing (odd n) black; uncertain cells grey, unsettled purple, non-finite magenta, not computed hatched. Works on partial stores.
     """  # noqa: E501
-    from ..io.basin_render import log_rerun, render_png
-    from ..io.store import open_basin
+    from .. import api
+    from ..io.basin_render import log_rerun
+    from ..io.paths import check_rrd_path
+    from ..io.store import read_basin
 
     with user_errors():
         if dpi < 10 or dpi > 1200:
             raise ParameterError(f"--dpi must be between 10 and 1200, got {dpi}")
         if rrd is not None and rrd.suffix != ".rrd":
             raise ParameterError(f"--rrd {rrd}: the file name must end in .rrd")
-        basin = open_basin(path)
+        basin = read_basin(path)
         target = out if out is not None else path.with_suffix(".png")
         if target.suffix.lower() != ".png":
             raise ParameterError(f"-o {target}: the file name must end in .png")
         if n_max is not None and n_max < 1:
             raise ParameterError(f"--n-max must be at least 1, got {n_max}")
-        from ..io.rrd import check_rrd_path  # a writable file path (numpy-only module)
-
-        check_rrd_path(target)
+        check_rrd_path(target)  # a writable file path
         if rrd is not None:
             check_rrd_path(rrd)
-        render_png(basin, target, title=title, dpi=dpi, n_max=n_max)
+        api.render_basin(basin, target, title=title, dpi=dpi, n_max=n_max)
         console.print(f"wrote {target}")
         if rrd is not None:
             log_rerun(basin, rrd)
@@ -358,14 +299,12 @@ def stats_command(
 
     Count and fraction of each n over the labelled cells, the cells unsettled, non-finite or not computed, the uncertain fraction of a certified sweep with the outcome probabilities with and without the uncertain cells, and the CPU and wall time of the sweep.
     """  # noqa: E501
-    from ..basin_stats import basin_stats
-    from ..io.store import open_basin
+    from .. import api
+    from ..io.store import read_basin
 
     with user_errors():
-        basin = open_basin(path)
-    a = basin.arrays
-    stats = basin_stats(a["quarter_turns"], a["status"], a.get("uncertain"),
-                        basin.tile_seconds, basin.done, basin.runs)
+        basin = read_basin(path)
+    stats = api.basin_stats(basin)
     attrs = basin.attrs
     if json_out:
         print_json({"path": str(path), "version": __version__, "store_version": attrs["version"],

@@ -5,17 +5,12 @@ from __future__ import annotations
 import os
 import resource
 import shutil
-import subprocess
-import sys
 import tempfile
-import time
 from typing import Annotated
 
 import typer
 from rich.table import Table
 
-from .. import bench
-from ..accuracy import Grid
 from ..params import ParameterError
 from . import app
 from .accuracy_cmd import parse_range, parse_res
@@ -24,7 +19,6 @@ from .common import (
     PresetOpt,
     build_scene,
     console,
-    err_console,
     print_json,
     user_errors,
 )
@@ -49,6 +43,9 @@ def bench_command(
     """Benchmark: cost per trajectory of each method's default setting and of the paper's
     setting (side by side), their label agreement with the converged reference, and the wall
     time of the full default basin on all cores."""
+    from .. import bench
+    from ..accuracy import vy_vphi_grid
+
     with user_errors():
         if threads < 1 or repeats < 1:
             raise ParameterError("--threads and --repeats must be at least 1")
@@ -56,19 +53,23 @@ def bench_command(
             raise ParameterError(f"--basin-res must be 0 (skip) or at least 2, got {basin_res}")
         scene = build_scene(preset)
         vy, vphi = parse_range(vy_range, "--vy-range"), parse_range(vphi_range, "--vphi-range")
-        cost_grid = Grid.linear(vy, vphi, parse_res(cost_res))
-        label_grid = Grid.linear(vy, vphi, parse_res(label_res))
+        cost_grid = vy_vphi_grid(scene, vy, vphi, parse_res(cost_res))
+        label_grid = vy_vphi_grid(scene, vy, vphi, parse_res(label_res))
     with console.status("") as status:
         say = lambda text: status.update(f"bench: {text}")  # noqa: E731
         rows = bench.side_by_side(scene, cost_grid, repeats, say)
         check = bench.label_check(scene, label_grid, rows, threads, say)
-        basin = time_basin(basin_res, say) if basin_res else None
+        basin = time_basin(scene, basin_res, say) if basin_res else None
+    from ..integrators.registry import setting_text
+
     paper = next(r for r in rows if r.full_run)
     result = {
         "cost_cells": cost_grid.shape[0] * cost_grid.shape[1],
         "label_cells": int(check.robust.size), "robust_cells": int(check.robust.sum()),
         "reference_agreement": check.agreement_ab,
-        "rows": [{"name": r.name, "method": r.setting.method, "dt": r.setting.dt,
+        "rows": [{"name": r.name, "method": r.setting.method.label,
+                  "setting": setting_text(r.setting.method, r.setting.dt, r.setting.rtol),
+                  "dt": r.setting.dt,
                   "rtol": r.setting.rtol, "full_run": r.full_run,
                   "ms_per_trajectory": r.seconds_per_trajectory * 1e3,
                   "rounds_ms": [t * 1e3 for t in r.repeats],
@@ -86,8 +87,7 @@ def bench_command(
         table.add_column(col, justify="left" if col == "setting" else "right")
     for r in result["rows"]:
         name = r["name"] if r["full_run"] else (
-            f"{r['method']} " + (f"rtol={r['rtol']:g}" if r["method"] in ("dopri5", "event")
-                                 else f"h={r['dt']:g}") + ", stop when settled")
+            f"{r['method']} {r['setting']}, stop when settled")
         table.add_row(name, f"{r['ms_per_trajectory']:.4g}", f"{r['speedup_vs_paper']:.0f}",
                       f"{r['label_agreement_robust']:.2%}")
     console.print(table)
@@ -96,26 +96,24 @@ def bench_command(
                   f"{result['robust_cells']} robust cells.")
     if basin:
         console.print(f"Full default basin {basin_res} x {basin_res} ({basin['cells']:,} "
-                      f"trajectories) with `coin basin`: {basin['wall_seconds']:.1f} s wall, "
+                      f"trajectories): {basin['wall_seconds']:.1f} s wall, "
                       f"{basin['trajectories_per_second']:,.0f} trajectories/s on "
                       f"{os.cpu_count()} cores, peak memory {basin['peak_rss_mb']:.0f} MB.")
 
 
-def time_basin(res: int, say) -> dict:
-    """Run the real `coin basin` command on defaults into a scratch store and time it."""
-    say(f"full default basin {res} x {res} (coin basin)")
+def time_basin(scene, res: int, say) -> dict:
+    """Sweep the default basin at ``res`` x ``res`` into a scratch store through the API (what
+    `coin basin` runs) and time it."""
+    from .. import api
+
+    say(f"full default basin {res} x {res}")
     scratch = tempfile.mkdtemp(prefix="coin-bench-")
-    store = os.path.join(scratch, "basin.zarr")
     try:
-        start = time.perf_counter()
-        proc = subprocess.run([sys.executable, "-m", "coincli", "basin", store, "--res",
-                               str(res), "--quiet"], capture_output=True, text=True)
-        wall = time.perf_counter() - start
-        if proc.returncode != 0:
-            err_console.print(proc.stderr.strip(), markup=False, highlight=False)
-            raise typer.Exit(code=proc.returncode)
-        peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+        plan = api.plan_sweep(scene, res=res)
+        report = api.sweep(plan, os.path.join(scratch, "basin.zarr"))
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
-    return {"res": res, "cells": res * res, "wall_seconds": wall,
-            "trajectories_per_second": res * res / wall, "peak_rss_mb": peak}
+    return {"res": res, "cells": report.cells, "wall_seconds": report.wall_seconds,
+            "trajectories_per_second": report.cells / report.wall_seconds,
+            "peak_rss_mb": peak}

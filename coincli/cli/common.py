@@ -95,31 +95,6 @@ def build_scene(preset: str, **overrides) -> Scene:
 
 def print_json(data) -> None:
     """One JSON object on stdout; NaN and infinities (no such JSON values) become null."""
-    sys.stdout.write(json.dumps(_finite(data), indent=2, default=_json_default,
-                                allow_nan=False) + "\n")
+    from ..jsonable import jsonable
 
-
-def _finite(value):
-    import math
-
-    import numpy as np
-
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _finite(value.tolist())
-    if isinstance(value, (float, np.floating)) and not math.isfinite(value):
-        return None
-    return value
-
-
-def _json_default(obj):
-    import numpy as np
-
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+    sys.stdout.write(json.dumps(jsonable(data), indent=2, allow_nan=False) + "\n")

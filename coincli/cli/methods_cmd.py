@@ -4,9 +4,6 @@ from __future__ import annotations
 
 from rich.table import Table
 
-from ..integrators import METHODS
-from ..model import stiffest_frequency
-from ..params import param_array
 from . import app
 from .common import (
     COpt,
@@ -35,13 +32,17 @@ def methods_command(
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
                             inertia=inertia, k=k, c=c, g=g)
-    omega, zeta = stiffest_frequency(param_array(scene))
+    from ..integrators import METHODS
+    from ..model import stiffest_frequency
+    from ..params import model_params
+
+    omega, zeta = stiffest_frequency(model_params(scene))
     rows = []
     for m in METHODS.values():
         limit = m.stable_step(scene)
         rows.append({"name": m.name, "order": m.order, "adaptive": m.adaptive,
                      "symplectic": m.symplectic, "stable_step": limit, "summary": m.summary,
-                     "default": m.name == scene.integration.method})
+                     "default": m.method == scene.integration.method})
     if json_out:
         print_json({"omega_max": omega, "zeta": zeta, "methods": rows})
         return

@@ -10,8 +10,8 @@ import typer
 from rich.table import Table
 
 from .. import __version__
-from ..io import rrd as rrd_io  # numpy only: rerun itself loads when a recording is written
-from ..simulate import Trajectory, simulate
+from ..defaults import DEFAULT_LOG_EVERY
+from ..enums import Status
 from . import app
 from .common import (
     COpt,
@@ -73,7 +73,7 @@ def simulate_command(
     method: MethodOpt = None, dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
     stop_on_settle: StopOpt = None, force: ForceOpt = False, json_out: JsonOpt = False,
     rrd: RrdOpt = Path("coin.rrd"), no_rrd: NoRrdOpt = False, spawn: SpawnOpt = False,
-    connect: ConnectOpt = None, log_every: LogEveryOpt = rrd_io.DEFAULT_LOG_EVERY,
+    connect: ConnectOpt = None, log_every: LogEveryOpt = DEFAULT_LOG_EVERY,
 ) -> None:
     """Run one throw and print its outcome: n quarter turns, lying or standing, when it settled.
     The throw is also recorded for the Rerun viewer (coin.rrd unless --rrd/--no-rrd).
@@ -81,6 +81,8 @@ def simulate_command(
     Example (the throw of the paper's fig. 2, which stands there):
     coin simulate --vy 1.197 --vphi 3.508
     """
+    from .. import api
+
     rrd_path = None if no_rrd else rrd
     recording = rrd_path is not None or spawn or connect is not None
     with user_errors():
@@ -90,14 +92,16 @@ def simulate_command(
                             stop_on_settle=stop_on_settle)
         if recording:
             _check_recording_options(scene, rrd_path, connect, log_every)
-        trajectory = simulate(scene, sample_dt=log_every if recording else None,
-                              record_events=recording, force=force)
+        trajectory = api.simulate(scene, sample_dt=log_every if recording else None,
+                                  record_events=recording, force=force)
     info = None
     if recording:
+        from ..io.rrd import write_recording
+
         with user_errors():
             try:
-                info = rrd_io.write_recording(trajectory, rrd=rrd_path, spawn=spawn,
-                                              connect=connect, log_every=log_every)
+                info = write_recording(trajectory, rrd=rrd_path, spawn=spawn, connect=connect,
+                                       log_every=log_every)
             except (RuntimeError, ValueError, OSError) as exc:
                 raise fail(f"could not write the recording: {exc}") from None
     if json_out:
@@ -108,7 +112,7 @@ def simulate_command(
         print_summary(trajectory)
         if info is not None:
             print_recording(info)
-    if trajectory.status == "non-finite":
+    if trajectory.status == Status.NONFINITE:
         raise SystemExit(1)
 
 
@@ -120,11 +124,13 @@ def _check_recording_options(scene, rrd_path, connect, log_every) -> None:
     if frames > MAX_FRAMES:
         raise fail(f"--log-every {log_every:g} s makes {frames:.3g} frames for t_end = "
                    f"{scene.integration.t_end:g} s (at most {MAX_FRAMES:,}); raise it")
+    from ..io.paths import check_rrd_path, probe_viewer
+
     if rrd_path is not None:
-        rrd_io.check_rrd_path(rrd_path)
+        check_rrd_path(rrd_path)
     if connect is not None:
         try:
-            rrd_io.probe_viewer(connect)
+            probe_viewer(connect)
         except (ValueError, ConnectionError) as exc:
             raise fail(str(exc)) from None
 
@@ -141,7 +147,7 @@ def print_recording(info) -> None:
                   f"{info.events} contact events", highlight=False, soft_wrap=True)
 
 
-def print_summary(tr: Trajectory) -> None:
+def print_summary(tr) -> None:
     s = tr.summary()
     integ = tr.scene.integration
     init = tr.scene.initial
@@ -160,7 +166,7 @@ def print_summary(tr: Trajectory) -> None:
         table.add_row("settled", f"yes, at t = {tr.settle_time:.6g} s (energy below E_crit = "
                                  f"{tr.e_crit * 1e3:.4g} mJ: n is final)")
     else:
-        table.add_row("settled", f"[yellow]no[/] ({tr.status} at t = {tr.t_final:g} s)")
+        table.add_row("settled", f"[yellow]no[/] ({tr.status.label} at t = {tr.t_final:g} s)")
     if tr.rounded_quarter_turns is not None and tr.rounded_quarter_turns != tr.quarter_turns:
         table.add_row("round(2 phi/pi)", f"{tr.rounded_quarter_turns} at t = {tr.t_final:g} s")
     fs = s["final_state"]
@@ -171,10 +177,11 @@ def print_summary(tr: Trajectory) -> None:
                       f"vphi = {fs['vphi']:.4g} rad/s")
     table.add_row("energy", f"{tr.energy_initial * 1e3:.5g} mJ -> {tr.energy_final * 1e3:.5g} "
                             f"mJ ({s['energy_dissipated'] * 1e3:.5g} mJ dissipated)")
-    setting = (f"dt = {integ.dt:g} s" if tr.scene.integration.method not in ("dopri5", "event")
-               else f"rtol = {integ.rtol:g}")
+    from ..integrators.registry import setting_text
+
+    setting = setting_text(integ.method, integ.dt, integ.rtol)
     run_to = "stop when settled" if integ.stop_on_settle else f"full {integ.t_end:g} s"
-    table.add_row("method", f"{integ.method}, {setting}, {run_to}")
+    table.add_row("method", f"{integ.method.label}, {setting}, {run_to}")
     table.add_row("cost", f"{tr.steps:,} steps, {tr.wall_time * 1e3:.3g} ms wall")
     console.print(table)
     for note in tr.notes:

@@ -7,7 +7,6 @@ import math
 from rich.table import Table
 
 from .. import __version__
-from ..stability import analyse
 from . import app
 from .common import (
     COpt,
@@ -36,7 +35,9 @@ def stability_command(
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
                             inertia=inertia, k=k, c=c, g=g)
-    report = analyse(scene)
+    from .. import api
+
+    report = api.stability(scene)
     if json_out:
         print_json({"version": __version__, "parameters": scene.to_dict(), **report.to_dict()})
         return

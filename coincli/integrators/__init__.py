@@ -1,11 +1,8 @@
 """Integration methods: fixed-step kernels, the adaptive event-locating kernel, the batch runner
-and the registry that names them."""
+and the registry that describes them."""
 
-from .fixed import NONFINITE, SETTLED, UNSETTLED
-from .kernels import NOT_COMPUTED, integrate, run_batch
-from .registry import METHODS, Method, check_step, get
+from .batch import NO_LABEL, Labels, final_state, integrate, label_states, warm_up
+from .registry import METHODS, MethodInfo, check_step, info
 
-STATUS_NAMES = {SETTLED: "settled", UNSETTLED: "unsettled", NONFINITE: "non-finite"}
-
-__all__ = ["METHODS", "Method", "NONFINITE", "NOT_COMPUTED", "SETTLED", "STATUS_NAMES",
-           "UNSETTLED", "check_step", "get", "integrate", "run_batch"]
+__all__ = ["METHODS", "Labels", "MethodInfo", "NO_LABEL", "check_step", "final_state", "info",
+           "integrate", "label_states", "warm_up"]

@@ -30,27 +30,18 @@ import math
 
 import numpy as np
 
+from ..enums import Method, Status
+from ..jit import kernel
 from ..model import (
     SX,
     SY,
     accelerations,
     contact_mask,
     corner_heights_at,
-    critical_energy,
-    jit,
     total_energy,
     well_index,
 )
-from ..params import P_G, P_R, P_RD, P_RT
-from .fixed import (
-    NO_WELL,
-    NONFINITE,
-    SETTLED,
-    UNSETTLED,
-    is_finite_state,
-    record_events,
-    record_sample,
-)
+from .common import NO_WELL, RunResult, is_finite_state, record_events, record_sample
 
 EVENT_BAND = 1e-13  # m, a contact corner lifts off above this height (hysteresis; the state
 # error it causes is proportional to it and ~1e-9 of the coin's scale; rounding of y is 1e-18 m)
@@ -75,7 +66,7 @@ D1, D3, D4, D5, D6, D7 = (-12715105075.0 / 11282082432.0, 87487479700.0 / 327004
                           -1453857185.0 / 822651844.0, 69997945.0 / 29380423.0)
 
 
-@jit
+@kernel
 def rhs(p, s, mode, out):
     """Time derivative of the state with the contact force on the corners in ``mode``."""
     ax, ay, aphi = accelerations(p, s[0], s[1], s[2], s[3], s[4], s[5], mode)
@@ -87,12 +78,12 @@ def rhs(p, s, mode, out):
     out[5] = aphi
 
 
-@jit
+@kernel
 def error_scales(p, rtol, scale):
     """Absolute tolerance per component: rtol times a natural scale of the coin (its half
     diagonal for positions, 1 rad, the speed sqrt(2 g r) gained falling by r)."""
-    r = p[P_R]
-    v_ref = math.sqrt(2.0 * max(p[P_G], 1.0) * r)
+    r = p.r
+    v_ref = math.sqrt(2.0 * max(p.g, 1.0) * r)
     scale[0] = rtol * r
     scale[1] = rtol * r
     scale[2] = rtol
@@ -101,7 +92,7 @@ def error_scales(p, rtol, scale):
     scale[5] = rtol * v_ref / r
 
 
-@jit
+@kernel
 def dense_component(rc, theta, j):
     """Component j of the state at fraction theta of the last step (continuous extension)."""
     one_minus = 1.0 - theta
@@ -109,20 +100,20 @@ def dense_component(rc, theta, j):
         rc[2, j] + theta * (rc[3, j] + one_minus * rc[4, j])))
 
 
-@jit
+@kernel
 def dense_state(rc, theta, out):
     for j in range(6):
         out[j] = dense_component(rc, theta, j)
 
 
-@jit
+@kernel
 def dense_corner_height(p, rc, theta, i):
     phi = dense_component(rc, theta, 2)
-    return (dense_component(rc, theta, 1) + SX[i] * p[P_RD] * math.sin(phi)
-            + SY[i] * p[P_RT] * math.cos(phi))
+    return (dense_component(rc, theta, 1) + SX[i] * p.r_d * math.sin(phi)
+            + SY[i] * p.r_t * math.cos(phi))
 
 
-@jit
+@kernel
 def locate_crossing(p, rc, h, i, level, lo, hi, g0, g1):
     """Fraction theta of the step in [lo, hi] where corner i's height crosses ``level`` (g0, g1:
     height minus level at lo and hi, of opposite signs). Illinois regula falsi on the
@@ -153,7 +144,7 @@ def locate_crossing(p, rc, h, i, level, lo, hi, g0, g1):
     return hi
 
 
-@jit
+@kernel
 def _corner_heights_at(p, rc, theta, s_start, s_end, out):
     """Corner heights at fraction theta of the step (the exact end states at 0 and 1)."""
     if theta == 0.0:
@@ -164,7 +155,7 @@ def _corner_heights_at(p, rc, theta, s_start, s_end, out):
         corner_heights_at(p, dense_component(rc, theta, 1), dense_component(rc, theta, 2), out)
 
 
-@jit
+@kernel
 def find_event(p, rc, h, mode, s_start, s_end, before, after):
     """Earliest contact event inside the accepted step: (theta, mask of the corners that switch
     there), or (2.0, 0) if none. A rotating coin can dip a corner below the surface and lift it
@@ -204,27 +195,27 @@ def find_event(p, rc, h, mode, s_start, s_end, before, after):
     return 2.0, 0
 
 
-@jit
+@kernel
 def flight_state(p, s, tau, out):
     """Closed-form free flight: a parabola for the centroid, uniform rotation."""
     out[0] = s[0] + s[3] * tau
-    out[1] = s[1] + (s[4] - 0.5 * p[P_G] * tau) * tau
+    out[1] = s[1] + (s[4] - 0.5 * p.g * tau) * tau
     out[2] = s[2] + s[5] * tau
     out[3] = s[3]
-    out[4] = s[4] - p[P_G] * tau
+    out[4] = s[4] - p.g * tau
     out[5] = s[5]
 
 
-@jit
+@kernel
 def time_to_touchdown(p, s, t_max):
     """Time until the first corner touches the surface in free flight from ``s`` (or t_max if
     none does before), and the mask of the corners touching then (0 if none): a coin landing
     flat touches with two corners at once, and taking only one would add a spurious torque.
     Conservative advancement with the second-order lower bound
     h(t + sig) >= h + h' sig - A sig^2 / 2, A = g + vphi^2 r."""
-    g = p[P_G]
+    g = p.g
     w = s[5]
-    bound = g + w * w * p[P_R]
+    bound = g + w * w * p.r
     tau = 0.0
     for _ in range(10000):
         y = s[1] + (s[4] - 0.5 * g * tau) * tau
@@ -235,8 +226,8 @@ def time_to_touchdown(p, s, t_max):
         step = math.inf
         touching = 0  # corners on the surface (within LANDING_GAP) and not rising
         for i in range(4):
-            px = SX[i] * p[P_RD]
-            py = SY[i] * p[P_RT]
+            px = SX[i] * p.r_d
+            py = SY[i] * p.r_t
             height = y + px * sn + py * c
             rate = vy + w * (px * c - py * sn)
             if height <= LANDING_GAP and rate <= 0.0:
@@ -260,26 +251,30 @@ def time_to_touchdown(p, s, t_max):
     return tau, _lowest_corner_mask(p, s[1] + (s[4] - 0.5 * g * tau) * tau, s[2] + w * tau)
 
 
-@jit
+@kernel
 def _lowest_corner_mask(p, y, phi):
     c = math.cos(phi)
     sn = math.sin(phi)
     lowest = 0
     lowest_height = math.inf
     for i in range(4):
-        height = y + SX[i] * p[P_RD] * sn + SY[i] * p[P_RT] * c
+        height = y + SX[i] * p.r_d * sn + SY[i] * p.r_t * c
         if height < lowest_height:
             lowest_height = height
             lowest = i
     return 1 << lowest
 
 
-@jit
-def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flight, sample_dt,
-                       samples, events, final):
-    """Dormand-Prince 5(4) with located contact events; with ``exact_flight``, closed-form
-    flight between contacts. Same outputs as :func:`coincli.integrators.fixed.integrate_fixed`:
-    (t, steps, status, settle_time, n_well, n_samples, n_events)."""
+@kernel
+def integrate_adaptive(p, settings, state, samples, events, final):
+    """Dormand-Prince 5(4) with located contact events; for the ``event`` method, closed-form
+    flight between contacts. Same contract as :func:`coincli.integrators.fixed.integrate_fixed`."""
+    rtol = settings.rtol
+    h_init = settings.dt
+    t_end = settings.t_end
+    stop_on_settle = settings.stop_on_settle
+    exact_flight = settings.method == Method.EVENT
+    sample_dt = settings.sample_dt
     k = np.empty((7, 6))
     rc = np.empty((5, 6))
     s = state.copy()
@@ -289,7 +284,7 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
     before = np.empty(4)
     after = np.empty(4)
     error_scales(p, rtol, scale)
-    e_crit = critical_energy(p)
+    e_crit = p.e_crit
     record = samples.shape[0] > 0 and sample_dt > 0.0
     n_samples = 0
     n_events = 0
@@ -299,7 +294,7 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
     mode = contact_mask(p, s[1], s[2])
     if events.shape[0] > 0 and mode != 0:
         n_events = record_events(events, 0, 0.0, 0, mode, s[0], s[1], s[2], s[3], s[4], s[5])
-    status = UNSETTLED
+    status = Status.UNSETTLED
     settle_time = math.nan
     n_well = NO_WELL
     t = 0.0
@@ -307,10 +302,10 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
     h = h_init
     need_rhs = True
     if total_energy(p, s) < e_crit:
-        status = SETTLED
+        status = Status.SETTLED
         settle_time = 0.0
         n_well = well_index(p, s[2])
-    while t < t_end and not (status == SETTLED and stop_on_settle):
+    while t < t_end and not (status == Status.SETTLED and stop_on_settle):
         if mode == 0 and exact_flight:
             tau, touching = time_to_touchdown(p, s, t_end - t)
             if record:
@@ -330,8 +325,8 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
                 mode = new_mode
             need_rhs = True
             # flight conserves energy, so settling is only checked where contact begins
-            if status != SETTLED and total_energy(p, s) < e_crit:
-                status = SETTLED
+            if status != Status.SETTLED and total_energy(p, s) < e_crit:
+                status = Status.SETTLED
                 settle_time = t
                 n_well = well_index(p, s[2])
             continue
@@ -372,7 +367,7 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
         err = math.sqrt(err / 6.0)
         if not (err <= 1.0):  # also catches NaN
             if not (err == err) or h < H_MIN:
-                status = NONFINITE
+                status = Status.NONFINITE
                 break
             h *= max(0.2, 0.9 * err ** -0.2)
             continue
@@ -401,7 +396,7 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
         t = t_new
         s[:] = s_new
         if not is_finite_state(s[0], s[1], s[2], s[3], s[4], s[5]):
-            status = NONFINITE
+            status = Status.NONFINITE
             break
         if event_mask != 0:
             new_mode = mode ^ event_mask
@@ -412,18 +407,18 @@ def integrate_adaptive(p, state, rtol, h_init, t_end, stop_on_settle, exact_flig
         else:
             for j in range(6):
                 k[0, j] = k[6, j]  # first same as last
-        if status != SETTLED and total_energy(p, s) < e_crit:
-            status = SETTLED
+        if status != Status.SETTLED and total_energy(p, s) < e_crit:
+            status = Status.SETTLED
             settle_time = t
             n_well = well_index(p, s[2])
         h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
     if record and n_samples > 0 and samples[n_samples - 1, 0] < t:
         n_samples = record_sample(samples, n_samples, t, s[0], s[1], s[2], s[3], s[4], s[5])
-    if status == SETTLED and not total_energy(p, s) < e_crit:
+    if status == Status.SETTLED and not total_energy(p, s) < e_crit:
         # energy cannot rise again physically: a void certificate (see integrate_fixed)
-        status = UNSETTLED
+        status = Status.UNSETTLED
         n_well = NO_WELL
         settle_time = math.nan
     final[:] = s
-    return t, steps, status, settle_time, n_well, n_samples, n_events
+    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events)
 

@@ -1,7 +1,7 @@
 """Fixed-step integrators: symplectic Euler (the paper's), Stormer-Verlet and classical RK4.
 
-One driver, :func:`integrate_fixed`, runs any of them and does the bookkeeping shared by every
-method (settling, samples at a display rate, contact onsets and lift-offs, non-finite states).
+One driver, :func:`integrate_fixed`, runs any of them: settling, samples at a display rate,
+contact onsets and lift-offs, non-finite states (the bookkeeping in :mod:`.common`).
 The contact set of a fixed-step method is whatever corners penetrate at the point where the force
 is evaluated, so a contact onset falls somewhere inside a step: that is the error the adaptive
 methods avoid by landing on it.
@@ -11,32 +11,20 @@ from __future__ import annotations
 
 import math
 
+from ..enums import Method, Status
+from ..jit import kernel
 from ..model import (
-    SX,
-    SY,
     accelerations_auto,
     contact_mask,
-    critical_energy,
-    jit,
+    corner_offset,
     total_energy,
     total_energy_at,
     well_index,
 )
-from ..params import P_C, P_G, P_INERTIA, P_K, P_MASS, P_RD, P_RT
-
-SYMPLECTIC_EULER, VERLET, RK4 = 0, 1, 2
-
-# Status codes of a run (shared by every method and the stores).
-SETTLED, UNSETTLED, NONFINITE = 0, 1, 2
-NO_WELL = -32768  # n_well before the run has settled
-
-# Event kinds recorded in the events buffer.
-ONSET, LIFTOFF = 1, -1
-EVENT_COLUMNS = 9  # t, corner, kind, x, y, phi, vx, vy, vphi
-SAMPLE_COLUMNS = 7  # t, x, y, phi, vx, vy, vphi
+from .common import NO_WELL, RunResult, is_finite_state, record_events, record_sample, store_state
 
 
-@jit
+@kernel
 def step_symplectic_euler(p, h, x, y, phi, vx, vy, vphi):
     """The paper's scheme: velocities from the force at the old state, positions from the new
     velocities."""
@@ -47,7 +35,7 @@ def step_symplectic_euler(p, h, x, y, phi, vx, vy, vphi):
     return x + h * vx, y + h * vy, phi + h * vphi, vx, vy, vphi
 
 
-@jit
+@kernel
 def _split_accelerations(p, y, phi):
     """The force split as a(q, v) = a0(q) - D(q) v, with D the mass-weighted damping matrix.
 
@@ -55,19 +43,16 @@ def _split_accelerations(p, y, phi):
     penetrating corners, J_i = [[1, 0, -d_yi], [0, 1, d_xi]] (before dividing by the masses)."""
     c = math.cos(phi)
     s = math.sin(phi)
-    m = p[P_MASS]
-    k = p[P_K]
-    fy = -m * p[P_G]
+    m = p.mass
+    k = p.k
+    fy = -m * p.g
     moment = 0.0
     n = 0.0
     sx = 0.0  # sum of d_x over contacts
     sy = 0.0  # sum of d_y
     srr = 0.0  # sum of d_x^2 + d_y^2
     for i in range(4):
-        px = SX[i] * p[P_RD]
-        py = SY[i] * p[P_RT]
-        dx = px * c - py * s
-        dy = px * s + py * c
+        dx, dy = corner_offset(p, i, c, s)
         yi = y + dy
         if yi < 0.0:
             fyi = -k * yi
@@ -77,18 +62,18 @@ def _split_accelerations(p, y, phi):
             sx += dx
             sy += dy
             srr += dx * dx + dy * dy
-    return fy / m, moment / p[P_INERTIA], n, sx, sy, srr
+    return fy / m, moment / p.inertia, n, sx, sy, srr
 
 
 
-@jit
+@kernel
 def _solve_damped_velocity(p, h2, ay0, aphi0, n, sx, sy, srr, bx, by, bphi):
     """Solve (M + h2 C) v = M b + h2 M a0 for v, where C = c [[n, 0, -sy], [0, n, sx],
     [-sy, sx, srr]] is the damping matrix of the penetrating corners (linear in v, so the
     implicit half steps of Stormer-Verlet reduce to one 3x3 solve)."""
-    m = p[P_MASS]
-    inertia = p[P_INERTIA]
-    cc = p[P_C] * h2
+    m = p.mass
+    inertia = p.inertia
+    cc = p.c * h2
     # matrix A = M + h2 C
     a11 = m + cc * n
     a22 = m + cc * n
@@ -106,7 +91,7 @@ def _solve_damped_velocity(p, h2, ay0, aphi0, n, sx, sy, srr, bx, by, bphi):
     return vx, vy, vphi
 
 
-@jit
+@kernel
 def step_verlet(p, h, x, y, phi, vx, vy, vphi):
     """Generalised Stormer-Verlet (Lobatto IIIA-IIIB) for q'' = a0(q) - D(q) q':
     v_half = v + h/2 (a0(q) - D(q) v_half)           (implicit: one exact 3x3 solve, the
@@ -124,7 +109,7 @@ def step_verlet(p, h, x, y, phi, vx, vy, vphi):
     return x, y, phi, vx + h2 * ax, vy + h2 * ay, vphi + h2 * aphi
 
 
-@jit
+@kernel
 def step_rk4(p, h, x, y, phi, vx, vy, vphi):
     a1x, a1y, a1p = accelerations_auto(p, x, y, phi, vx, vy, vphi)
     h2 = 0.5 * h
@@ -146,81 +131,28 @@ def step_rk4(p, h, x, y, phi, vx, vy, vphi):
             vphi + h6 * (a1p + 2.0 * a2p + 2.0 * a3p + a4p))
 
 
-@jit
+@kernel
 def fixed_step(method, p, h, x, y, phi, vx, vy, vphi):
-    if method == SYMPLECTIC_EULER:
+    if method == Method.SYMPLECTIC_EULER:
         return step_symplectic_euler(p, h, x, y, phi, vx, vy, vphi)
-    if method == VERLET:
+    if method == Method.VERLET:
         return step_verlet(p, h, x, y, phi, vx, vy, vphi)
     return step_rk4(p, h, x, y, phi, vx, vy, vphi)
 
 
-@jit
-def is_finite_state(x, y, phi, vx, vy, vphi):
-    # NaN fails every comparison; 1e30 catches a blow-up before it overflows to inf.
-    big = 1e30
-    return (abs(x) < big and abs(y) < big and abs(phi) < big and abs(vx) < big
-            and abs(vy) < big and abs(vphi) < big)
-
-
-@jit
-def record_events(events, n_events, t, old_mask, new_mask, x, y, phi, vx, vy, vphi):
-    """Append one row per corner whose contact state changed between old_mask and new_mask."""
-    changed = old_mask ^ new_mask
-    if changed == 0:
-        return n_events
-    for i in range(4):
-        if changed & (1 << i) and n_events < events.shape[0]:
-            row = events[n_events]
-            row[0] = t
-            row[1] = i
-            row[2] = ONSET if new_mask & (1 << i) else LIFTOFF
-            row[3] = x
-            row[4] = y
-            row[5] = phi
-            row[6] = vx
-            row[7] = vy
-            row[8] = vphi
-            n_events += 1
-    return n_events
-
-
-@jit
-def store_state(out, x, y, phi, vx, vy, vphi):
-    out[0] = x
-    out[1] = y
-    out[2] = phi
-    out[3] = vx
-    out[4] = vy
-    out[5] = vphi
-
-
-@jit
-def record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi):
-    if n_samples < samples.shape[0]:
-        row = samples[n_samples]
-        row[0] = t
-        row[1] = x
-        row[2] = y
-        row[3] = phi
-        row[4] = vx
-        row[5] = vy
-        row[6] = vphi
-        n_samples += 1
-    return n_samples
-
-
-@jit
-def integrate_fixed(method, p, state, dt, t_end, stop_on_settle, sample_dt, samples, events,
-                    final):
-    """Integrate from ``state`` with a fixed step ``dt`` until ``t_end`` (or until settled, if
-    ``stop_on_settle``). Writes the final state into ``final``; fills ``samples`` (one row every
-    ``sample_dt`` of simulated time, first and last state included) and ``events`` (contact
-    onsets and lift-offs) while they have room.
-
-    Returns (t, steps, status, settle_time, n_well, n_samples, n_events)."""
+@kernel
+def integrate_fixed(p, settings, state, samples, events, final):
+    """Integrate from ``state`` with the fixed step ``settings.dt`` until ``settings.t_end`` (or
+    until settled, if ``settings.stop_on_settle``). Writes the final state into ``final``; fills
+    ``samples`` (one row every ``settings.sample_dt`` of simulated time, first and last state
+    included) and ``events`` (contact onsets and lift-offs) while they have room."""
+    method = settings.method
+    dt = settings.dt
+    t_end = settings.t_end
+    stop_on_settle = settings.stop_on_settle
+    sample_dt = settings.sample_dt
     x, y, phi, vx, vy, vphi = state[0], state[1], state[2], state[3], state[4], state[5]
-    e_crit = critical_energy(p)
+    e_crit = p.e_crit
     n_total = int(math.ceil(t_end / dt - 1e-9))
     record = samples.shape[0] > 0 and sample_dt > 0.0
     track_events = events.shape[0] > 0
@@ -232,21 +164,21 @@ def integrate_fixed(method, p, state, dt, t_end, stop_on_settle, sample_dt, samp
     mask = contact_mask(p, y, phi) if track_events else 0
     if track_events and mask != 0:
         n_events = record_events(events, 0, 0.0, 0, mask, x, y, phi, vx, vy, vphi)
-    status = UNSETTLED
+    status = Status.UNSETTLED
     settle_time = math.nan
     n_well = NO_WELL
     steps = 0
     t = 0.0
     if total_energy(p, state) < e_crit:
-        status = SETTLED
+        status = Status.SETTLED
         settle_time = 0.0
         n_well = well_index(p, phi)
-    if not (status == SETTLED and stop_on_settle):
+    if not (status == Status.SETTLED and stop_on_settle):
         for steps in range(1, n_total + 1):
             x, y, phi, vx, vy, vphi = fixed_step(method, p, dt, x, y, phi, vx, vy, vphi)
             t = steps * dt
             if not is_finite_state(x, y, phi, vx, vy, vphi):
-                status = NONFINITE
+                status = Status.NONFINITE
                 break
             if track_events:
                 new_mask = contact_mask(p, y, phi)
@@ -256,21 +188,20 @@ def integrate_fixed(method, p, state, dt, t_end, stop_on_settle, sample_dt, samp
             if record and t >= next_sample - 0.5 * dt:
                 n_samples = record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi)
                 next_sample += sample_dt
-            if status != SETTLED:
+            if status != Status.SETTLED:
                 if total_energy_at(p, y, phi, vx, vy, vphi) < e_crit:
-                    status = SETTLED
+                    status = Status.SETTLED
                     settle_time = t
                     n_well = well_index(p, phi)
                     if stop_on_settle:
                         break
     if record and n_samples > 0 and samples[n_samples - 1, 0] < t:
         n_samples = record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi)
-    if status == SETTLED and not total_energy_at(p, y, phi, vx, vy, vphi) < e_crit:
+    if status == Status.SETTLED and not total_energy_at(p, y, phi, vx, vy, vphi) < e_crit:
         # Damping only removes energy: a run that fell below E_crit and ends above it has been
         # pumped by an unstable step. Its certificate is void.
-        status = UNSETTLED
+        status = Status.UNSETTLED
         n_well = NO_WELL
         settle_time = math.nan
     store_state(final, x, y, phi, vx, vy, vphi)
-    return t, steps, status, settle_time, n_well, n_samples, n_events
-
+    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events)

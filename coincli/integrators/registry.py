@@ -13,10 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..enums import Method
 from ..model import stiffest_frequency
-from ..params import ParameterError, Scene, param_array
-from .fixed import RK4, SYMPLECTIC_EULER, VERLET
-from .kernels import DOPRI5, EVENT
+from ..params import ParameterError, Scene, model_params
 
 
 def _map_symplectic_euler(h: float, omega: float, zeta: float) -> np.ndarray:
@@ -64,62 +63,74 @@ def _stable_limit(step_map, omega: float, zeta: float) -> float:
 
 
 @dataclass(frozen=True)
-class Method:
-    name: str
-    kernel_id: int
+class MethodInfo:
+    method: Method
     order: int
     adaptive: bool
     symplectic: bool
     summary: str
     step_map: object = None  # one-step map of the damped oscillator, fixed-step methods only
 
+    @property
+    def name(self) -> str:
+        return self.method.label
+
     def stable_step(self, scene: Scene) -> float | None:
         """Predicted largest stable step (s), or None for an adaptive method."""
         if self.step_map is None:
             return None
-        omega, zeta = stiffest_frequency(param_array(scene))
+        omega, zeta = stiffest_frequency(model_params(scene))
         return _stable_limit(self.step_map, omega, zeta)
 
 
-METHODS: dict[str, Method] = {
-    m.name: m
+METHODS: dict[Method, MethodInfo] = {
+    m.method: m
     for m in (
-        Method("symplectic_euler", SYMPLECTIC_EULER, 1, False, True,
-               "the paper's scheme: kick with the old force, then drift", _map_symplectic_euler),
-        Method("verlet", VERLET, 2, False, True,
-               "Stormer-Verlet (Lobatto IIIA-IIIB): first half kick implicit in the damping",
-               _map_verlet),
-        Method("rk4", RK4, 4, False, False, "classical Runge-Kutta, 4 force evaluations a step",
-               _map_rk4),
-        Method("dopri5", DOPRI5, 5, True, False,
-               "Dormand-Prince 5(4) with error control; lands on the contact onsets and "
-               "lift-offs it sees (flight integrated: a dip under ~3 um can hide in a step)"),
-        Method("event", EVENT, 5, True, False,
-               "dopri5 in contact, closed-form flight between contacts, certified early stop"),
+        MethodInfo(Method.SYMPLECTIC_EULER, 1, False, True,
+                   "the paper's scheme: kick with the old force, then drift",
+                   _map_symplectic_euler),
+        MethodInfo(Method.VERLET, 2, False, True,
+                   "Stormer-Verlet (Lobatto IIIA-IIIB): first half kick implicit in the damping",
+                   _map_verlet),
+        MethodInfo(Method.RK4, 4, False, False,
+                   "classical Runge-Kutta, 4 force evaluations a step", _map_rk4),
+        MethodInfo(Method.DOPRI5, 5, True, False,
+                   "Dormand-Prince 5(4) with error control; lands on the contact onsets and "
+                   "lift-offs it sees (flight integrated: a dip under ~3 um can hide in a step)"),
+        MethodInfo(Method.EVENT, 5, True, False,
+                   "dopri5 in contact, closed-form flight between contacts, certified early "
+                   "stop"),
     )
 }
 
 
-def get(name: str) -> Method:
+def info(method: Method | str) -> MethodInfo:
+    """The registry entry of a method (by member or name); ParameterError if unknown."""
     try:
-        return METHODS[name]
-    except KeyError:
-        raise ParameterError(f"unknown method '{name}'; available: {', '.join(METHODS)}") from None
+        return METHODS[Method.parse(method)]
+    except ValueError as exc:
+        raise ParameterError(str(exc)) from None
 
 
-def check_step(scene: Scene, force: bool = False) -> Method:
+def setting_text(method: Method, dt: float, rtol: float) -> str:
+    """What sets a run's accuracy, as a user reads it: ``rtol = 1e-06`` for an adaptive
+    method, ``dt = 1e-06 s`` for a fixed step."""
+    return f"rtol = {rtol:g}" if METHODS[method].adaptive else f"dt = {dt:g} s"
+
+
+def check_step(scene: Scene, force: bool = False) -> MethodInfo:
     """Return the scene's method; refuse a fixed step beyond its stable step unless forced."""
-    method = get(scene.integration.method)
+    method = info(scene.integration.method)
     limit = method.stable_step(scene)
     if limit is not None and scene.integration.dt > limit and not force:
         raise ParameterError(
             f"--dt {scene.integration.dt:g} s is beyond the stable step of {method.name} for "
             f"these parameters ({limit:.3g} s, from the rocking frequency "
-            f"{stiffest_frequency(param_array(scene))[0]:.4g} rad/s); use a smaller --dt "
+            f"{stiffest_frequency(model_params(scene))[0]:.4g} rad/s); use a smaller --dt "
             "or --force")
     if method.adaptive and scene.integration.dt >= scene.integration.t_end:
         raise ParameterError("--dt (the initial step) must be smaller than --t-end")
     return method
 
 
-__all__ = ["METHODS", "Method", "check_step", "get"]
+__all__ = ["METHODS", "MethodInfo", "check_step", "info", "setting_text"]

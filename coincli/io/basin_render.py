@@ -18,8 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..sweep import AXIS_INFO, STATUS_NOT_COMPUTED
-from .store import Basin
+from ..enums import Status
+from ..grid import AXIS_INFO
+from .dataset import Basin
 
 WHITE = (1.0, 1.0, 1.0, 1.0)
 STANDING = (0.0, 0.0, 0.0, 1.0)
@@ -48,7 +49,7 @@ def _ramp_colours(n_max_even: int):
 
 def _labelled_mask(basin: Basin) -> np.ndarray:
     st = basin.arrays["status"]
-    return (st == 0) | (st == 1)
+    return (st == Status.SETTLED) | (st == Status.UNSETTLED)
 
 
 def n_range(basin: Basin, n_max: int | None = None) -> int:
@@ -83,13 +84,13 @@ def basin_rgba(basin: Basin, n_max: int | None = None) -> tuple[np.ndarray, dict
         rgba[uncertain] = UNCERTAIN
         classes["uncertain"] = uncertain
         classes["standing"] = standing & ~uncertain
-    unsettled = st == 1
+    unsettled = st == Status.UNSETTLED
     rgba[unsettled] = UNSETTLED
     classes["unsettled"] = unsettled
-    nonfinite = st == 2
+    nonfinite = st == Status.NONFINITE
     rgba[nonfinite] = NONFINITE
     classes["non-finite"] = nonfinite
-    classes["not computed"] = st == STATUS_NOT_COMPUTED
+    classes["not computed"] = st == Status.NOT_COMPUTED
     return rgba, classes
 
 
@@ -223,7 +224,7 @@ def log_rerun(basin: Basin, rrd: str | os.PathLike) -> Path:
     rrd = Path(rrd)
     q = basin.arrays["quarter_turns"].astype(np.int64)
     st = basin.arrays["status"]
-    labelled = (st == 0) | (st == 1)
+    labelled = _labelled_mask(basin)
     n_even = n_range(basin)
     n_max = n_even + 1  # odd n up to one past the largest even n
     offset = 10
@@ -239,9 +240,9 @@ def log_rerun(basin: Basin, rrd: str | os.PathLike) -> Path:
         classes.append(rr.ClassDescription(info=(offset + n + n_max, f"n = {n} ({pose})", rgb)))
     ids = np.zeros(q.shape, dtype=np.uint16)
     ids[labelled] = (offset + q[labelled] + n_max).astype(np.uint16)
-    ids[st == 2] = 1
+    ids[st == Status.NONFINITE] = 1
     flags = np.zeros(q.shape, dtype=np.uint8)
-    flags[st == 1] = 2
+    flags[st == Status.UNSETTLED] = 2
     if "uncertain" in basin.arrays:
         flags[labelled & (basin.arrays["uncertain"] == 1)] = 1
     # images are row = vertical axis from the top: second swept axis, highest value first
@@ -257,7 +258,8 @@ def log_rerun(basin: Basin, rrd: str | os.PathLike) -> Path:
                                                 opacity=0.8), static=True)
     ax0, ax1 = basin.axes
     rec.log("basin/description", rr.TextDocument(
-        f"Basin map of {basin.path}: horizontal {ax0['name']} from {ax0['lo']} to {ax0['hi']} "
+        f"Basin map of {basin.path or 'a basin computed in memory'}: horizontal {ax0['name']} "
+        f"from {ax0['lo']} to {ax0['hi']} "
         f"{ax0['units']} ({ax0['n']} cells), vertical {ax1['name']} from {ax1['hi']} (top) to "
         f"{ax1['lo']} {ax1['units']} ({ax1['n']} cells)."), static=True)
     rec.flush()

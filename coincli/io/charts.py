@@ -8,16 +8,17 @@ import math
 from pathlib import Path
 
 from .. import __version__
+from ..enums import Method
 
-COLOURS = {"symplectic_euler": "#d62728", "verlet": "#ff7f0e", "rk4": "#2ca02c",
-           "dopri5": "#1f77b4", "event": "#9467bd"}
+COLOURS = {Method.SYMPLECTIC_EULER: "#d62728", Method.VERLET: "#ff7f0e", Method.RK4: "#2ca02c",
+           Method.DOPRI5: "#1f77b4", Method.EVENT: "#9467bd"}
 
 
 def study_rows(study) -> list[dict]:
     rows = []
     for p in study.points:
         rows.append({
-            "method": p.setting.method,
+            "method": p.setting.method.label,
             "knob": "rtol" if p.setting.adaptive else "dt",
             "value": p.setting.knob,
             "cpu_ms_per_trajectory": p.cpu_per_trajectory * 1e3,
@@ -42,9 +43,7 @@ def write_table(study, path: Path, scene) -> None:
     data = {
         "version": __version__,
         "parameters": scene.to_dict(),
-        "grid": {"vy": [float(study.grid.vy[0]), float(study.grid.vy[-1]), study.grid.vy.size],
-                 "vphi": [float(study.grid.vphi[0]), float(study.grid.vphi[-1]),
-                          study.grid.vphi.size]},
+        "grid": {axis.name: [axis.lo, axis.hi, axis.n] for axis in study.grid.axes},
         "robust_cells": study.robust_cells,
         "cells": int(study.robust.size),
         "reference_agreement": study.reference_agreement,
@@ -76,7 +75,7 @@ def plot_study(study, path: Path, title: str = "") -> None:
         traj = [p.trajectory_error if math.isfinite(p.trajectory_error) else float("nan")
                 for p in points]
         label = [max(p.label_error, floor) for p in points]
-        style = dict(color=COLOURS.get(method), marker="o", ms=4, lw=1.5, label=method)
+        style = dict(color=COLOURS.get(method), marker="o", ms=4, lw=1.5, label=method.label)
         ax_traj.plot(cost, traj, **style)
         ax_label.plot(cost, label, **style)
         for p, x, y in zip(points, cost, label, strict=True):

@@ -1,11 +1,10 @@
 """Rerun recordings of one throw: the coin in a 2-D view with y up, time series of its energies,
 height, angle and penetrations, contact events on the timeline, and a default blueprint.
 
-The numbers come from :func:`coincli.simulate.simulate` run with ``sample_dt`` (the display rate)
-and ``record_events=True``. :func:`build_frames` merges the samples with the exact states at every
-contact onset and lift-off and derives everything the scene shows (corner positions,
-penetrations, contact forces, energies) in vectorised numpy; :func:`write_recording` sends it to
-Rerun column by column (one ``send_columns`` call per entity, never one ``log`` call per frame).
+The numbers come from :func:`coincli.simulate` run with ``sample_dt`` (the display rate) and
+``record_events=True``; :func:`coincli.io.frames.build_frames` turns them into frames, and
+:func:`write_recording` sends those to Rerun column by column (one ``send_columns`` call per
+entity, never one ``log`` call per frame).
 
 Rerun itself is imported lazily, inside the functions that need it, so that importing this
 module (or anything that imports it) stays cheap and nothing below ``coincli.io`` depends on it.
@@ -27,12 +26,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model import SX, SY
+from ..enums import Status
+from ..integrators.registry import setting_text
+from .frames import ARROW_PEAK_DIAMETERS, Frames, build_frames, force_arrows
+from .paths import check_connect_url, check_rrd_path
 
 APPLICATION_ID = "coin"
 TIMELINE = "sim_time"
-DEFAULT_LOG_EVERY = 1e-3  # s of simulated time between frames: a 2 s throw is 2001 frames
-DEFAULT_CONNECT_URL = "rerun+http://127.0.0.1:9876/proxy"
 
 # Entity paths.
 SCENE = "scene"  # origin of the 2-D view (screen coordinates, y down)
@@ -76,48 +76,6 @@ ENERGY_SERIES = (  # (entity, name, colour)
 
 
 @dataclass
-class Frames:
-    """Everything a recording shows, one row per frame (display samples merged with the exact
-    contact events, sorted by time, one row per distinct time; at an event the row holds the
-    state just after it)."""
-
-    t: np.ndarray  # (N,) s
-    state: np.ndarray  # (N, 6): x, y, phi, vx, vy, vphi
-    is_event: np.ndarray  # (N,) bool: the row is the exact state at a contact event
-    contact: np.ndarray  # (N, 4) bool: corner i is in the contact set (carries a force)
-    corners: np.ndarray  # (N, 4, 2) corner positions, m
-    heights: np.ndarray  # (N, 4) corner heights y_i, m (negative = penetrating)
-    forces: np.ndarray  # (N, 4, 2) contact force on each corner, N (zero when free)
-    kinetic: np.ndarray  # (N,) J
-    gravitational: np.ndarray  # (N,) J
-    elastic: np.ndarray  # (N,) J
-    events: np.ndarray  # (M, 9) the contact events: t, corner, kind, state
-
-    def __len__(self) -> int:
-        return len(self.t)
-
-    @property
-    def penetration(self) -> np.ndarray:
-        """(N, 4) depth below the surface, m (zero above it)."""
-        return np.maximum(-self.heights, 0.0)
-
-    @property
-    def total(self) -> np.ndarray:
-        return self.kinetic + self.gravitational + self.elastic
-
-    @property
-    def quarter_turns(self) -> np.ndarray:
-        """2 phi / pi, whose rounding is the paper's n."""
-        return 2.0 * self.state[:, 2] / math.pi
-
-    @property
-    def n(self) -> np.ndarray:
-        """The paper's n = round(2 phi / pi), ties away from zero (model.rounded_quarter_turns)."""
-        q = self.quarter_turns
-        return (np.sign(q) * np.floor(np.abs(q) + 0.5)).astype(np.int64)
-
-
-@dataclass
 class RecordingInfo:
     """What :func:`write_recording` wrote and where."""
 
@@ -129,139 +87,9 @@ class RecordingInfo:
     recording_id: str
 
 
-# -- pure numpy ----------------------------------------------------------------------------------
-
-def build_frames(trajectory) -> Frames:
-    """Merge a trajectory's samples with its contact events and derive the scene's quantities.
-
-    ``trajectory`` must come from ``simulate(scene, sample_dt=..., record_events=True)``. Rows
-    that went non-finite (a diverged run) are dropped.
-    """
-    if trajectory.samples is None:
-        raise ValueError("the trajectory has no samples: run simulate() with sample_dt")
-    samples = np.asarray(trajectory.samples, dtype=np.float64)
-    events = (np.asarray(trajectory.events, dtype=np.float64) if trajectory.events is not None
-              else np.empty((0, 9)))
-    events = events[np.isfinite(events).all(axis=1)]
-    rows = np.concatenate([events[:, [0, 3, 4, 5, 6, 7, 8]], samples])
-    is_event = np.concatenate([np.ones(len(events), bool), np.zeros(len(samples), bool)])
-    finite = np.isfinite(rows).all(axis=1)
-    rows, is_event = rows[finite], is_event[finite]
-    # sort by time, an event before a sample at the same time; keep the first row of each time
-    order = np.lexsort((~is_event, rows[:, 0]))
-    rows, is_event = rows[order], is_event[order]
-    keep = np.ones(len(rows), bool)
-    keep[1:] = rows[1:, 0] != rows[:-1, 0]
-    rows, is_event = rows[keep], is_event[keep]
-    t = rows[:, 0].copy()
-    state = rows[:, 1:].copy()
-
-    scene = trajectory.scene
-    coin, found = scene.coin, scene.foundation
-    x, y, phi, vx, vy, vphi = state.T
-    px = np.asarray(SX) * coin.r_d
-    py = np.asarray(SY) * coin.r_t
-    c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
-    dx = px * c - py * s  # (N, 4) offsets d_i = R(phi) p_i
-    dy = px * s + py * c
-    heights = y[:, None] + dy
-    corners = np.stack([x[:, None] + dx, heights], axis=-1)
-
-    contact = _contact_sets(t, heights, events)
-    vxi = vx[:, None] - vphi[:, None] * dy
-    vyi = vy[:, None] + vphi[:, None] * dx
-    fx = np.where(contact, -found.c * vxi, 0.0)
-    fy = np.where(contact, -found.k * heights - found.c * vyi, 0.0)
-    forces = np.stack([fx, fy], axis=-1)
-
-    m, inertia = coin.mass, coin.inertia
-    kinetic = 0.5 * m * (vx ** 2 + vy ** 2) + 0.5 * inertia * vphi ** 2
-    gravitational = m * scene.g * y
-    elastic = 0.5 * found.k * np.sum(np.where(heights < 0.0, heights ** 2, 0.0), axis=1)
-    return Frames(t=t, state=state, is_event=is_event, contact=contact, corners=corners,
-                  heights=heights, forces=forces, kinetic=kinetic, gravitational=gravitational,
-                  elastic=elastic, events=events)
-
-
-def _contact_sets(t: np.ndarray, heights: np.ndarray, events: np.ndarray) -> np.ndarray:
-    """(N, 4) contact set at each frame time: replayed from the events (the integrator's own
-    contact set, exact at the event rows), or the penetration y_i < 0 where no events exist."""
-    from ..simulate import MAX_EVENTS
-
-    if len(events) == 0 or len(events) >= MAX_EVENTS:
-        return heights < 0.0
-    contact = np.zeros(heights.shape, bool)
-    for i in range(4):
-        ev = events[events[:, 1] == i]
-        if len(ev) == 0:
-            continue
-        last = np.searchsorted(ev[:, 0], t, side="right") - 1  # last event of corner i <= t
-        contact[:, i] = (last >= 0) & (ev[np.maximum(last, 0), 2] > 0)
-    return contact
-
-
-ARROW_PEAK_DIAMETERS = 1.0  # the largest contact force of a run is drawn this many diameters long
-
-
-def force_arrows(frames: Frames, weight: float, diameter: float) -> np.ndarray:
-    """(N, 4, 2) arrows (m) for the contact forces. Impact forces exceed the coin's weight by two
-    orders of magnitude, so the length grows with log(1 + |F| / (m g)), the direction is the
-    force's own, and the largest force of the run is ``ARROW_PEAK_DIAMETERS`` diameters long:
-    the weight itself then shows as a few millimetres, an impact as centimetres."""
-    magnitude = np.hypot(frames.forces[..., 0], frames.forces[..., 1])
-    peak = float(np.max(magnitude, initial=0.0))
-    if peak <= 0.0 or weight <= 0.0:
-        return np.zeros_like(frames.forces)
-    length = ARROW_PEAK_DIAMETERS * diameter * np.log1p(magnitude / weight) / np.log1p(
-        peak / weight)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        unit = np.where(magnitude[..., None] > 0, frames.forces / magnitude[..., None], 0.0)
-    return unit * length[..., None]
-
-
 def _rgba(colour) -> int:
     r, g, b, a = (tuple(colour) + (255,))[:4]
     return (r << 24) | (g << 16) | (b << 8) | a
-
-
-def check_rrd_path(path: str | os.PathLike) -> Path:
-    """Raise the OSError a user should see (one line) if ``path`` cannot be written as a file."""
-    p = Path(path)
-    if p.is_dir():
-        raise IsADirectoryError(f"recording path '{path}' is a directory")
-    if str(path) == "" or p.name == "":
-        raise FileNotFoundError(f"invalid recording path '{path}'")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise FileNotFoundError(f"cannot write '{p}': folder '{parent}' does not exist")
-    if not os.access(parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
-        raise PermissionError(f"cannot write '{p}': permission denied")
-    return p
-
-
-def check_connect_url(url: str) -> str:
-    """Raise ValueError (one line) unless ``url`` looks like a Rerun gRPC proxy address."""
-    if not url.startswith(("rerun://", "rerun+http://", "rerun+https://")):
-        raise ValueError(f"--connect URL '{url}' must start with rerun+http://, rerun+https:// "
-                         f"or rerun:// (e.g. {DEFAULT_CONNECT_URL})")
-    return url
-
-
-def probe_viewer(url: str, timeout: float = 2.0) -> None:
-    """Raise ConnectionError (one line) unless something accepts TCP connections at ``url``'s
-    host and port: streaming to nobody would otherwise only fail after seconds of retries."""
-    import socket
-    from urllib.parse import urlsplit
-
-    parts = urlsplit(check_connect_url(url))
-    port = parts.port or (80 if parts.scheme == "rerun+http" else 443)
-    host = parts.hostname or "127.0.0.1"
-    try:
-        with socket.create_connection((host, port), timeout=timeout):
-            pass
-    except OSError as exc:
-        raise ConnectionError(f"no Rerun viewer reachable at {url} ({exc.strerror or exc}); "
-                              "start one with `rerun` or use --spawn") from None
 
 
 # -- Rerun ---------------------------------------------------------------------------------------
@@ -368,7 +196,7 @@ def write_recording(trajectory, *, rrd: str | os.PathLike | None = None, spawn: 
     rec.set_sinks(*_sinks(rr, rec, rrd_path, spawn, connect, port))
     init = scene.initial
     rec.send_recording_name(f"coin simulate vy={init.vy:g} vphi={init.vphi:g} "
-                            f"phi0={init.phi0:g} ({scene.integration.method})")
+                            f"phi0={init.phi0:g} ({scene.integration.method.label})")
     rec.send_blueprint(blueprint(frames, scene), make_active=True, make_default=True)
     _log_static(rec, rr, trajectory, frames, log_every)
     if len(frames):
@@ -432,12 +260,13 @@ def _log_static(rec, rr, trajectory, frames: Frames, log_every: float | None) ->
     rec.log(INFO, rr.TextDocument(_info_markdown(trajectory, frames, log_every),
                                   media_type=rr.MediaType.MARKDOWN), static=True)
     rec.log(f"{INFO}/parameters", rr.AnyValues(**params), static=True)
-    rec.send_property("coin", rr.AnyValues(version=__version__, method=scene.integration.method,
+    rec.send_property("coin", rr.AnyValues(version=__version__,
+                                           method=scene.integration.method.label,
                                            dt=scene.integration.dt,
                                            rtol=scene.integration.rtol,
                                            outcome_n=trajectory.quarter_turns
                                            if trajectory.quarter_turns is not None else -1,
-                                           status=trajectory.status))
+                                           status=trajectory.status.label))
 
 
 def _flat_parameters(trajectory, log_every: float | None) -> dict:
@@ -451,7 +280,7 @@ def _flat_parameters(trajectory, log_every: float | None) -> dict:
         else:
             params[section] = values
     params["log_every"] = float(log_every) if log_every else float("nan")
-    params["status"] = trajectory.status
+    params["status"] = trajectory.status.label
     params["quarter_turns"] = (trajectory.quarter_turns if trajectory.quarter_turns is not None
                                else -1)
     params["e_crit"] = trajectory.e_crit
@@ -468,12 +297,11 @@ def _info_markdown(trajectory, frames: Frames, log_every: float | None) -> str:
         lines.append("**Outcome:** none, the run went non-finite.")
     else:
         lines.append(f"**Outcome:** n = {trajectory.quarter_turns} quarter turns, "
-                     f"{trajectory.pose} ({trajectory.status}"
+                     f"{trajectory.pose} ({trajectory.status.label}"
                      + (f" at t = {trajectory.settle_time:.6g} s" if trajectory.settled else "")
                      + ").")
-    step = (f"rtol = {integ.rtol:g}" if integ.method in ("dopri5", "event")
-            else f"dt = {integ.dt:g} s")
-    lines += ["", f"**Method:** {integ.method}, {step}, t_end = {integ.t_end:g} s, "
+    step = setting_text(integ.method, integ.dt, integ.rtol)
+    lines += ["", f"**Method:** {integ.method.label}, {step}, t_end = {integ.t_end:g} s, "
               + ("stop when settled" if integ.stop_on_settle else "full run"), ""]
     lines += ["| parameter | value |", "|---|---|"]
     for section, values in scene.to_dict().items():
@@ -609,6 +437,6 @@ def _send_text_log(rec, rr, trajectory, frames: Frames) -> None:
     for note in trajectory.notes:
         times.append(end)
         texts.append(note)
-        levels.append("ERROR" if trajectory.status == "non-finite" else "WARN")
+        levels.append("ERROR" if trajectory.status == Status.NONFINITE else "WARN")
     rec.send_columns(EVENTS, indexes=[rr.TimeColumn(TIMELINE, duration=_durations(times))],
                      columns=rr.TextLog.columns(text=texts, level=levels))

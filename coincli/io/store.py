@@ -39,37 +39,14 @@ import shutil
 import threading
 import time
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..integrators import NOT_COMPUTED
+from ..grid import SweepSpec, TileResult
 from ..params import ParameterError
-from ..sweep import STATUS_NOT_COMPUTED, UNCERTAIN_NOT_COMPUTED, SweepSpec, TileResult
-
-FORMAT = 1
-COMPARED_ATTRS = ("version", "parameters", "sweep", "method", "certify")
-
-ARRAYS = {
-    "quarter_turns": ("int16", int(NOT_COMPUTED), {
-        "long_name": "final number n of quarter turns (phi / (pi/2)); odd = standing",
-        "units": "1", "missing_value": int(NOT_COMPUTED),
-        "description": "the well that holds the settled coin; round(2 phi / pi) at t_end when "
-                       "unsettled; -32768 where not computed or non-finite"}),
-    "status": ("uint8", STATUS_NOT_COMPUTED, {
-        "long_name": "run status", "flag_values": [0, 1, 2, STATUS_NOT_COMPUTED],
-        "flag_meanings": "settled unsettled_at_t_end non_finite not_computed"}),
-    "settle_time": ("float32", math.nan, {
-        "long_name": "time at which the energy fell below E_crit (n final)", "units": "s"}),
-    "steps": ("int64", -1, {"long_name": "integrator steps", "units": "1"}),
-    "uncertain": ("uint8", UNCERTAIN_NOT_COMPUTED, {
-        "long_name": "n changes under the certifying run (see the certify attribute)",
-        "flag_values": [0, 1, UNCERTAIN_NOT_COMPUTED],
-        "flag_meanings": "certain uncertain not_computed"}),
-}
-DTYPES = {name: spec[0] for name, spec in ARRAYS.items()}
-FILLS = {name: spec[1] for name, spec in ARRAYS.items()}
+from .dataset import Basin
+from .schema import COMPARED_ATTRS, COORD_NOTE, DONE_ATTRS, VARIABLES, tile_dims
 
 
 def _zarr():
@@ -150,19 +127,15 @@ def _create(path: Path, attrs: dict, spec: SweepSpec) -> None:
         arr = group.create_array(axis.name, shape=(axis.n,), chunks=(axis.n,), dtype="float64",
                                  fill_value=0.0, dimension_names=(axis.name,),
                                  attributes={"units": axis.units, "long_name": axis.long_name,
-                                             "cell_centres": "linspace(lo, hi, n), ends "
-                                                             "included"})
+                                             "cell_centres": COORD_NOTE})
         arr[:] = axis.coords
     for name in spec.array_names:
-        dtype, fill, array_attrs = ARRAYS[name]
+        dtype, fill, array_attrs = VARIABLES[name]
         group.create_array(name, shape=grid.shape, chunks=grid.chunk, dtype=dtype,
                            fill_value=fill, dimension_names=(d0, d1), attributes=array_attrs,
                            config={"write_empty_chunks": True})
-    tiles = grid.tile_grid
-    tdims = (f"tile_{d0}", f"tile_{d1}")
-    group.create_array("done", shape=tiles, chunks=(1, 1), dtype="uint8", fill_value=0,
-                       dimension_names=tdims,
-                       attributes={"long_name": "1 = tile complete (written after its data)"})
+    group.create_array("done", shape=grid.tile_grid, chunks=(1, 1), dtype="uint8", fill_value=0,
+                       dimension_names=tile_dims(grid), attributes=DONE_ATTRS)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # "consolidated metadata is not part of the v3 spec"
         zarr.consolidate_metadata(str(tmp))
@@ -285,34 +258,8 @@ def read_costs(path: str | os.PathLike, tile_grid: tuple[int, int]) -> tuple[np.
     return seconds, runs
 
 
-@dataclass
-class Basin:
-    """A store read back: cells of tiles not flagged done are reported as not computed."""
-
-    path: str
-    attrs: dict
-    dims: tuple[str, str]
-    axes: list[dict]
-    coords: tuple[np.ndarray, np.ndarray]
-    arrays: dict[str, np.ndarray]
-    done: np.ndarray
-    tile_seconds: np.ndarray  # from out.zarr.cost/, NaN where unknown
-    runs: list
-    chunk: tuple[int, int]
-
-    @property
-    def certified(self) -> bool:
-        return "uncertain" in self.arrays
-
-    @property
-    def computed(self) -> np.ndarray:
-        """Cell mask of complete tiles."""
-        c0, c1 = self.chunk
-        n0, n1 = self.coords[0].size, self.coords[1].size
-        return np.repeat(np.repeat(self.done.astype(bool), c0, axis=0), c1, axis=1)[:n0, :n1]
-
-
-def open_basin(path: str | os.PathLike) -> Basin:
+def read_basin(path: str | os.PathLike) -> Basin:
+    """Read a store back (cells of tiles not flagged done read as not computed)."""
     zarr = _zarr()
     p = Path(path)
     if not _is_store(p):
@@ -321,18 +268,13 @@ def open_basin(path: str | os.PathLike) -> Basin:
     attrs = dict(group.attrs)
     if "coin_basin" not in attrs:
         raise ParameterError(f"{path} is not a coin basin store")
-    sweep = attrs["sweep"]
-    dims = tuple(sweep["dims"])
     present = set(group.array_keys())
-    arrays = {name: np.asarray(group[name][:]) for name in ARRAYS if name in present}
+    arrays = {name: np.asarray(group[name][:]) for name in VARIABLES if name in present}
     done = np.asarray(group["done"][:])
     tile_seconds, runs = read_costs(p, done.shape)
-    basin = Basin(path=str(path), attrs=attrs, dims=dims, axes=sweep["axes"],
-                  coords=tuple(np.asarray(group[d][:]) for d in dims), arrays=arrays, done=done,
-                  tile_seconds=tile_seconds, runs=runs, chunk=tuple(sweep["chunk"]))
-    missing = ~basin.computed
-    for name, arr in arrays.items():
-        arr[missing] = FILLS[name]
+    basin = Basin(attrs=attrs, arrays=arrays, done=done, tile_seconds=tile_seconds, runs=runs,
+                  path=str(path))
+    basin.mask_not_done()
     return basin
 
 
@@ -343,5 +285,5 @@ def run_record(started: float, wall: float, tiles: int, cells: int, mode: str, w
             "workers": workers, "interrupted": interrupted}
 
 
-__all__ = ["ARRAYS", "Basin", "differences", "open_basin", "prepare", "read_done",
+__all__ = ["differences", "prepare", "read_basin", "read_done",
            "read_costs", "record_run", "run_record", "write_tile", "cost_dir"]

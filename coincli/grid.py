@@ -31,36 +31,28 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .integrators import NOT_COMPUTED
-from .integrators.kernels import label_states
-from .params import ParameterError, Scene, param_array, state_array
+from .defaults import AXIS_INFO, DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES, IC_NAMES
+from .integrators import NO_LABEL, MethodInfo, label_states
+from .params import (
+    ModelParams,
+    ParameterError,
+    RunSettings,
+    Scene,
+    model_params,
+    run_settings,
+    state_array,
+)
 
-# The initial-condition options, in the order of the state vector (x, y, phi, vx, vy, vphi).
-IC_NAMES = ("x0", "y0", "phi0", "vx", "vy", "vphi")
-
-# name -> (label for plots, unit, long name)
-AXIS_INFO = {
-    "x0": ("$x_0$", "m", "initial horizontal position"),
-    "y0": ("$y_0$", "m", "initial height of the centroid"),
-    "phi0": (r"$\varphi_0$", "rad", "initial angle"),
-    "vx": ("$v_{x0}$", "m/s", "initial horizontal velocity"),
-    "vy": ("$v_{y0}$", "m/s", "initial vertical velocity"),
-    "vphi": (r"$v_{\varphi 0}$", "rad/s", "initial angular velocity"),
-}
-# The paper sweeps (vy0, vphi0) with x0 = 0, y0 = r, phi0 = 0, vx0 = 0; its ranges were on the
-# figures, not in the text. These are the ranges NOTES.md measured the method's accuracy on.
-DEFAULT_RANGES = {"vy": "0.05:2", "vphi": "-20:20"}
-DEFAULT_RES = "512"
-DEFAULT_CHUNK = "64"
 MAX_CELLS_PER_AXIS = 1 << 16
 
-# Status codes in a store: the run statuses (0 settled, 1 unsettled, 2 non-finite) plus:
-STATUS_NOT_COMPUTED = 255
-UNCERTAIN_NOT_COMPUTED = 255
+UNCERTAIN_NOT_COMPUTED = 255  # the uncertain flag of a cell not computed
 
 
 # -- parsing ------------------------------------------------------------------------------------
-def _parse_float(name: str, text: str) -> float:
+def _parse_float(name: str, text) -> float:
+    """A finite number from option text or a Python number."""
+    if isinstance(text, bool) or not isinstance(text, str | int | float):
+        raise ParameterError(f"--{name}: {text!r} is not a number or a LO:HI range")
     try:
         value = float(text)
     except ValueError:
@@ -70,24 +62,37 @@ def _parse_float(name: str, text: str) -> float:
     return value
 
 
-def parse_range(name: str, text: str | float) -> float | tuple[float, float]:
-    """``'0:2'`` -> (0.0, 2.0), a swept axis; ``'1.5'`` -> 1.5, a fixed value."""
-    if not isinstance(text, str):
-        return _parse_float(name, str(text))
-    text = text.strip()
-    if ":" not in text:
-        return _parse_float(name, text)
-    parts = text.split(":")
-    if len(parts) != 2 or not parts[0].strip() or not parts[1].strip():
-        raise ParameterError(f"--{name}: '{text}' is not a LO:HI range")
-    lo, hi = (_parse_float(name, part) for part in parts)
+def format_range(lo: float, hi: float) -> str:
+    return f"{lo:g}:{hi:g}"
+
+
+def parse_range(name: str, value) -> float | tuple[float, float]:
+    """``'0:2'`` or ``(0, 2)`` -> (0.0, 2.0), a swept axis; ``'1.5'`` or ``1.5`` -> 1.5, a fixed
+    value."""
+    if isinstance(value, tuple | list):
+        if len(value) != 2:
+            raise ParameterError(f"--{name}: a range is (LO, HI), got {value!r}")
+        lo, hi = (_parse_float(name, v) for v in value)
+        text = f"{lo!r}:{hi!r}"
+    elif isinstance(value, str):
+        text = value.strip()
+        if ":" not in text:
+            return _parse_float(name, text)
+        parts = text.split(":")
+        if len(parts) != 2 or not parts[0].strip() or not parts[1].strip():
+            raise ParameterError(f"--{name}: '{text}' is not a LO:HI range")
+        lo, hi = (_parse_float(name, part) for part in parts)
+    else:
+        return _parse_float(name, value)
     if not lo < hi:
         raise ParameterError(f"--{name} {text}: empty range (LO must be below HI)")
     return lo, hi
 
 
-def parse_pair(option: str, text: str, minimum: int = 1) -> tuple[int, int]:
-    """``'512'`` -> (512, 512), ``'512x256'`` -> (512, 256)."""
+def parse_pair(option: str, text, minimum: int = 1) -> tuple[int, int]:
+    """``'512'`` or ``512`` -> (512, 512), ``'512x256'`` or ``(512, 256)`` -> (512, 256)."""
+    if isinstance(text, tuple | list):
+        text = "x".join(map(str, text))
     parts = str(text).lower().split("x")
     try:
         values = [int(part) for part in parts]
@@ -166,6 +171,11 @@ class Grid:
         """Number of tiles along each axis."""
         return tuple(-(-n // c) for n, c in zip(self.shape, self.chunk, strict=True))
 
+    def states(self) -> np.ndarray:
+        """Initial states of every cell, row-major over (first axis, second axis), N x 6."""
+        whole = Grid(self.axes, self.base_state, self.shape)
+        return whole.tile_states((0, 0))
+
     def tiles(self) -> list[tuple[int, int]]:
         t0, t1 = self.tile_grid
         return [(i, j) for i in range(t0) for j in range(t1)]
@@ -200,6 +210,29 @@ class Grid:
                 "cell_centres": "numpy.linspace(lo, hi, n): both ends included"}
 
 
+def split_options(options: dict) -> tuple[dict[str, tuple[float, float]], dict[str, float]]:
+    """Initial-condition options (name -> 'LO:HI' | (lo, hi) | value | None) -> (swept ranges,
+    fixed values). vy and vphi sweep their default ranges unless given."""
+    unknown = set(options) - set(IC_NAMES)
+    if unknown:
+        raise ParameterError(f"unknown initial condition(s) {sorted(unknown)}; "
+                             f"sweepable: {', '.join(IC_NAMES)}")
+    ranges: dict[str, tuple[float, float]] = {}
+    fixed: dict[str, float] = {}
+    for name in IC_NAMES:
+        text = options.get(name)
+        if text is None:
+            if name in DEFAULT_RANGES:
+                ranges[name] = DEFAULT_RANGES[name]
+            continue
+        value = parse_range(name, text)
+        if isinstance(value, tuple):
+            ranges[name] = value
+        else:
+            fixed[name] = value
+    return ranges, fixed
+
+
 def make_grid(scene: Scene, ranges: dict[str, tuple[float, float]], res: tuple[int, int],
               chunk: tuple[int, int]) -> Grid:
     """The grid over the two swept ``ranges`` (name -> (lo, hi)), other values from ``scene``."""
@@ -228,51 +261,41 @@ class SweepSpec:
     """Everything a tile needs, as plain picklable values (shipped to Dask workers)."""
 
     grid: Grid
-    params: tuple[float, ...]  # param_array(scene)
-    kernel_id: int
-    dt: float
-    rtol: float
-    t_end: float
-    stop_on_settle: bool
-    certify: bool = False
-    certify_dt: float = math.nan
-    certify_rtol: float = math.nan
+    params: ModelParams
+    settings: RunSettings
+    certify: RunSettings | None = None  # the tighter run of a certified sweep
 
     @property
     def array_names(self) -> tuple[str, ...]:
         names = ("quarter_turns", "status", "settle_time", "steps")
-        return names + ("uncertain",) if self.certify else names
+        return names + ("uncertain",) if self.certify is not None else names
 
 
-def certify_setting(method, dt: float, rtol: float) -> tuple[float, float]:
+def certify_setting(method: MethodInfo, settings: RunSettings) -> RunSettings:
     """The tighter setting of the certifying run: a tenfold smaller error bound."""
     if method.adaptive:
-        return dt, rtol / 10.0
-    return dt / 10.0 ** (1.0 / method.order), rtol
+        return settings._replace(rtol=settings.rtol / 10.0)
+    return settings._replace(dt=settings.dt / 10.0 ** (1.0 / method.order))
 
 
-def make_spec(scene: Scene, method, grid: Grid, certify: bool = False) -> SweepSpec:
+def make_spec(scene: Scene, method: MethodInfo, grid: Grid, certify: bool = False) -> SweepSpec:
+    settings = run_settings(scene.integration)
+    return SweepSpec(grid=grid, params=model_params(scene), settings=settings,
+                     certify=certify_setting(method, settings) if certify else None)
+
+
+def method_attrs(scene: Scene, method: MethodInfo) -> dict:
     integ = scene.integration
-    cdt, crtol = certify_setting(method, integ.dt, integ.rtol) if certify else (math.nan,
-                                                                                 math.nan)
-    return SweepSpec(grid=grid, params=tuple(float(v) for v in param_array(scene)),
-                     kernel_id=method.kernel_id, dt=float(integ.dt), rtol=float(integ.rtol),
-                     t_end=float(integ.t_end), stop_on_settle=bool(integ.stop_on_settle),
-                     certify=certify, certify_dt=cdt, certify_rtol=crtol)
-
-
-def method_attrs(scene: Scene, method) -> dict:
-    integ = scene.integration
-    return {"name": method.name, "kernel_id": method.kernel_id, "order": method.order,
+    return {"name": method.name, "kernel_id": int(method.method), "order": method.order,
             "adaptive": method.adaptive, "symplectic": method.symplectic,
             "dt": integ.dt, "rtol": integ.rtol, "t_end": integ.t_end,
             "stop_on_settle": integ.stop_on_settle}
 
 
 def certify_attrs(spec: SweepSpec) -> dict | None:
-    if not spec.certify:
+    if spec.certify is None:
         return None
-    return {"dt": spec.certify_dt, "rtol": spec.certify_rtol,
+    return {"dt": spec.certify.dt, "rtol": spec.certify.rtol,
             "rule": "every cell recomputed by the same method with a tenfold smaller error "
                     "bound (adaptive: rtol/10; fixed step of order p: dt/10**(1/p)); "
                     "uncertain = 1 where n differs or one run is non-finite"}
@@ -290,30 +313,25 @@ class TileResult:
         return int(self.arrays["quarter_turns"].size)
 
 
-def _run(spec: SweepSpec, states: np.ndarray, dt: float, rtol: float):
-    return label_states(spec.kernel_id, np.asarray(spec.params, dtype=np.float64), states, dt,
-                        rtol, spec.t_end, spec.stop_on_settle)
-
-
 def compute_tile(spec: SweepSpec, tile: tuple[int, int]) -> TileResult:
     """Run every cell of one tile (and its certifying run); the GIL is released meanwhile."""
     wall0, cpu0 = time.perf_counter(), time.thread_time()
     states = spec.grid.tile_states(tile)
     s0, s1 = spec.grid.tile_slices(tile)
     shape = (s0.stop - s0.start, s1.stop - s1.start)
-    q, status, settle, steps = _run(spec, states, spec.dt, spec.rtol)
+    q, status, settle, steps = label_states(spec.params, spec.settings, states)
     arrays = {"quarter_turns": q.reshape(shape), "status": status.reshape(shape),
               "settle_time": settle.reshape(shape), "steps": steps.reshape(shape)}
-    if spec.certify:
-        q2, _, _, _ = _run(spec, states, spec.certify_dt, spec.certify_rtol)
-        # NOT_COMPUTED marks a non-finite run in both: differing n or one non-finite -> uncertain
-        both_nonfinite = (q == NOT_COMPUTED) & (q2 == NOT_COMPUTED)
+    if spec.certify is not None:
+        q2 = label_states(spec.params, spec.certify, states).quarter_turns
+        # NO_LABEL marks a non-finite run in both: differing n or one non-finite -> uncertain
+        both_nonfinite = (q == NO_LABEL) & (q2 == NO_LABEL)
         arrays["uncertain"] = ((q != q2) & ~both_nonfinite).astype(np.uint8).reshape(shape)
     return TileResult(tile=tuple(tile), arrays=arrays, cpu_seconds=time.thread_time() - cpu0,
                       wall_seconds=time.perf_counter() - wall0)
 
 
 __all__ = ["AXIS_INFO", "Axis", "DEFAULT_CHUNK", "DEFAULT_RANGES", "DEFAULT_RES", "Grid",
-           "IC_NAMES", "STATUS_NOT_COMPUTED", "SweepSpec", "TileResult", "UNCERTAIN_NOT_COMPUTED",
-           "certify_attrs", "certify_setting", "compute_tile", "make_grid", "make_spec",
-           "method_attrs", "parse_pair", "parse_range"]
+           "IC_NAMES", "SweepSpec", "TileResult", "UNCERTAIN_NOT_COMPUTED", "certify_attrs",
+           "certify_setting", "compute_tile", "format_range", "make_grid", "make_spec",
+           "method_attrs", "parse_pair", "parse_range", "split_options"]

@@ -4,7 +4,7 @@ Wilson 95 % interval, the cells without a trustworthy label, and the sweep's cos
 Fractions and probabilities are taken over the *labelled* cells: computed and finite (settled, or
 unsettled at t_end and labelled round(2 phi / pi) there, as the paper labels every run). With a
 certified sweep they are given twice: over all labelled cells, and over the certain ones only.
-Where there is nothing to divide by they are None (the JSON output stays valid JSON).
+Where there is nothing to divide by they are NaN.
 """
 
 from __future__ import annotations
@@ -13,20 +13,18 @@ import math
 
 import numpy as np
 
-SETTLED, UNSETTLED, NONFINITE, NOT_COMPUTED_STATUS = 0, 1, 2, 255
-Z95 = 1.959963984540054
+from .enums import Status
 
 
-def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
-    """Wilson score interval for k successes in n trials (NaN, NaN for n = 0)."""
+def wilson(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
+    """Wilson score interval for k successes in n trials (scipy's; NaN, NaN for n = 0)."""
     if n <= 0:
         return math.nan, math.nan
-    p = k / n
-    denom = 1 + z * z / n
-    centre = (p + z * z / (2 * n)) / denom
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
-    lo = 0.0 if k == 0 else max(0.0, centre - half)  # exact ends, not rounding noise
-    hi = 1.0 if k == n else min(1.0, centre + half)
+    from scipy.stats import binomtest
+
+    ci = binomtest(int(k), int(n)).proportion_ci(confidence_level=confidence, method="wilson")
+    lo = 0.0 if k == 0 else float(ci.low)  # exact ends, not rounding noise
+    hi = 1.0 if k == n else float(ci.high)
     return lo, hi
 
 
@@ -55,15 +53,15 @@ def basin_stats(quarter_turns: np.ndarray, status: np.ndarray,
     """Everything `coin basin stats` reports, as plain JSON-able values."""
     q = np.asarray(quarter_turns)
     st = np.asarray(status)
-    computed = st != NOT_COMPUTED_STATUS
-    labelled = computed & ((st == SETTLED) | (st == UNSETTLED))
+    computed = st != Status.NOT_COMPUTED
+    labelled = computed & ((st == Status.SETTLED) | (st == Status.UNSETTLED))
     out: dict = {
         "cells": int(q.size),
         "computed": int(computed.sum()),
         "not_computed": int((~computed).sum()),
-        "settled": int((st == SETTLED).sum()),
-        "unsettled": int((st == UNSETTLED).sum()),
-        "non_finite": int((st == NONFINITE).sum()),
+        "settled": int((st == Status.SETTLED).sum()),
+        "unsettled": int((st == Status.UNSETTLED).sum()),
+        "non_finite": int((st == Status.NONFINITE).sum()),
         "labelled": int(labelled.sum()),
     }
     out["outcomes"], out["standing"] = outcome_table(q[labelled])
@@ -99,18 +97,7 @@ def basin_stats(quarter_turns: np.ndarray, status: np.ndarray,
         cost["wall_seconds"] = wall
         cost["trajectories_per_second"] = cells / wall if wall > 0 else math.nan
     out["cost"] = cost
-    return _finite_or_none(out)
-
-
-def _finite_or_none(value):
-    """NaN (an empty denominator) -> None, so that the JSON output stays valid JSON."""
-    if isinstance(value, dict):
-        return {k: _finite_or_none(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_finite_or_none(v) for v in value]
-    if isinstance(value, float | np.floating):
-        return float(value) if math.isfinite(value) else None
-    return value
+    return out
 
 
 __all__ = ["basin_stats", "outcome_table", "wilson"]

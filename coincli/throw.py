@@ -1,18 +1,25 @@
-"""One trajectory: run a scene, return its outcome as plain data (no printing, no files)."""
+"""One trajectory: run a scene, return its outcome as plain data (no printing, no files).
+
+:func:`simulate` returns a :class:`Trajectory` (outcome, status, final state, energies, and on
+request the samples at a display rate and every contact event); :func:`classify` only the
+:class:`Outcome` of one initial condition, as Attractors.jl classifies one initial condition.
+"""
 
 from __future__ import annotations
 
 import math
 import time
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
-from .integrators import SETTLED, STATUS_NAMES, check_step, integrate
-from .integrators.fixed import EVENT_COLUMNS, SAMPLE_COLUMNS
-from .integrators.kernels import warm_up
+from .enums import Status
+from .integrators import check_step, integrate, warm_up
+from .integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
+from .jit import compiled
 from .model import energies, rounded_quarter_turns
-from .params import STATE_NAMES, Scene, param_array, state_array, validate
+from .params import STATE_NAMES, Scene, model_params, run_settings, state_array, validate
 
 MAX_EVENTS = 200_000
 
@@ -24,7 +31,7 @@ class Trajectory:
     ``rounded_quarter_turns`` is always the paper's round(2 phi / pi) at the end."""
 
     scene: Scene
-    status: str
+    status: Status
     t_final: float
     final_state: np.ndarray
     steps: int
@@ -41,13 +48,11 @@ class Trajectory:
 
     @property
     def settled(self) -> bool:
-        return self.status == STATUS_NAMES[SETTLED]
+        return self.status == Status.SETTLED
 
     @property
     def pose(self) -> str:
-        if self.quarter_turns is None:
-            return "unknown"
-        return "standing" if self.quarter_turns % 2 else "lying"
+        return pose_of(self.quarter_turns)
 
     def summary(self) -> dict:
         """Everything a user or a script needs, as plain JSON-able values."""
@@ -55,7 +60,7 @@ class Trajectory:
         return {
             "quarter_turns": self.quarter_turns,
             "pose": self.pose,
-            "status": self.status,
+            "status": self.status.label,
             "settled": self.settled,
             "settle_time": None if math.isnan(self.settle_time) else self.settle_time,
             "rounded_quarter_turns": self.rounded_quarter_turns,
@@ -65,7 +70,7 @@ class Trajectory:
             "energy_final": self.energy_final,
             "energy_dissipated": self.energy_initial - self.energy_final,
             "e_crit": self.e_crit,
-            "method": integ.method,
+            "method": integ.method.label,
             "dt": integ.dt,
             "rtol": integ.rtol,
             "t_end": integ.t_end,
@@ -76,15 +81,36 @@ class Trajectory:
         }
 
 
-def simulate(scene: Scene, sample_dt: float | None = None, record_events: bool = False,
+class Outcome(NamedTuple):
+    """The outcome of one initial condition."""
+
+    quarter_turns: int | None  # final n if settled; round(2 phi / pi) at t_end if unsettled
+    status: Status
+    settle_time: float  # s, NaN if it never settled
+
+    @property
+    def pose(self) -> str:
+        return pose_of(self.quarter_turns)
+
+
+def pose_of(quarter_turns: int | None) -> str:
+    """Odd n: the coin stands on its rim; even n: it lies on a face."""
+    if quarter_turns is None:
+        return "unknown"
+    return "standing" if quarter_turns % 2 else "lying"
+
+
+def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: bool = False,
              force: bool = False) -> Trajectory:
     """Integrate one trajectory. With ``sample_dt`` the state is kept every ``sample_dt`` seconds
     of simulated time (exact times for the adaptive methods); with ``record_events`` every contact
-    onset and lift-off is kept with its state."""
+    onset and lift-off is kept with its state. ``force`` allows a fixed step beyond the method's
+    stable step."""
     validate(scene)
-    method = check_step(scene, force=force)
+    check_step(scene, force=force)
     integ = scene.integration
-    p = param_array(scene)
+    p = model_params(scene)
+    settings = run_settings(integ, float(sample_dt or 0.0))
     state0 = state_array(scene)
     if sample_dt:
         samples = np.empty((int(integ.t_end / sample_dt) + 3, SAMPLE_COLUMNS))
@@ -92,25 +118,25 @@ def simulate(scene: Scene, sample_dt: float | None = None, record_events: bool =
         samples = np.empty((0, SAMPLE_COLUMNS))
     events = np.empty((MAX_EVENTS if record_events else 0, EVENT_COLUMNS))
     final = np.empty(6)
-    warm_up(method.kernel_id, p, state0, integ.dt, integ.rtol)  # before the clock starts
+    warm_up(p, run_settings(integ), state0)  # before the clock starts
     start = time.perf_counter()
-    t, steps, status, settle_time, n_well, n_samples, n_events = integrate(
-        method.kernel_id, p, state0, integ.dt, integ.rtol, integ.t_end, integ.stop_on_settle,
-        float(sample_dt or 0.0), samples, events, final)
+    result = compiled(integrate)(p, settings, state0, samples, events, final)
     wall = time.perf_counter() - start
-    status_name = STATUS_NAMES[status]
-    finite = status_name != "non-finite"
+    status = Status(result.status)
+    t = result.t
+    finite = status != Status.NONFINITE
     rounded = int(rounded_quarter_turns(final[2])) if finite else None
-    if status == SETTLED:
-        quarter_turns = int(n_well)
+    if status == Status.SETTLED:
+        quarter_turns = int(result.n_well)
     else:
         quarter_turns = rounded if finite else None
+    settle_time = result.settle_time
     notes = []
-    if status == SETTLED and not integ.stop_on_settle and rounded != quarter_turns:
+    if status == Status.SETTLED and not integ.stop_on_settle and rounded != quarter_turns:
         notes.append(f"the coin is still rocking at t = {t:g} s: round(2 phi / pi) = {rounded}, "
                      f"but its energy fell below E_crit at t = {settle_time:.4g} s inside the "
                      f"well n = {quarter_turns}, which is the true outcome")
-    if status_name == "unsettled":
+    if status == Status.UNSETTLED:
         notes.append(f"the energy is still above E_crit at t = {t:g} s: n = {rounded} is "
                      "round(2 phi / pi) at the end and may still change; raise --t-end")
     if not finite:
@@ -119,9 +145,15 @@ def simulate(scene: Scene, sample_dt: float | None = None, record_events: bool =
     e0 = sum(energies(p, state0))
     e1 = sum(energies(p, final)) if finite else math.nan
     return Trajectory(
-        scene=scene, status=status_name, t_final=float(t), final_state=final.copy(),
-        steps=int(steps), settle_time=float(settle_time), quarter_turns=quarter_turns,
+        scene=scene, status=status, t_final=float(t), final_state=final.copy(),
+        steps=int(result.steps), settle_time=float(settle_time), quarter_turns=quarter_turns,
         rounded_quarter_turns=rounded, energy_initial=float(e0), energy_final=float(e1),
         e_crit=scene.e_crit, wall_time=wall,
-        samples=samples[:n_samples].copy() if sample_dt else None,
-        events=events[:n_events].copy() if record_events else None, notes=notes)
+        samples=samples[:result.n_samples].copy() if sample_dt else None,
+        events=events[:result.n_events].copy() if record_events else None, notes=notes)
+
+
+def classify(scene: Scene, *, force: bool = False) -> Outcome:
+    """The outcome of the scene's initial condition (nothing recorded on the way)."""
+    run = simulate(scene, force=force)
+    return Outcome(run.quarter_turns, run.status, run.settle_time)

@@ -12,15 +12,15 @@ from __future__ import annotations
 import os
 import signal
 import uuid
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
-from .sweep import SweepSpec, compute_tile
+from ..grid import SweepSpec, compute_tile
 
 
 def run_tile_task(path: str, spec: SweepSpec, tile: tuple[int, int]) -> tuple:
     """Compute one tile and write it to the store at ``path``; return (tile, cells, cpu s)."""
-    from .io.store import write_tile
+    from .store import write_tile
 
     result = compute_tile(spec, tuple(tile))
     write_tile(path, spec, result)
@@ -34,26 +34,25 @@ def usable_cores() -> int:
         return os.cpu_count() or 1
 
 
-def run_threads(path: str, spec: SweepSpec, tiles: Iterable[tuple[int, int]],
-                threads: int) -> Iterator[tuple]:
-    """Yield each tile's (tile, cells, cpu s) as it finishes, ``threads`` tiles at a time (the
+def run_threads(task: Callable, tiles: Iterable[tuple[int, int]],
+                threads: int) -> Iterator:
+    """Yield ``task(tile)`` for each tile as it finishes, ``threads`` tiles at a time (the
     kernels release the GIL). Closing the iterator (or Ctrl-C while it waits) cancels the tiles
-    not started and waits for those in flight, which are written completely."""
-    tiles = list(tiles)
+    not started and waits for those in flight, which finish completely."""
     pool = ThreadPoolExecutor(max_workers=max(1, threads), thread_name_prefix="coin-tile")
     try:
         # keep a bounded window in flight so an interrupt leaves few tiles to finish
         pending = set()
         queue = iter(tiles)
         for tile in queue:
-            pending.add(pool.submit(run_tile_task, path, spec, tile))
+            pending.add(pool.submit(task, tile))
             if len(pending) >= 2 * threads:
                 break
         while pending:
             finished, pending = wait(pending, return_when=FIRST_COMPLETED)
             for future in finished:
                 for tile in queue:
-                    pending.add(pool.submit(run_tile_task, path, spec, tile))
+                    pending.add(pool.submit(task, tile))
                     break
                 yield future.result()
     finally:

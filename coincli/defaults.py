@@ -1,0 +1,31 @@
+"""Defaults and names a user sees in option help (free of heavy imports, so that the command line
+can declare its options without loading numpy or the kernels)."""
+
+from __future__ import annotations
+
+DEFAULT_PRESET = "paper"
+
+# The initial-condition options, in the order of the state vector (x, y, phi, vx, vy, vphi).
+IC_NAMES = ("x0", "y0", "phi0", "vx", "vy", "vphi")
+
+# name -> (label for plots, unit, long name)
+AXIS_INFO = {
+    "x0": ("$x_0$", "m", "initial horizontal position"),
+    "y0": ("$y_0$", "m", "initial height of the centroid"),
+    "phi0": (r"$\varphi_0$", "rad", "initial angle"),
+    "vx": ("$v_{x0}$", "m/s", "initial horizontal velocity"),
+    "vy": ("$v_{y0}$", "m/s", "initial vertical velocity"),
+    "vphi": (r"$v_{\varphi 0}$", "rad/s", "initial angular velocity"),
+}
+
+# The paper sweeps (vy0, vphi0) with x0 = 0, y0 = r, phi0 = 0, vx0 = 0; its ranges were on the
+# figures, not in the text. These are the ranges on which the paper's method was measured
+# (docs/model.md): they contain the fig.-2 throw and outcomes from robust to chaotic.
+DEFAULT_RANGES = {"vy": (0.05, 2.0), "vphi": (-20.0, 20.0)}
+DEFAULT_RES = 512
+DEFAULT_CHUNK = 64
+
+DEFAULT_LOG_EVERY = 1e-3  # s of simulated time between frames of a recording
+
+__all__ = ["AXIS_INFO", "DEFAULT_CHUNK", "DEFAULT_LOG_EVERY", "DEFAULT_PRESET", "DEFAULT_RANGES",
+           "DEFAULT_RES", "IC_NAMES"]

@@ -1,0 +1,80 @@
+"""The enumerations every layer shares: how a run ended (:class:`Status`) and how it was
+integrated (:class:`Method`).
+
+Both are ``IntEnum`` so that numba kernels can use them (as ``Status.SETTLED.value``) and stores
+can hold them as small integers; everything above the kernels uses the members, their names and
+their messages, never bare numbers or hand-compared strings.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+
+class Status(IntEnum):
+    """How a run (or a basin cell) ended. Only SETTLED gives a final count of quarter turns."""
+
+    SETTLED = 0
+    UNSETTLED = 1
+    NONFINITE = 2
+    NOT_COMPUTED = 255
+
+    @property
+    def label(self) -> str:
+        """The word a user reads (CLI, JSON, stores)."""
+        return _STATUS_LABELS[self]
+
+    @property
+    def message(self) -> str:
+        return _STATUS_MESSAGES[self]
+
+    @property
+    def labelled(self) -> bool:
+        """Whether the run has a count of quarter turns at all: a settled run has the final
+        one, an unsettled run the paper's round(2 phi / pi) at t_end (not final)."""
+        return self in (Status.SETTLED, Status.UNSETTLED)
+
+
+_STATUS_LABELS = {
+    Status.SETTLED: "settled",
+    Status.UNSETTLED: "unsettled",
+    Status.NONFINITE: "non-finite",
+    Status.NOT_COMPUTED: "not computed",
+}
+_STATUS_MESSAGES = {
+    Status.SETTLED: "the energy fell below E_crit: the count of quarter turns is final",
+    Status.UNSETTLED: "the energy is still above E_crit at t_end: the count may still change",
+    Status.NONFINITE: "the run went non-finite: no outcome",
+    Status.NOT_COMPUTED: "not computed",
+}
+
+
+class Method(IntEnum):
+    """Integration methods; the value is the id the kernels dispatch on."""
+
+    SYMPLECTIC_EULER = 0
+    VERLET = 1
+    RK4 = 2
+    DOPRI5 = 3
+    EVENT = 4
+
+    @property
+    def label(self) -> str:
+        """The name a user types: ``symplectic_euler``, ``event``..."""
+        return self.name.lower()
+
+    @classmethod
+    def parse(cls, value: str | int | Method) -> Method:
+        """A member from its name (``"event"``), its member or its id; ValueError otherwise."""
+        if isinstance(value, cls):
+            return value
+        if isinstance(value, str):
+            try:
+                return cls[value.strip().upper()]
+            except KeyError:
+                pass
+        raise ValueError(f"unknown method {value!r}; available: "
+                         f"{', '.join(m.label for m in cls)}")
+
+
+__all__ = ["Method", "Status"]

@@ -1,0 +1,97 @@
+"""One entry point for every method (:func:`integrate`), the batch runner the sweeps use, and
+their plain-Python conveniences (the shapes and dtypes every caller uses).
+
+Methods are identified by their :class:`coincli.enums.Method` value so that one compiled kernel
+serves them all; their names, orders and properties live in :mod:`.registry`.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ..enums import Method, Status
+from ..jit import compiled, kernel
+from ..model import rounded_quarter_turns
+from .adaptive import integrate_adaptive
+from .common import EVENT_COLUMNS, NO_WELL, SAMPLE_COLUMNS
+from .fixed import integrate_fixed
+
+NO_LABEL = NO_WELL  # quarter_turns of a cell without a count (int16 fill of the stores)
+
+
+@kernel
+def integrate(p, settings, state, samples, events, final):
+    """Run one trajectory from ``state`` with ``settings`` (a RunSettings); returns a RunResult
+    and writes the final state into ``final``."""
+    if settings.method == Method.DOPRI5 or settings.method == Method.EVENT:
+        return integrate_adaptive(p, settings, state, samples, events, final)
+    return integrate_fixed(p, settings, state, samples, events, final)
+
+
+@kernel
+def outcome_label(status, n_well, final_phi):
+    """The count of quarter turns a run decides: the well that holds the coin once it has
+    settled, the paper's round(2 phi / pi) at the end time otherwise (flagged unsettled by the
+    status), nothing for a non-finite run."""
+    if status == Status.NONFINITE:
+        return NO_LABEL
+    if status == Status.SETTLED:
+        return n_well
+    return rounded_quarter_turns(final_phi)
+
+
+@kernel
+def run_batch(p, settings, states, quarter_turns, status, settle_time, steps):
+    """Integrate every row of ``states`` (N x 6) and write the outcome of each into the output
+    arrays (quarter_turns int16, status uint8, settle_time float32, steps int64). Releases the
+    GIL, so threads run batches on all cores."""
+    no_samples = np.empty((0, SAMPLE_COLUMNS))
+    no_events = np.empty((0, EVENT_COLUMNS))
+    final = np.empty(6)
+    for row in range(states.shape[0]):
+        result = integrate(p, settings, states[row], no_samples, no_events, final)
+        quarter_turns[row] = outcome_label(result.status, result.n_well, final[2])
+        status[row] = result.status
+        settle_time[row] = result.settle_time
+        steps[row] = result.steps
+
+
+class Labels(NamedTuple):
+    """Per-trajectory outcomes of a batch, one entry per row of the states."""
+
+    quarter_turns: np.ndarray  # int16, NO_LABEL where there is none
+    status: np.ndarray  # uint8 Status values
+    settle_time: np.ndarray  # float32 s, NaN where never settled
+    steps: np.ndarray  # int64
+
+
+def label_states(p, settings, states) -> Labels:
+    """Run every row of ``states`` (compiled; releases the GIL)."""
+    n = states.shape[0]
+    out = Labels(np.empty(n, np.int16), np.empty(n, np.uint8), np.empty(n, np.float32),
+                 np.empty(n, np.int64))
+    compiled(run_batch)(p, settings, np.ascontiguousarray(states, dtype=np.float64), *out)
+    return out
+
+
+def final_state(p, settings, state) -> tuple[np.ndarray, Status]:
+    """(final state, status) of one compiled run, nothing recorded on the way."""
+    final = np.empty(6)
+    result = compiled(integrate)(p, settings, np.ascontiguousarray(state, dtype=np.float64),
+                                 np.empty((0, SAMPLE_COLUMNS)), np.empty((0, EVENT_COLUMNS)),
+                                 final)
+    return final, Status(result.status)
+
+
+def warm_up(p, settings, state) -> None:
+    """Load the compiled kernels (from numba's cache) for one method before a clock starts.
+    The arrays have the same types as in every real call, so the same specialisations load."""
+    short = settings._replace(t_end=settings.dt * 4)
+    final_state(p, short._replace(stop_on_settle=False), state)
+    label_states(p, short._replace(stop_on_settle=True), np.array([state], dtype=np.float64))
+
+
+__all__ = ["Labels", "NO_LABEL", "final_state", "integrate", "label_states", "outcome_label",
+           "run_batch", "warm_up"]

@@ -1,0 +1,87 @@
+"""What every integration method shares: the result of a run, and the bookkeeping of its samples,
+contact events and final state (kernels on plain floats and arrays)."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+from ..enums import Status
+from ..jit import kernel
+
+NO_WELL = -32768  # n_well of a run that has not settled (the int16 fill of the stores)
+
+# Event kinds recorded in the events buffer.
+ONSET, LIFTOFF = 1, -1
+EVENT_COLUMNS = 9  # t, corner, kind, x, y, phi, vx, vy, vphi
+SAMPLE_COLUMNS = 7  # t, x, y, phi, vx, vy, vphi
+
+
+class RunResult(NamedTuple):
+    """What a kernel returns for one trajectory (its final state goes into the caller's array)."""
+
+    t: float  # s, time reached
+    steps: int  # integrator steps taken (a closed-form flight counts as one)
+    status: Status
+    settle_time: float  # s, when the energy fell below E_crit (NaN if it did not)
+    n_well: int  # the well holding the coin once settled (NO_WELL otherwise)
+    n_samples: int  # rows written to the samples buffer
+    n_events: int  # rows written to the events buffer
+
+
+@kernel
+def is_finite_state(x, y, phi, vx, vy, vphi):
+    # NaN fails every comparison; 1e30 catches a blow-up before it overflows to inf.
+    big = 1e30
+    return (abs(x) < big and abs(y) < big and abs(phi) < big and abs(vx) < big
+            and abs(vy) < big and abs(vphi) < big)
+
+
+@kernel
+def record_events(events, n_events, t, old_mask, new_mask, x, y, phi, vx, vy, vphi):
+    """Append one row per corner whose contact state changed between old_mask and new_mask."""
+    changed = old_mask ^ new_mask
+    if changed == 0:
+        return n_events
+    for i in range(4):
+        if changed & (1 << i) and n_events < events.shape[0]:
+            row = events[n_events]
+            row[0] = t
+            row[1] = i
+            row[2] = ONSET if new_mask & (1 << i) else LIFTOFF
+            row[3] = x
+            row[4] = y
+            row[5] = phi
+            row[6] = vx
+            row[7] = vy
+            row[8] = vphi
+            n_events += 1
+    return n_events
+
+
+@kernel
+def store_state(out, x, y, phi, vx, vy, vphi):
+    out[0] = x
+    out[1] = y
+    out[2] = phi
+    out[3] = vx
+    out[4] = vy
+    out[5] = vphi
+
+
+@kernel
+def record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi):
+    if n_samples < samples.shape[0]:
+        row = samples[n_samples]
+        row[0] = t
+        row[1] = x
+        row[2] = y
+        row[3] = phi
+        row[4] = vx
+        row[5] = vy
+        row[6] = vphi
+        n_samples += 1
+    return n_samples
+
+
+__all__ = ["EVENT_COLUMNS", "LIFTOFF", "NO_WELL", "ONSET", "RunResult", "SAMPLE_COLUMNS",
+           "is_finite_state", "record_events", "record_sample", "store_state"]

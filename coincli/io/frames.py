@@ -1,0 +1,144 @@
+"""The frames of a recording, in numpy: a trajectory's display samples merged with its exact
+contact events, and everything the scene shows at each (corner positions, penetrations, contact
+forces, energies), computed with the model's own formulas."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..jit import python
+from ..model import corner_force, corner_offset
+from ..params import model_params
+
+
+@dataclass
+class Frames:
+    """Everything a recording shows, one row per frame (display samples merged with the exact
+    contact events, sorted by time, one row per distinct time; at an event the row holds the
+    state just after it)."""
+
+    t: np.ndarray  # (N,) s
+    state: np.ndarray  # (N, 6): x, y, phi, vx, vy, vphi
+    is_event: np.ndarray  # (N,) bool: the row is the exact state at a contact event
+    contact: np.ndarray  # (N, 4) bool: corner i is in the contact set (carries a force)
+    corners: np.ndarray  # (N, 4, 2) corner positions, m
+    heights: np.ndarray  # (N, 4) corner heights y_i, m (negative = penetrating)
+    forces: np.ndarray  # (N, 4, 2) contact force on each corner, N (zero when free)
+    kinetic: np.ndarray  # (N,) J
+    gravitational: np.ndarray  # (N,) J
+    elastic: np.ndarray  # (N,) J
+    events: np.ndarray  # (M, 9) the contact events: t, corner, kind, state
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def penetration(self) -> np.ndarray:
+        """(N, 4) depth below the surface, m (zero above it)."""
+        return np.maximum(-self.heights, 0.0)
+
+    @property
+    def total(self) -> np.ndarray:
+        return self.kinetic + self.gravitational + self.elastic
+
+    @property
+    def quarter_turns(self) -> np.ndarray:
+        """2 phi / pi, whose rounding is the paper's n."""
+        return 2.0 * self.state[:, 2] / math.pi
+
+    @property
+    def n(self) -> np.ndarray:
+        """The paper's n = round(2 phi / pi), ties away from zero (model.rounded_quarter_turns)."""
+        q = self.quarter_turns
+        return (np.sign(q) * np.floor(np.abs(q) + 0.5)).astype(np.int64)
+
+
+def build_frames(trajectory) -> Frames:
+    """Merge a trajectory's samples with its contact events and derive the scene's quantities.
+
+    ``trajectory`` must come from ``simulate(scene, sample_dt=..., record_events=True)``. Rows
+    that went non-finite (a diverged run) are dropped.
+    """
+    if trajectory.samples is None:
+        raise ValueError("the trajectory has no samples: run simulate() with sample_dt")
+    samples = np.asarray(trajectory.samples, dtype=np.float64)
+    events = (np.asarray(trajectory.events, dtype=np.float64) if trajectory.events is not None
+              else np.empty((0, 9)))
+    events = events[np.isfinite(events).all(axis=1)]
+    rows = np.concatenate([events[:, [0, 3, 4, 5, 6, 7, 8]], samples])
+    is_event = np.concatenate([np.ones(len(events), bool), np.zeros(len(samples), bool)])
+    finite = np.isfinite(rows).all(axis=1)
+    rows, is_event = rows[finite], is_event[finite]
+    # sort by time, an event before a sample at the same time; keep the first row of each time
+    order = np.lexsort((~is_event, rows[:, 0]))
+    rows, is_event = rows[order], is_event[order]
+    keep = np.ones(len(rows), bool)
+    keep[1:] = rows[1:, 0] != rows[:-1, 0]
+    rows, is_event = rows[keep], is_event[keep]
+    t = rows[:, 0].copy()
+    state = rows[:, 1:].copy()
+
+    scene = trajectory.scene
+    p = model_params(scene)
+    x, y, phi, vx, vy, vphi = (column[:, None] for column in state.T)
+    c, s = np.cos(phi), np.sin(phi)
+    # the model's own formulas (its kernels in plain Python) on (N, 4) arrays
+    offsets = [python(corner_offset)(p, i, c, s) for i in range(4)]
+    dx = np.concatenate([o[0] for o in offsets], axis=1)
+    dy = np.concatenate([o[1] for o in offsets], axis=1)
+    heights = y + dy
+    corners = np.stack([x + dx, heights], axis=-1)
+
+    contact = _contact_sets(t, heights, events)
+    fx, fy = python(corner_force)(p, y, dx, dy, vx, vy, vphi)
+    forces = np.stack([np.where(contact, fx, 0.0), np.where(contact, fy, 0.0)], axis=-1)
+
+    kinetic = 0.5 * p.mass * (vx ** 2 + vy ** 2) + 0.5 * p.inertia * vphi ** 2
+    gravitational = p.mass * p.g * y
+    elastic = 0.5 * p.k * np.sum(np.where(heights < 0.0, heights ** 2, 0.0), axis=1)
+    kinetic, gravitational = kinetic[:, 0], gravitational[:, 0]
+    return Frames(t=t, state=state, is_event=is_event, contact=contact, corners=corners,
+                  heights=heights, forces=forces, kinetic=kinetic, gravitational=gravitational,
+                  elastic=elastic, events=events)
+
+
+def _contact_sets(t: np.ndarray, heights: np.ndarray, events: np.ndarray) -> np.ndarray:
+    """(N, 4) contact set at each frame time: replayed from the events (the integrator's own
+    contact set, exact at the event rows), or the penetration y_i < 0 where no events exist."""
+    from ..throw import MAX_EVENTS
+
+    if len(events) == 0 or len(events) >= MAX_EVENTS:
+        return heights < 0.0
+    contact = np.zeros(heights.shape, bool)
+    for i in range(4):
+        ev = events[events[:, 1] == i]
+        if len(ev) == 0:
+            continue
+        last = np.searchsorted(ev[:, 0], t, side="right") - 1  # last event of corner i <= t
+        contact[:, i] = (last >= 0) & (ev[np.maximum(last, 0), 2] > 0)
+    return contact
+
+
+ARROW_PEAK_DIAMETERS = 1.0  # the largest contact force of a run is drawn this many diameters long
+
+
+def force_arrows(frames: Frames, weight: float, diameter: float) -> np.ndarray:
+    """(N, 4, 2) arrows (m) for the contact forces. Impact forces exceed the coin's weight by two
+    orders of magnitude, so the length grows with log(1 + |F| / (m g)), the direction is the
+    force's own, and the largest force of the run is ``ARROW_PEAK_DIAMETERS`` diameters long:
+    the weight itself then shows as a few millimetres, an impact as centimetres."""
+    magnitude = np.hypot(frames.forces[..., 0], frames.forces[..., 1])
+    peak = float(np.max(magnitude, initial=0.0))
+    if peak <= 0.0 or weight <= 0.0:
+        return np.zeros_like(frames.forces)
+    length = ARROW_PEAK_DIAMETERS * diameter * np.log1p(magnitude / weight) / np.log1p(
+        peak / weight)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = np.where(magnitude[..., None] > 0, frames.forces / magnitude[..., None], 0.0)
+    return unit * length[..., None]
+
+
+__all__ = ["ARROW_PEAK_DIAMETERS", "Frames", "build_frames", "force_arrows"]

@@ -1,0 +1,53 @@
+"""Shared fixtures: the shipped scenes, and one call of the compiled kernel through its
+contract (ModelParams and RunSettings in, a RunResult and the final state out)."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+import pytest
+
+from coincli.enums import Method
+from coincli.integrators import integrate
+from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS, RunResult
+from coincli.jit import compiled
+from coincli.params import RunSettings, model_params
+from coincli.presets import load
+
+
+@pytest.fixture(scope="session")
+def paper():
+    return load("paper").scene
+
+
+@pytest.fixture(scope="session")
+def undamped():
+    return load("undamped").scene
+
+
+@pytest.fixture(scope="session")
+def thick():
+    return load("thick").scene
+
+
+class KernelRun(NamedTuple):
+    result: RunResult
+    final: np.ndarray
+    samples: np.ndarray
+    events: np.ndarray
+
+
+def run_kernel(scene, state, *, method: Method | str, t_end: float, dt: float = 1e-6,
+               rtol: float = 1e-7, stop_on_settle: bool = False, sample_dt: float = 0.0,
+               max_samples: int = 0, max_events: int = 0) -> KernelRun:
+    """One compiled run from ``state`` (samples and events cut to what was recorded)."""
+    settings = RunSettings(method=int(Method.parse(method)), dt=dt, rtol=rtol, t_end=t_end,
+                           stop_on_settle=stop_on_settle, sample_dt=sample_dt)
+    final = np.empty(6)
+    samples = np.empty((max_samples, SAMPLE_COLUMNS))
+    events = np.empty((max_events, EVENT_COLUMNS))
+    result = compiled(integrate)(model_params(scene), settings,
+                                 np.ascontiguousarray(state, dtype=np.float64), samples, events,
+                                 final)
+    return KernelRun(result, final, samples[:result.n_samples], events[:result.n_events])
