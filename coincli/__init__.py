@@ -10,7 +10,7 @@ The public API (see :mod:`coincli.api` and the README's "Python API"):
 Names load on first use, so ``import coincli`` (and ``coin --help``) stays cheap.
 """
 
-__version__ = "0.1.0"
+from .version import __version__
 
 _API = ("Method", "Outcome", "Scene", "Status", "SweepPlan", "SweepProgress", "SweepReport",
         "Trajectory", "basin", "basin_stats", "classify", "load_preset", "open_basin",

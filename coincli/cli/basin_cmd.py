@@ -26,9 +26,9 @@ from rich.table import Table
 from rich.text import Text
 from typer.core import TyperGroup
 
-from .. import __version__
 from ..defaults import DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES
 from ..params import ParameterError
+from ..version import __version__
 from . import app
 from .common import (
     INIT,

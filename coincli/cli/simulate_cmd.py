@@ -9,9 +9,9 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from .. import __version__
 from ..defaults import DEFAULT_LOG_EVERY
 from ..enums import Status
+from ..version import __version__
 from . import app
 from .common import (
     COpt,

@@ -6,7 +6,7 @@ import math
 
 from rich.table import Table
 
-from .. import __version__
+from ..version import __version__
 from . import app
 from .common import (
     COpt,

@@ -7,8 +7,8 @@ import json
 import math
 from pathlib import Path
 
-from .. import __version__
 from ..enums import Method
+from ..version import __version__
 
 COLOURS = {Method.SYMPLECTIC_EULER: "#d62728", Method.VERLET: "#ff7f0e", Method.RK4: "#2ca02c",
            Method.DOPRI5: "#1f77b4", Method.EVENT: "#9467bd"}

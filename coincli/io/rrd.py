@@ -28,6 +28,7 @@ import numpy as np
 
 from ..enums import Status
 from ..integrators.registry import setting_text
+from ..version import __version__
 from .frames import ARROW_PEAK_DIAMETERS, Frames, build_frames, force_arrows
 from .paths import check_connect_url, check_rrd_path
 
@@ -212,8 +213,6 @@ def write_recording(trajectory, *, rrd: str | os.PathLike | None = None, spawn: 
 
 
 def _log_static(rec, rr, trajectory, frames: Frames, log_every: float | None) -> None:
-    from .. import __version__
-
     scene = trajectory.scene
     coin = scene.coin
     r_d, r_t = coin.r_d * MM, coin.r_t * MM
@@ -270,8 +269,6 @@ def _log_static(rec, rr, trajectory, frames: Frames, log_every: float | None) ->
 
 
 def _flat_parameters(trajectory, log_every: float | None) -> dict:
-    from .. import __version__
-
     params: dict = {"version": __version__}
     for section, values in trajectory.scene.to_dict().items():
         if isinstance(values, dict):
@@ -288,8 +285,6 @@ def _flat_parameters(trajectory, log_every: float | None) -> dict:
 
 
 def _info_markdown(trajectory, frames: Frames, log_every: float | None) -> str:
-    from .. import __version__
-
     scene = trajectory.scene
     integ = scene.integration
     lines = [f"# coin simulate (coincli {__version__})", ""]

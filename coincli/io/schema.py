@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import math
 
-from .. import __version__
 from ..enums import Status
 from ..grid import UNCERTAIN_NOT_COMPUTED, Grid, SweepSpec, certify_attrs, method_attrs
 from ..integrators import NO_LABEL
 from ..integrators.registry import MethodInfo
 from ..params import Scene
+from ..version import __version__
 
 FORMAT = 1
 COMPARED_ATTRS = ("version", "parameters", "sweep", "method", "certify")

@@ -1,0 +1,130 @@
+"""The public API: what a notebook calls, and the same numbers the command line gives."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import coincli
+from coincli.cli import app
+from coincli.enums import Method, Status
+from coincli.params import ParameterError
+
+SMALL = dict(vy=(0.3, 1.0), vphi=(-15.0, 15.0), res=16)
+
+
+def test_basin_in_memory_equals_coin_basin_cell_for_cell(tmp_path):
+    ds = coincli.basin(coincli.load_preset("paper"), **SMALL)
+    store = tmp_path / "cli.zarr"
+    result = CliRunner().invoke(app, ["basin", str(store), "--vy", "0.3:1", "--vphi", "-15:15",
+                                      "--res", "16", "-q"])
+    assert result.exit_code == 0, result.output
+    cli = coincli.open_basin(store)
+    for name in ("quarter_turns", "status", "settle_time", "steps"):
+        np.testing.assert_array_equal(ds[name].values, cli[name].values, err_msg=name)
+    assert ds.sizes["vy"] == 16 and ds.sizes["vphi"] == 16
+    np.testing.assert_array_equal(ds["vy"].values, np.linspace(0.3, 1.0, 16))
+    for key in ("parameters", "sweep", "method", "version"):
+        assert ds.attrs[key] == cli.attrs[key]
+    assert ds["quarter_turns"].dtype == np.int16 and (ds["done"] == 1).all()
+
+
+def test_the_issue_one_liner_prints_a_dataset():
+    code = ("import coincli; print(coincli.basin(coincli.load_preset('paper'), vy=(0.3, 1.0), "
+            "vphi=(-15.0, 15.0), res=16))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.startswith("<xarray.Dataset>") and "quarter_turns" in out
+
+
+def test_basin_into_a_store_reports_progress_and_resumes(tmp_path):
+    scene = coincli.load_preset("paper")
+    seen = []
+    ds = coincli.basin(scene, store=tmp_path / "b.zarr", chunk=8, progress=seen.append, **SMALL)
+    assert [p.tiles_done for p in seen] == [1, 2, 3, 4]
+    assert seen[-1].cells_done == seen[-1].cells_todo == 256
+    assert ds.attrs["store"] == str(tmp_path / "b.zarr")
+    again = []
+    coincli.basin(scene, store=tmp_path / "b.zarr", chunk=8, progress=again.append, **SMALL)
+    assert again == []  # everything was done: nothing computed twice
+    with pytest.raises(ParameterError, match="different sweep"):
+        coincli.basin(scene.with_overrides(k=5000.0), store=tmp_path / "b.zarr", chunk=8,
+                      **SMALL)
+
+
+def test_stop_event_interrupts_and_the_store_resumes_to_the_same_map(tmp_path):
+    scene = coincli.load_preset("paper")
+    plan = coincli.plan_sweep(scene, chunk=4, **SMALL)
+    stop = threading.Event()
+    stop.set()  # asked to stop from the first tile on
+    report = coincli.sweep(plan, tmp_path / "s.zarr", threads=1, stop=stop)
+    assert report.interrupted and not report.complete and report.tiles_done >= 1
+    report = coincli.sweep(plan, tmp_path / "s.zarr")
+    assert report.complete and not report.interrupted
+    whole = coincli.basin(scene, chunk=4, **SMALL)
+    np.testing.assert_array_equal(coincli.open_basin(tmp_path / "s.zarr")["quarter_turns"],
+                                  whole["quarter_turns"])
+
+
+def test_simulate_and_classify_give_named_results():
+    scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
+    run = coincli.simulate(scene)
+    assert run.quarter_turns == 6 and run.pose == "lying" and run.status is Status.SETTLED
+    assert run.settle_time == pytest.approx(0.3622, abs=1e-4)
+    assert run.energy_final < run.e_crit < run.energy_initial
+    outcome = coincli.classify(scene)
+    assert outcome == (6, Status.SETTLED, run.settle_time) and outcome.pose == "lying"
+    recorded = coincli.simulate(scene, sample_dt=1e-3, record_events=True)
+    assert recorded.samples.shape[1] == 7 and recorded.events.shape[1] == 9
+    assert recorded.quarter_turns == run.quarter_turns
+
+
+def test_stats_and_render_take_a_dataset_or_a_store(tmp_path):
+    scene = coincli.load_preset("paper")
+    ds = coincli.basin(scene, store=tmp_path / "b.zarr", **SMALL)
+    stats = coincli.basin_stats(ds)
+    assert stats == {**coincli.basin_stats(tmp_path / "b.zarr"), "cost": stats["cost"]}
+    assert stats["cells"] == stats["labelled"] == 256
+    assert sum(row["count"] for row in stats["outcomes"]) == 256
+    out = coincli.render_basin(ds, tmp_path / "map.png")
+    assert out.stat().st_size > 10_000
+    # a store opened by xarray itself (quarter_turns masked to float) works too
+    import xarray as xr
+
+    raw = xr.open_zarr(tmp_path / "b.zarr")
+    assert coincli.basin_stats(raw)["outcomes"] == stats["outcomes"]
+
+
+def test_keyword_options_are_checked_in_one_line():
+    scene = coincli.load_preset("paper")
+    with pytest.raises(ParameterError, match="exactly two"):
+        coincli.basin(scene, vx=(0.0, 1.0), res=4)
+    with pytest.raises(ParameterError, match="empty range"):
+        coincli.basin(scene, vy=(2.0, 1.0), res=4)
+    with pytest.raises(ParameterError, match="unknown method"):
+        scene.with_overrides(method="nope")
+    with pytest.raises(ParameterError, match="store"):
+        coincli.basin(scene, workers=2, res=4)
+    assert scene.with_overrides(method="rk4").integration.method is Method.RK4
+
+
+def test_stability_report():
+    report = coincli.stability(coincli.load_preset("paper"))
+    assert report.k_cr == pytest.approx(308.96, abs=0.01)
+    assert report.elastic.ratio == pytest.approx(187.2, abs=0.05)
+
+
+def test_import_is_light_and_leaves_numba_alone():
+    """`import coincli` loads neither numpy nor numba, and using the kernels does not change
+    numba's cache directory for other code in the same process."""
+    code = ("import sys, coincli; assert 'numba' not in sys.modules and 'numpy' not in "
+            "sys.modules, sorted(m for m in sys.modules if m.startswith(('numba', 'numpy')))\n"
+            "import numba.core.config as c; before = c.CACHE_DIR\n"
+            "coincli.classify(coincli.load_preset('paper').with_overrides(vy=0.5))\n"
+            "assert c.CACHE_DIR == before, (before, c.CACHE_DIR)")
+    subprocess.run([sys.executable, "-c", code], check=True)
