@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from coincli import model
-from coincli.params import param_array
+from coincli import model, simulate
+from coincli.enums import Status
+from coincli.params import model_params
 from coincli.presets import load
-from coincli.simulate import simulate
-from coincli.stability import analyse
+from coincli.statics import analyse
 
 G = 9.81
 R_D, R_T = 0.01, 0.001  # m, half diameter and half thickness of the paper's coin
@@ -105,7 +105,7 @@ def test_printed_eq3_is_not_a_rigid_rotation():
 
 def test_implemented_corners_are_a_rigid_rotation():
     """The kernel's corner heights are y + (R(phi) p_i)_y, and |R(phi) p_i| = r."""
-    p = param_array(load("paper").scene)
+    p = model_params(load("paper").scene)
     out = np.empty(4)
     for phi in np.linspace(-7.0, 7.0, 57):
         model.corner_heights_at(p, 0.003, phi, out)
@@ -164,7 +164,7 @@ def test_energy_balance_of_the_implemented_forces():
     """dE/dt = -c sum |v_i|^2 over the penetrating corners, with the kernel's accelerations:
     the contact law, the moment of eq. (6) and the kinematics are consistent."""
     scene = load("paper").scene
-    p = param_array(scene)
+    p = model_params(scene)
     rng = np.random.default_rng(11)
     checked = set()
     for _ in range(400):
@@ -312,7 +312,7 @@ def independent_well(phi):
 
 
 def test_wells_tile_the_angle_axis_and_match_well_index():
-    p = param_array(load("paper").scene)
+    p = model_params(load("paper").scene)
     assert math.degrees(PHI_CR) == pytest.approx(84.2894, abs=1e-4)
     assert math.degrees(math.pi / 2 - PHI_CR) == pytest.approx(5.7106, abs=1e-4)
     rng = np.random.default_rng(5)
@@ -330,7 +330,7 @@ def test_wells_tile_the_angle_axis_and_match_well_index():
 
 
 def test_well_and_rounding_differ_between_45_degrees_and_phi_cr():
-    p = param_array(load("paper").scene)
+    p = model_params(load("paper").scene)
     for deg in (46.0, 60.0, 84.0, -50.0, 180.0 + 70.0):
         phi = math.radians(deg)
         j_round = model.rounded_quarter_turns(phi)
@@ -399,7 +399,7 @@ def test_standing_coin_between_rocking_limit_and_half_k_cr_stays_standing():
     run = scene.with_overrides(y0=scene.coin.r_d - w / (2 * k), phi0=math.pi / 2, vphi=0.01,
                                t_end=5.0, stop_on_settle=False, rtol=1e-8)
     tr = simulate(run, sample_dt=0.01)
-    assert tr.status == "unsettled" and tr.energy_final > scene.e_crit
+    assert tr.status == Status.UNSETTLED and tr.energy_final > scene.e_crit
     assert np.all(np.abs(np.degrees(tr.samples[:, 3]) - 90.0) < 0.6)
     assert abs(math.degrees(tr.final_state[2]) - 90.0) < 0.05
 
