@@ -5,6 +5,7 @@ from __future__ import annotations
 import subprocess
 import sys
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -128,3 +129,12 @@ def test_import_is_light_and_leaves_numba_alone():
             "coincli.classify(coincli.load_preset('paper').with_overrides(vy=0.5))\n"
             "assert c.CACHE_DIR == before, (before, c.CACHE_DIR)")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_worked_example_runs(tmp_path):
+    """docs/example.py, the README's worked example, runs as it is."""
+    example = Path(__file__).resolve().parent.parent / "docs" / "example.py"
+    out = subprocess.run([sys.executable, str(example)], cwd=tmp_path, capture_output=True,
+                         text=True, check=True).stdout
+    assert "fig.-2 throw: n = 6 (lying)" in out and "<xarray.Dataset>" in out
+    assert (tmp_path / "example-basin.png").stat().st_size > 10_000
