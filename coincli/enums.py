@@ -17,6 +17,8 @@ class Status(IntEnum):
     SETTLED = 0
     UNSETTLED = 1
     NONFINITE = 2
+    BUDGET = 3
+    INTERRUPTED = 4
     NOT_COMPUTED = 255
 
     @property
@@ -39,12 +41,16 @@ _STATUS_LABELS = {
     Status.SETTLED: "settled",
     Status.UNSETTLED: "unsettled",
     Status.NONFINITE: "non-finite",
+    Status.BUDGET: "budget",
+    Status.INTERRUPTED: "interrupted",
     Status.NOT_COMPUTED: "not computed",
 }
 _STATUS_MESSAGES = {
     Status.SETTLED: "the energy fell below E_crit: the count of quarter turns is final",
     Status.UNSETTLED: "the energy is still above E_crit at t_end: the count may still change",
     Status.NONFINITE: "the run went non-finite: no outcome",
+    Status.BUDGET: "the run used up its step budget (max_steps) before t_end: no outcome",
+    Status.INTERRUPTED: "the run was interrupted: no outcome",
     Status.NOT_COMPUTED: "not computed",
 }
 

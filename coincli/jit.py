@@ -30,18 +30,26 @@ _PACKAGE = Path(__file__).resolve().parent
 # Every module that defines kernels: all are imported before numba sees any of them, so that a
 # kernel's callees are dispatchers whatever was imported first.
 KERNEL_MODULES = ("coincli.model", "coincli.integrators.common", "coincli.integrators.fixed",
+                  "coincli.integrators.dopri", "coincli.integrators.flight",
                   "coincli.integrators.adaptive", "coincli.integrators.batch")
 _KERNELS: list = []  # the registered Python functions, in definition order
+_INLINE: set = set()  # kernels numba inlines into their callers (small helpers on hot paths)
 _DISPATCHERS: dict = {}  # Python function -> numba dispatcher (after activation)
 _LOCK = threading.Lock()
 
 
-def kernel(fn):
-    """Register ``fn`` as a kernel (see the module docstring); returns it unchanged."""
+def kernel(fn=None, *, inline: bool = False):
+    """Register ``fn`` as a kernel (see the module docstring); returns it unchanged.
+    ``@kernel(inline=True)`` marks a small helper that numba inlines into every caller (no
+    call, no array passing: the hot loops stay one function in the compiled code)."""
+    if fn is None:
+        return lambda f: kernel(f, inline=inline)
     if _DISPATCHERS:
         raise RuntimeError(f"kernel {fn.__qualname__} defined after numba was activated: add its "
                            "module to coincli.jit.KERNEL_MODULES")
     _KERNELS.append(fn)
+    if inline:
+        _INLINE.add(fn)
     return fn
 
 
@@ -92,7 +100,9 @@ def _activate() -> None:
             importlib.import_module(module)
 
         _install_locator(numba)
-        dispatchers = {fn: numba.njit(cache=True, nogil=True)(fn) for fn in _KERNELS}
+        dispatchers = {fn: numba.njit(cache=True, nogil=True,
+                                      inline="always" if fn in _INLINE else "never")(fn)
+                       for fn in _KERNELS}
         # rebind every name in the package that refers to a kernel, so that numba finds
         # dispatchers when it resolves a kernel's callees and Python callers run compiled code
         for name, module in list(sys.modules.items()):

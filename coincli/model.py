@@ -1,13 +1,14 @@
 """The plane coin model: rigid-body kinematics of the four corners, the Winkler + viscous contact
 force on each penetrating corner, the resultant of eq. (6), the total energy, and the count of
-quarter turns.
+quarter turns (docs/model.md derives each).
 
-All kernels (:func:`coincli.jit.kernel`) work on plain floats, float64 arrays and the named
-tuple of model parameters ``p`` (:class:`coincli.params.ModelParams`).
+All kernels (:func:`coincli.jit.kernel`) work on plain floats and the named tuple of model
+parameters ``p`` (:class:`coincli.params.ModelParams`). The geometry and the force law are
+written once, here, as small scalar helpers that numba inlines into the integrators and that
+also apply, as plain Python, to numpy arrays (the recordings use them so).
 
 Corner i sits at body coordinates p_i = (SX[i] r_d, SY[i] r_t); its offset from the centroid is
 d_i = R(phi) p_i and its velocity v_i = v + vphi z x d_i = (vx - vphi d_yi, vy + vphi d_xi).
-(Eqs. (3)-(4) as printed are not a rigid rotation; see docs/model.md.)
 """
 
 from __future__ import annotations
@@ -20,27 +21,49 @@ from .jit import kernel
 # 3 = (+r_d, +r_t). With phi = 0 corners 0 and 1 are the lower ones.
 SX = (1.0, -1.0, -1.0, 1.0)
 SY = (-1.0, -1.0, 1.0, 1.0)
-N_CORNERS = 4
 
-@kernel
-def corner_heights_at(p, y, phi, out):
-    """Heights y_i of the four corners (negative = penetrating) written into out[0:4]."""
-    c = math.cos(phi)
-    s = math.sin(phi)
-    for i in range(4):
-        out[i] = y + SX[i] * p.r_d * s + SY[i] * p.r_t * c
+# Taylor coefficients of cos and sin for a small turn (see rotate)
+_C2, _C4, _C6, _C8, _C10, _C12 = (1.0 / 2, 1.0 / 24, 1.0 / 720, 1.0 / 40320, 1.0 / 3628800,
+                                  1.0 / 479001600)
+_S3, _S5, _S7, _S9, _S11, _S13 = (1.0 / 6, 1.0 / 120, 1.0 / 5040, 1.0 / 362880, 1.0 / 39916800,
+                                  1.0 / 6227020800)
+TINY_TURN = 0.03  # rad: below it the series to d^6 and d^7 is exact to rounding (next term 2e-17)
+SMALL_TURN = 0.3  # rad: below it the series to d^12 and d^13 is (next term 2e-21)
 
 
-@kernel
+@kernel(inline=True)
+def rotate(c, s, d):
+    """(cos(phi + d), sin(phi + d)) from c = cos phi, s = sin phi: a rotation by the small turn
+    d, its cosine and sine from their Taylor series, evaluated in parallel pieces (Estrin)
+    rather than one long chain, since the integrator waits for the result. A few times cheaper
+    than the library's cos and sin, and as exact to rounding."""
+    a = abs(d)
+    d2 = d * d
+    d4 = d2 * d2
+    if a < TINY_TURN:
+        cd = (1.0 - d2 * _C2) + d4 * (_C4 - d2 * _C6)
+        sd = d * ((1.0 - d2 * _S3) + d4 * (_S5 - d2 * _S7))
+    elif a < SMALL_TURN:
+        d8 = d4 * d4
+        cd = ((1.0 - d2 * _C2) + d4 * (_C4 - d2 * _C6)
+              + d8 * ((_C8 - d2 * _C10) + d4 * _C12))
+        sd = d * ((1.0 - d2 * _S3) + d4 * (_S5 - d2 * _S7)
+                  + d8 * ((_S9 - d2 * _S11) + d4 * _S13))
+    else:
+        cd = math.cos(d)
+        sd = math.sin(d)
+    return c * cd - s * sd, s * cd + c * sd
+
+
+@kernel(inline=True)
 def corner_offset(p, i, c, s):
-    """Offset d_i = R(phi) p_i of corner i from the centroid, given c = cos phi, s = sin phi
-    (plain Python on numpy arrays as well: see coincli.jit.python)."""
+    """Offset d_i = R(phi) p_i of corner i from the centroid, given c = cos phi, s = sin phi."""
     px = SX[i] * p.r_d
     py = SY[i] * p.r_t
     return px * c - py * s, px * s + py * c
 
 
-@kernel
+@kernel(inline=True)
 def corner_force(p, y, dx, dy, vx, vy, vphi):
     """Contact force (F_x, F_y) on a corner in contact at offset (dx, dy) (eqs. 1-2): the
     Winkler spring on its height y + dy and the damper on its velocity (vx - vphi dy,
@@ -48,62 +71,85 @@ def corner_force(p, y, dx, dy, vx, vy, vphi):
     return -p.c * (vx - vphi * dy), -p.k * (y + dy) - p.c * (vy + vphi * dx)
 
 
-@kernel
-def contact_mask(p, y, phi):
-    """Bit mask of the corners below the surface (bit i set = corner i penetrates)."""
-    c = math.cos(phi)
-    s = math.sin(phi)
+@kernel(inline=True)
+def corner_heights(p, y, c, s):
+    """Heights y_i = y + d_yi of the four corners (negative = penetrating)."""
+    return (y + corner_offset(p, 0, c, s)[1], y + corner_offset(p, 1, c, s)[1],
+            y + corner_offset(p, 2, c, s)[1], y + corner_offset(p, 3, c, s)[1])
+
+
+@kernel(inline=True)
+def below(heights):
+    """Bit mask of the corners whose height is negative (bit i set = corner i penetrates)."""
     mask = 0
     for i in range(4):
-        if y + SX[i] * p.r_d * s + SY[i] * p.r_t * c < 0.0:
+        if heights[i] < 0.0:
             mask |= 1 << i
     return mask
 
 
-@kernel
-def accelerations(p, x, y, phi, vx, vy, vphi, mask):
-    """(a_x, a_y, a_phi) with the contact force acting on the corners whose bit is set in mask.
-
-    Each contact corner carries F = (-c v_xi, -k y_i - c v_yi) (eqs. 1-2); the moment is
-    M = sum(d_xi F_yi - d_yi F_xi) (eq. 6).
-    """
-    m = p.mass
+@kernel(inline=True)
+def contact_accelerations(p, mode, y, vx, vy, vphi, c, s):
+    """(a_x, a_y, a_phi) with the contact force acting on the corners whose bit is set in
+    ``mode`` (whatever their height: the force law extends smoothly beyond the surface), and
+    gravity. The moment is M = sum(d_xi F_yi - d_yi F_xi) (eq. 6)."""
     fx = 0.0
-    fy = -m * p.g
+    fy = 0.0
     moment = 0.0
-    if mask != 0:
-        c = math.cos(phi)
-        s = math.sin(phi)
+    if mode != 0:
         for i in range(4):
-            if mask & (1 << i):
+            if mode & (1 << i):
                 dx, dy = corner_offset(p, i, c, s)
                 fxi, fyi = corner_force(p, y, dx, dy, vx, vy, vphi)
                 fx += fxi
                 fy += fyi
                 moment += dx * fyi - dy * fxi
-    return fx / m, fy / m, moment / p.inertia
+    return fx * p.inv_mass, fy * p.inv_mass - p.g, moment * p.inv_inertia
+
+
+@kernel(inline=True)
+def elastic_energy(p, heights):
+    """sum k y_i^2 / 2 over the penetrating corners."""
+    total = 0.0
+    for i in range(4):
+        if heights[i] < 0.0:
+            total += heights[i] * heights[i]
+    return 0.5 * p.k * total
+
+
+@kernel(inline=True)
+def energy_with_heights(p, y, vx, vy, vphi, heights):
+    """Total energy, the corner heights known (kinetic + m g y + elastic)."""
+    kinetic = 0.5 * p.mass * (vx * vx + vy * vy) + 0.5 * p.inertia * vphi * vphi
+    return kinetic + p.mass * p.g * y + elastic_energy(p, heights)
+
+
+@kernel
+def contact_mask(p, y, phi):
+    """Bit mask of the corners below the surface (bit i set = corner i penetrates)."""
+    return below(corner_heights(p, y, math.cos(phi), math.sin(phi)))
+
+
+@kernel
+def accelerations(p, x, y, phi, vx, vy, vphi, mask):
+    """(a_x, a_y, a_phi) with the contact force on the corners whose bit is set in mask."""
+    return contact_accelerations(p, mask, y, vx, vy, vphi, math.cos(phi), math.sin(phi))
 
 
 @kernel
 def accelerations_auto(p, x, y, phi, vx, vy, vphi):
     """Accelerations with the contact set taken from the current penetration (y_i < 0)."""
-    return accelerations(p, x, y, phi, vx, vy, vphi, contact_mask(p, y, phi))
+    c = math.cos(phi)
+    s = math.sin(phi)
+    return contact_accelerations(p, below(corner_heights(p, y, c, s)), y, vx, vy, vphi, c, s)
 
 
 @kernel
 def energies_at(p, y, phi, vx, vy, vphi):
     """(kinetic, gravitational m g y, elastic sum k y_i^2 / 2 over penetrating corners)."""
-    m = p.mass
-    kinetic = 0.5 * m * (vx * vx + vy * vy) + 0.5 * p.inertia * vphi * vphi
-    gravity = m * p.g * y
-    c = math.cos(phi)
-    s = math.sin(phi)
-    elastic = 0.0
-    for i in range(4):
-        yi = y + SX[i] * p.r_d * s + SY[i] * p.r_t * c
-        if yi < 0.0:
-            elastic += 0.5 * p.k * yi * yi
-    return kinetic, gravity, elastic
+    kinetic = 0.5 * p.mass * (vx * vx + vy * vy) + 0.5 * p.inertia * vphi * vphi
+    heights = corner_heights(p, y, math.cos(phi), math.sin(phi))
+    return kinetic, p.mass * p.g * y, elastic_energy(p, heights)
 
 
 @kernel
@@ -113,8 +159,8 @@ def energies(p, state):
 
 @kernel
 def total_energy_at(p, y, phi, vx, vy, vphi):
-    kinetic, gravity, elastic = energies_at(p, y, phi, vx, vy, vphi)
-    return kinetic + gravity + elastic
+    heights = corner_heights(p, y, math.cos(phi), math.sin(phi))
+    return energy_with_heights(p, y, vx, vy, vphi, heights)
 
 
 @kernel

@@ -79,6 +79,10 @@ class Integration:
     ``dt`` is the step of a fixed-step method (or the initial step of an adaptive one), ``rtol``
     the relative tolerance of an adaptive one. ``stop_on_settle`` stops a run as soon as its
     outcome is certain (total energy below E_crit); the paper's own runs always last ``t_end``.
+    ``max_steps`` bounds the work of one run (like diffrax's ``max_steps``): a run that needs
+    more ends with status ``budget``, not with a label. By default an adaptive run may take
+    ADAPTIVE_MAX_STEPS steps (a typical throw takes under a hundred), a fixed-step run the
+    t_end / dt steps it asks for.
     """
 
     method: Method = Method.EVENT
@@ -86,6 +90,7 @@ class Integration:
     rtol: float = 1.0e-6
     t_end: float = 2.0
     stop_on_settle: bool = True
+    max_steps: int | None = None  # the step budget of one run; None: the method's default
 
     def __post_init__(self):
         # presets, stores and options name the method; the scene holds the member
@@ -214,6 +219,10 @@ def validate(scene: Scene) -> Scene:
         raise ParameterError(f"rtol must be between 1e-14 and 0.1, got {i.rtol:g}")
     if i.t_end / i.dt > 1e12:
         raise ParameterError(f"--t-end / --dt is {i.t_end / i.dt:.3g} steps; at most 1e12")
+    if i.max_steps is not None and (isinstance(i.max_steps, bool)
+                                    or not isinstance(i.max_steps, int) or i.max_steps < 1):
+        raise ParameterError(f"max_steps must be a whole number of at least 1, got "
+                             f"{i.max_steps!r}")
     if not isinstance(i.stop_on_settle, bool):
         raise ParameterError(f"stop_on_settle must be true or false, got {i.stop_on_settle!r}")
     return scene
@@ -233,14 +242,19 @@ class ModelParams(NamedTuple):
     r: float  # m, half diagonal
     e_crit: float  # J, below it the count of quarter turns is final
     phi_cr: float  # rad, the diagonal is vertical
+    inv_mass: float  # 1/kg (a product is cheaper than a quotient in every step)
+    inv_inertia: float  # 1/(kg m^2)
+    omega: float  # rad/s, the stiffest contact mode: rocking on two corners, sqrt(2 k r_d^2 / I)
 
 
 def model_params(scene: Scene) -> ModelParams:
     coin = scene.coin
+    k = float(scene.foundation.k)
     return ModelParams(mass=float(coin.mass), inertia=float(coin.inertia), r_d=float(coin.r_d),
-                       r_t=float(coin.r_t), k=float(scene.foundation.k),
-                       c=float(scene.foundation.c), g=float(scene.g), r=float(coin.r),
-                       e_crit=float(scene.e_crit), phi_cr=float(coin.phi_cr))
+                       r_t=float(coin.r_t), k=k, c=float(scene.foundation.c), g=float(scene.g),
+                       r=float(coin.r), e_crit=float(scene.e_crit), phi_cr=float(coin.phi_cr),
+                       inv_mass=1.0 / coin.mass, inv_inertia=1.0 / coin.inertia,
+                       omega=math.sqrt(2.0 * k * coin.r_d ** 2 / coin.inertia))
 
 
 class RunSettings(NamedTuple):
@@ -251,14 +265,27 @@ class RunSettings(NamedTuple):
     rtol: float  # relative tolerance of an adaptive method
     t_end: float  # s
     stop_on_settle: bool  # stop as soon as the outcome is certain
+    max_steps: int  # the step budget (closed-form flights count their iterations)
     sample_dt: float  # s between recorded samples (0: record none)
+
+
+ADAPTIVE_MAX_STEPS = 1_000_000
+
+
+def step_budget(integration: Integration) -> int:
+    """The run's step budget: ``max_steps`` if given, else the method's default."""
+    if integration.max_steps is not None:
+        return int(integration.max_steps)
+    if integration.method in (Method.DOPRI5, Method.EVENT):
+        return ADAPTIVE_MAX_STEPS
+    return int(math.ceil(integration.t_end / integration.dt - 1e-9))
 
 
 def run_settings(integration: Integration, sample_dt: float = 0.0) -> RunSettings:
     return RunSettings(method=int(integration.method), dt=float(integration.dt),
                        rtol=float(integration.rtol), t_end=float(integration.t_end),
                        stop_on_settle=bool(integration.stop_on_settle),
-                       sample_dt=float(sample_dt))
+                       max_steps=step_budget(integration), sample_dt=float(sample_dt))
 
 
 def state_array(scene: Scene):

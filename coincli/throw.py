@@ -15,7 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .enums import Status
-from .integrators import check_step, integrate, warm_up
+from .integrators import check_step, integrate, new_control, warm_up
 from .integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
 from .jit import compiled
 from .model import energies, rounded_quarter_turns
@@ -120,7 +120,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     final = np.empty(6)
     warm_up(p, run_settings(integ), state0)  # before the clock starts
     start = time.perf_counter()
-    result = compiled(integrate)(p, settings, state0, samples, events, final)
+    result = compiled(integrate)(p, settings, state0, samples, events, final, new_control())
     wall = time.perf_counter() - start
     status = Status(result.status)
     t = result.t

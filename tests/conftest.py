@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from coincli.enums import Method
-from coincli.integrators import integrate
+from coincli.integrators import integrate, new_control
 from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS, RunResult
 from coincli.jit import compiled
 from coincli.params import RunSettings, model_params
@@ -43,11 +43,11 @@ def run_kernel(scene, state, *, method: Method | str, t_end: float, dt: float = 
                max_samples: int = 0, max_events: int = 0) -> KernelRun:
     """One compiled run from ``state`` (samples and events cut to what was recorded)."""
     settings = RunSettings(method=int(Method.parse(method)), dt=dt, rtol=rtol, t_end=t_end,
-                           stop_on_settle=stop_on_settle, sample_dt=sample_dt)
+                           stop_on_settle=stop_on_settle, max_steps=10**9, sample_dt=sample_dt)
     final = np.empty(6)
     samples = np.empty((max_samples, SAMPLE_COLUMNS))
     events = np.empty((max_events, EVENT_COLUMNS))
     result = compiled(integrate)(model_params(scene), settings,
                                  np.ascontiguousarray(state, dtype=np.float64), samples, events,
-                                 final)
+                                 final, new_control())
     return KernelRun(result, final, samples[:result.n_samples], events[:result.n_events])

@@ -22,36 +22,38 @@ NO_LABEL = NO_WELL  # quarter_turns of a cell without a count (int16 fill of the
 
 
 @kernel
-def integrate(p, settings, state, samples, events, final):
+def integrate(p, settings, state, samples, events, final, control):
     """Run one trajectory from ``state`` with ``settings`` (a RunSettings); returns a RunResult
-    and writes the final state into ``final``."""
+    and writes the final state into ``final``. Setting ``control[0]`` (from another thread)
+    stops it with status INTERRUPTED."""
     if settings.method == Method.DOPRI5 or settings.method == Method.EVENT:
-        return integrate_adaptive(p, settings, state, samples, events, final)
-    return integrate_fixed(p, settings, state, samples, events, final)
+        return integrate_adaptive(p, settings, state, samples, events, final, control)
+    return integrate_fixed(p, settings, state, samples, events, final, control)
 
 
 @kernel
 def outcome_label(status, n_well, final_phi):
     """The count of quarter turns a run decides: the well that holds the coin once it has
-    settled, the paper's round(2 phi / pi) at the end time otherwise (flagged unsettled by the
-    status), nothing for a non-finite run."""
-    if status == Status.NONFINITE:
-        return NO_LABEL
+    settled, the paper's round(2 phi / pi) at t_end if it has not (flagged unsettled by the
+    status), nothing for a run that went non-finite, used up its budget or was interrupted."""
     if status == Status.SETTLED:
         return n_well
-    return rounded_quarter_turns(final_phi)
+    if status == Status.UNSETTLED:
+        return rounded_quarter_turns(final_phi)
+    return NO_LABEL
 
 
 @kernel
-def run_batch(p, settings, states, quarter_turns, status, settle_time, steps):
+def run_batch(p, settings, states, quarter_turns, status, settle_time, steps, control):
     """Integrate every row of ``states`` (N x 6) and write the outcome of each into the output
     arrays (quarter_turns int16, status uint8, settle_time float32, steps int64). Releases the
-    GIL, so threads run batches on all cores."""
+    GIL, so threads run batches on all cores; ``control[0]`` set stops every row still to run
+    (status INTERRUPTED)."""
     no_samples = np.empty((0, SAMPLE_COLUMNS))
     no_events = np.empty((0, EVENT_COLUMNS))
     final = np.empty(6)
     for row in range(states.shape[0]):
-        result = integrate(p, settings, states[row], no_samples, no_events, final)
+        result = integrate(p, settings, states[row], no_samples, no_events, final, control)
         quarter_turns[row] = outcome_label(result.status, result.n_well, final[2])
         status[row] = result.status
         settle_time[row] = result.settle_time
@@ -67,12 +69,18 @@ class Labels(NamedTuple):
     steps: np.ndarray  # int64
 
 
-def label_states(p, settings, states) -> Labels:
+def new_control():
+    """A control flag for kernels: set element 0 to 1 to stop them (from any thread)."""
+    return np.zeros(1, np.int64)
+
+
+def label_states(p, settings, states, control=None) -> Labels:
     """Run every row of ``states`` (compiled; releases the GIL)."""
     n = states.shape[0]
     out = Labels(np.empty(n, np.int16), np.empty(n, np.uint8), np.empty(n, np.float32),
                  np.empty(n, np.int64))
-    compiled(run_batch)(p, settings, np.ascontiguousarray(states, dtype=np.float64), *out)
+    compiled(run_batch)(p, settings, np.ascontiguousarray(states, dtype=np.float64), *out,
+                        new_control() if control is None else control)
     return out
 
 
@@ -81,7 +89,7 @@ def final_state(p, settings, state) -> tuple[np.ndarray, Status]:
     final = np.empty(6)
     result = compiled(integrate)(p, settings, np.ascontiguousarray(state, dtype=np.float64),
                                  np.empty((0, SAMPLE_COLUMNS)), np.empty((0, EVENT_COLUMNS)),
-                                 final)
+                                 final, new_control())
     return final, Status(result.status)
 
 
@@ -93,5 +101,5 @@ def warm_up(p, settings, state) -> None:
     label_states(p, short._replace(stop_on_settle=True), np.array([state], dtype=np.float64))
 
 
-__all__ = ["Labels", "NO_LABEL", "final_state", "integrate", "label_states", "outcome_label",
-           "run_batch", "warm_up"]
+__all__ = ["Labels", "NO_LABEL", "final_state", "integrate", "label_states", "new_control",
+           "outcome_label", "run_batch", "warm_up"]

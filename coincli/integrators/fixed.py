@@ -23,6 +23,8 @@ from ..model import (
 )
 from .common import NO_WELL, RunResult, is_finite_state, record_events, record_sample, store_state
 
+CONTROL_EVERY = 4096  # steps between looks at the control flag (a few microseconds apart)
+
 
 @kernel
 def step_symplectic_euler(p, h, x, y, phi, vx, vy, vphi):
@@ -141,11 +143,13 @@ def fixed_step(method, p, h, x, y, phi, vx, vy, vphi):
 
 
 @kernel
-def integrate_fixed(p, settings, state, samples, events, final):
+def integrate_fixed(p, settings, state, samples, events, final, control):
     """Integrate from ``state`` with the fixed step ``settings.dt`` until ``settings.t_end`` (or
     until settled, if ``settings.stop_on_settle``). Writes the final state into ``final``; fills
     ``samples`` (one row every ``settings.sample_dt`` of simulated time, first and last state
-    included) and ``events`` (contact onsets and lift-offs) while they have room."""
+    included) and ``events`` (contact onsets and lift-offs) while they have room. Stops with
+    status BUDGET after ``settings.max_steps`` steps, INTERRUPTED when ``control[0]`` is set
+    (looked at every CONTROL_EVERY steps)."""
     method = settings.method
     dt = settings.dt
     t_end = settings.t_end
@@ -154,6 +158,7 @@ def integrate_fixed(p, settings, state, samples, events, final):
     x, y, phi, vx, vy, vphi = state[0], state[1], state[2], state[3], state[4], state[5]
     e_crit = p.e_crit
     n_total = int(math.ceil(t_end / dt - 1e-9))
+    n_run = min(n_total, settings.max_steps)
     record = samples.shape[0] > 0 and sample_dt > 0.0
     track_events = events.shape[0] > 0
     n_samples = 0
@@ -174,7 +179,11 @@ def integrate_fixed(p, settings, state, samples, events, final):
         settle_time = 0.0
         n_well = well_index(p, phi)
     if not (status == Status.SETTLED and stop_on_settle):
-        for steps in range(1, n_total + 1):
+        for steps in range(1, n_run + 1):
+            if steps % CONTROL_EVERY == 0 and control[0] != 0:
+                status = Status.INTERRUPTED
+                steps -= 1
+                break
             x, y, phi, vx, vy, vphi = fixed_step(method, p, dt, x, y, phi, vx, vy, vphi)
             t = steps * dt
             if not is_finite_state(x, y, phi, vx, vy, vphi):
@@ -195,6 +204,8 @@ def integrate_fixed(p, settings, state, samples, events, final):
                     n_well = well_index(p, phi)
                     if stop_on_settle:
                         break
+        if status == Status.UNSETTLED and steps == n_run < n_total:
+            status = Status.BUDGET
     if record and n_samples > 0 and samples[n_samples - 1, 0] < t:
         n_samples = record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi)
     if status == Status.SETTLED and not total_energy_at(p, y, phi, vx, vy, vphi) < e_crit:
