@@ -83,4 +83,13 @@ class Method(IntEnum):
                          f"{', '.join(m.label for m in cls)}")
 
 
-__all__ = ["Method", "Status"]
+class Engine(IntEnum):
+    """What runs a kernel: numba's compiled code, or CPython on the same source (same floats,
+    no compilation or loading: the faster choice for one short run), or the choice of AUTO."""
+
+    AUTO = 0
+    PYTHON = 1
+    NUMBA = 2
+
+
+__all__ = ["Engine", "Method", "Status"]

@@ -14,14 +14,18 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .enums import Status
+from .enums import Engine, Status
 from .integrators import check_step, integrate, new_control, warm_up
 from .integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
-from .jit import compiled
+from .jit import compiled, is_active, python
 from .model import energies, rounded_quarter_turns
 from .params import STATE_NAMES, Scene, model_params, run_settings, state_array, validate
 
 MAX_EVENTS = 200_000
+# Engine.AUTO runs the kernel as Python (no numba to import, no machine code to load: ~0.7 s
+# saved) when the run is adaptive and stops once settled; a typical throw takes under a hundred
+# steps (about 5 ms in Python). One that needs more than PYTHON_STEPS is run again compiled.
+PYTHON_STEPS = 3000
 
 
 @dataclass
@@ -101,13 +105,14 @@ def pose_of(quarter_turns: int | None) -> str:
 
 
 def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: bool = False,
-             force: bool = False) -> Trajectory:
+             force: bool = False, engine: Engine = Engine.AUTO, control=None) -> Trajectory:
     """Integrate one trajectory. With ``sample_dt`` the state is kept every ``sample_dt`` seconds
     of simulated time (exact times for the adaptive methods); with ``record_events`` every contact
     onset and lift-off is kept with its state. ``force`` allows a fixed step beyond the method's
-    stable step."""
+    stable step. ``engine`` chooses what runs the kernel (the result is the same to the bit);
+    ``control`` (from :func:`coincli.integrators.new_control`) lets another thread stop it."""
     validate(scene)
-    check_step(scene, force=force)
+    method = check_step(scene, force=force)
     integ = scene.integration
     p = model_params(scene)
     settings = run_settings(integ, float(sample_dt or 0.0))
@@ -118,10 +123,23 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
         samples = np.empty((0, SAMPLE_COLUMNS))
     events = np.empty((MAX_EVENTS if record_events else 0, EVENT_COLUMNS))
     final = np.empty(6)
-    warm_up(p, run_settings(integ), state0)  # before the clock starts
-    start = time.perf_counter()
-    result = compiled(integrate)(p, settings, state0, samples, events, final, new_control())
-    wall = time.perf_counter() - start
+    control = new_control() if control is None else control
+    if engine == Engine.AUTO:
+        short = method.adaptive and integ.stop_on_settle and not is_active()
+        engine = Engine.PYTHON if short else Engine.NUMBA
+    result = None
+    if engine == Engine.PYTHON:
+        start = time.perf_counter()
+        capped = settings._replace(max_steps=min(settings.max_steps, PYTHON_STEPS))
+        result = python(integrate)(p, capped, state0, samples, events, final, control)
+        wall = time.perf_counter() - start
+        if result.status == Status.BUDGET and capped.max_steps < settings.max_steps:
+            result = None  # a long run: compiled code from the start (the same floats)
+    if result is None:
+        warm_up(p, run_settings(integ), state0)  # before the clock starts
+        start = time.perf_counter()
+        result = compiled(integrate)(p, settings, state0, samples, events, final, control)
+        wall = time.perf_counter() - start
     status = Status(result.status)
     t = result.t
     finite = status != Status.NONFINITE

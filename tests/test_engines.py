@@ -1,0 +1,58 @@
+"""The kernels are one source run two ways: compiled by numba, or as plain CPython for one short
+throw (Engine.PYTHON). Both must give the same floats, to the last bit."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+THROWS = [(1.197, 3.508, "event"), (0.4, -9.0, "event"), (1.9, 17.0, "event"),
+          (0.6, 5.0, "dopri5"), (0.3, 12.0, "rk4")]
+
+
+def fingerprint(engine_name: str) -> str:
+    """Python code printing every number of the runs, bit for bit (float.hex)."""
+    return f"""
+import json, coincli
+from coincli.enums import Engine
+out = []
+for vy, vphi, method in {THROWS!r}:
+    scene = coincli.load_preset("paper").with_overrides(vy=vy, vphi=vphi, method=method)
+    run = coincli.simulate(scene, sample_dt=1e-3, record_events=True,
+                           engine=Engine.{engine_name})
+    out.append([run.quarter_turns, int(run.status), run.steps, run.t_final.hex(),
+                [v.hex() for v in run.final_state.tolist()],
+                [v.hex() for v in run.samples.ravel().tolist()],
+                [v.hex() for v in run.events.ravel().tolist()]])
+print(json.dumps(out))
+"""
+
+
+def test_python_and_numba_engines_agree_to_the_bit():
+    runs = {}
+    for engine in ("PYTHON", "NUMBA"):
+        code = fingerprint(engine)
+        runs[engine] = json.loads(subprocess.run([sys.executable, "-c", code], check=True,
+                                                 capture_output=True, text=True).stdout)
+    assert runs["PYTHON"] == runs["NUMBA"]
+    assert [r[0] for r in runs["NUMBA"]][:1] == [6]
+
+
+def test_auto_engine_redoes_a_long_run_compiled():
+    """A run longer than the Python engine's cap is redone compiled, with the same result."""
+    code = """
+import json, coincli, coincli.throw as throw
+from coincli.enums import Engine
+from coincli.jit import is_active
+throw.PYTHON_STEPS = 10  # the fig.-2 throw takes 45
+scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
+auto = coincli.simulate(scene)
+assert is_active(), "the long run must have gone to numba"
+again = coincli.simulate(scene, engine=Engine.NUMBA)
+print(json.dumps([auto.steps, again.steps, auto.final_state.tolist() == again.final_state.tolist(),
+                  auto.quarter_turns]))
+"""
+    out = json.loads(subprocess.run([sys.executable, "-c", code], check=True,
+                                    capture_output=True, text=True).stdout)
+    assert out == [45, 45, True, 6]
