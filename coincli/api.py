@@ -35,7 +35,8 @@ from .grid import (
     parse_pair,
     split_options,
 )
-from .integrators import check_step, warm_up
+from .integrators import check_step
+from .integrators.batch import verified_labels
 from .params import ParameterError, Scene, validate
 from .presets import load
 from .statics import StabilityReport, analyse
@@ -67,8 +68,8 @@ class SweepPlan:
         return self.spec.grid
 
 
-def plan_sweep(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, certify: bool = False,
-               force: bool = False, **initial) -> SweepPlan:
+def plan_sweep(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, force: bool = False,
+               **initial) -> SweepPlan:
     """Check everything about a sweep before any work: the ranges (two initial conditions
     swept, ``name=(lo, hi)`` or ``'LO:HI'``; vy and vphi sweep their defaults unless given), the
     other initial values, the resolution, the tiles, the method and its step."""
@@ -81,7 +82,7 @@ def plan_sweep(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, certify: b
         for value in (axis.lo, axis.hi):
             validate(scene.with_overrides(**{axis.name: value}))
     method = check_step(scene, force=force)
-    spec = make_spec(scene, method, grid, certify=certify)
+    spec = make_spec(scene, grid)
     return SweepPlan(scene, spec, basin_attrs(scene, method, spec))
 
 
@@ -180,7 +181,7 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
 
 
 def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os.PathLike |
-          None = None, certify: bool = False, overwrite: bool = False, force: bool = False,
+          None = None, overwrite: bool = False, force: bool = False,
           threads: int | None = None, workers: int | None = None, scheduler: str | None = None,
           progress: Callable[[SweepProgress], None] | None = None, stop=None,
           x0=None, y0=None, phi0=None, vx=None, vy=None, vphi=None):
@@ -190,9 +191,11 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
     rad/s unless given); a plain number fixes a value. ``res`` cells per axis (N or (N, M)),
     tiles of ``chunk`` cells. Without ``store`` the map is computed in memory and returned; with
     ``store`` it is computed into (or resumed from) that Zarr store, the same store
-    ``coin basin`` writes, and the store is returned opened. Interrupted (``stop`` set, or
+    ``coin basin`` writes, and the store is returned opened. Every label is verified (see
+    coincli.integrators.ladder) unless the scene's integration says ``verify=False``
+    (``scene.with_overrides(verify=False)``). Interrupted (``stop`` set, or
     Ctrl-C), it raises KeyboardInterrupt; a store keeps every finished tile for a resume."""
-    plan = plan_sweep(scene, res=res, chunk=chunk, certify=certify, force=force, x0=x0, y0=y0,
+    plan = plan_sweep(scene, res=res, chunk=chunk, force=force, x0=x0, y0=y0,
                       phi0=phi0, vx=vx, vy=vy, vphi=vphi)
     if store is not None:
         report = sweep(plan, store, overwrite=overwrite, threads=threads, workers=workers,
@@ -246,10 +249,9 @@ def _basin_in_memory(plan: SweepPlan, threads, progress, stop):
 
 def _load_kernels(spec: SweepSpec) -> None:
     """Load the compiled kernels before the clock starts (and before the threads race to)."""
-    state = np.asarray(spec.grid.base_state, dtype=np.float64)
-    warm_up(spec.params, spec.settings, state)
-    if spec.certify is not None:
-        warm_up(spec.params, spec.certify, state)
+    state = np.asarray([spec.grid.base_state], dtype=np.float64)
+    verified_labels(spec.params, spec.settings._replace(t_end=spec.settings.dt * 4),
+                    spec.ladder.rtols, spec.ladder.dts, state)
 
 
 def check_where(threads, workers, scheduler) -> None:
@@ -290,14 +292,18 @@ def _as_basin(basin):
 
 def basin_stats(basin) -> dict:
     """Outcome counts and fractions, P(standing) with its 95 % Wilson interval, the cells
-    without a label, the uncertain fraction of a certified sweep, and the cost, of a Dataset or
-    a store path (plain values: ``coin basin stats --json`` prints this)."""
-    from .stats import basin_stats as compute
+    without a label, the certain and uncertain cells of a verified sweep with the outcome
+    probabilities over the certain ones, and the cost, of a Dataset or a store path (plain
+    values: ``coin basin stats --json`` prints this)."""
+    from .stats import BasinCounts, cost_summary
 
     view = _as_basin(basin)
     a = view.arrays
-    return compute(a["quarter_turns"], a["status"], a.get("uncertain"), view.tile_seconds,
-                   view.done, view.runs)
+    counts = BasinCounts()
+    counts.add(a["quarter_turns"], a["status"], a["certainty"])
+    out = counts.summary()
+    out["cost"] = cost_summary(out["computed"], view.tile_seconds, view.done, view.runs)
+    return out
 
 
 def render_basin(basin, out: str | os.PathLike, *, title: str | None = None, dpi: int = 150,

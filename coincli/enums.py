@@ -83,6 +83,21 @@ class Method(IntEnum):
                          f"{', '.join(m.label for m in cls)}")
 
 
+class Certainty(IntEnum):
+    """Whether a label is converged (verification per cell, see coincli.verify): CERTAIN when
+    two successive rungs of the ladder of settings agree (same n, both settled), UNCERTAIN when
+    none did by the last rung, UNVERIFIED for a single pass (no ladder)."""
+
+    UNCERTAIN = 0
+    CERTAIN = 1
+    UNVERIFIED = 2
+    NOT_COMPUTED = 255
+
+    @property
+    def label(self) -> str:
+        return self.name.lower().replace("_", " ")
+
+
 class Engine(IntEnum):
     """What runs a kernel: numba's compiled code, or CPython on the same source (same floats,
     no compilation or loading: the faster choice for one short run), or the choice of AUTO."""
@@ -92,4 +107,4 @@ class Engine(IntEnum):
     NUMBA = 2
 
 
-__all__ = ["Engine", "Method", "Status"]
+__all__ = ["Certainty", "Engine", "Method", "Status"]

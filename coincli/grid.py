@@ -14,13 +14,11 @@ of work, of writing and of resuming. Each cell's outcome depends only on its own
 condition (the kernels are deterministic and run one trajectory at a time), so a grid computed in
 any tiling, order, thread count or cluster gives bit-identical arrays.
 
-Certification
--------------
-With ``certify`` every cell is computed a second time by the same method with a tenfold smaller
-error bound: an adaptive method at ``rtol / 10``; a fixed-step method of order p at
-``dt / 10**(1/p)`` (symplectic Euler dt/10, Verlet dt/3.16, RK4 dt/1.78). A cell whose n differs
-between the two runs (or that is non-finite in one of them) is *uncertain*: its label is not
-converged at the chosen setting.
+Verification
+------------
+Every cell climbs the ladder of its integration's settings (:mod:`coincli.integrators.ladder`)
+until two successive rungs agree; the tile holds, besides the label, its certainty and the rung
+at which it converged. A single pass is a ladder of one rung.
 """
 
 from __future__ import annotations
@@ -32,7 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .defaults import AXIS_INFO, DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES, IC_NAMES
-from .integrators import NO_LABEL, MethodInfo, label_states
+from .integrators import MethodInfo
+from .integrators.batch import verified_labels
+from .integrators.ladder import Ladder, ladder_of
 from .params import (
     ModelParams,
     ParameterError,
@@ -41,11 +41,10 @@ from .params import (
     model_params,
     run_settings,
     state_array,
+    step_budget,
 )
 
 MAX_CELLS_PER_AXIS = 1 << 16
-
-UNCERTAIN_NOT_COMPUTED = 255  # the uncertain flag of a cell not computed
 
 
 # -- parsing ------------------------------------------------------------------------------------
@@ -263,25 +262,15 @@ class SweepSpec:
     grid: Grid
     params: ModelParams
     settings: RunSettings
-    certify: RunSettings | None = None  # the tighter run of a certified sweep
+    ladder: Ladder
 
-    @property
-    def array_names(self) -> tuple[str, ...]:
-        names = ("quarter_turns", "status", "settle_time", "steps")
-        return names + ("uncertain",) if self.certify is not None else names
+    array_names = ("quarter_turns", "status", "settle_time", "steps", "certainty", "rung")
 
 
-def certify_setting(method: MethodInfo, settings: RunSettings) -> RunSettings:
-    """The tighter setting of the certifying run: a tenfold smaller error bound."""
-    if method.adaptive:
-        return settings._replace(rtol=settings.rtol / 10.0)
-    return settings._replace(dt=settings.dt / 10.0 ** (1.0 / method.order))
-
-
-def make_spec(scene: Scene, method: MethodInfo, grid: Grid, certify: bool = False) -> SweepSpec:
-    settings = run_settings(scene.integration)
-    return SweepSpec(grid=grid, params=model_params(scene), settings=settings,
-                     certify=certify_setting(method, settings) if certify else None)
+def make_spec(scene: Scene, grid: Grid) -> SweepSpec:
+    integ = scene.integration
+    return SweepSpec(grid=grid, params=model_params(scene), settings=run_settings(integ),
+                     ladder=ladder_of(integ))
 
 
 def method_attrs(scene: Scene, method: MethodInfo) -> dict:
@@ -289,16 +278,8 @@ def method_attrs(scene: Scene, method: MethodInfo) -> dict:
     return {"name": method.name, "kernel_id": int(method.method), "order": method.order,
             "adaptive": method.adaptive, "symplectic": method.symplectic,
             "dt": integ.dt, "rtol": integ.rtol, "t_end": integ.t_end,
-            "stop_on_settle": integ.stop_on_settle}
-
-
-def certify_attrs(spec: SweepSpec) -> dict | None:
-    if spec.certify is None:
-        return None
-    return {"dt": spec.certify.dt, "rtol": spec.certify.rtol,
-            "rule": "every cell recomputed by the same method with a tenfold smaller error "
-                    "bound (adaptive: rtol/10; fixed step of order p: dt/10**(1/p)); "
-                    "uncertain = 1 where n differs or one run is non-finite"}
+            "stop_on_settle": integ.stop_on_settle, "max_steps": step_budget(integ),
+            "verification": ladder_of(integ).to_dict()}
 
 
 @dataclass
@@ -313,25 +294,20 @@ class TileResult:
         return int(self.arrays["quarter_turns"].size)
 
 
-def compute_tile(spec: SweepSpec, tile: tuple[int, int]) -> TileResult:
-    """Run every cell of one tile (and its certifying run); the GIL is released meanwhile."""
+def compute_tile(spec: SweepSpec, tile: tuple[int, int], control=None) -> TileResult:
+    """Run every cell of one tile up its ladder; the GIL is released meanwhile. ``control``
+    set stops it (its cells then have status INTERRUPTED)."""
     wall0, cpu0 = time.perf_counter(), time.thread_time()
     states = spec.grid.tile_states(tile)
     s0, s1 = spec.grid.tile_slices(tile)
     shape = (s0.stop - s0.start, s1.stop - s1.start)
-    q, status, settle, steps = label_states(spec.params, spec.settings, states)
-    arrays = {"quarter_turns": q.reshape(shape), "status": status.reshape(shape),
-              "settle_time": settle.reshape(shape), "steps": steps.reshape(shape)}
-    if spec.certify is not None:
-        q2 = label_states(spec.params, spec.certify, states).quarter_turns
-        # NO_LABEL marks a non-finite run in both: differing n or one non-finite -> uncertain
-        both_nonfinite = (q == NO_LABEL) & (q2 == NO_LABEL)
-        arrays["uncertain"] = ((q != q2) & ~both_nonfinite).astype(np.uint8).reshape(shape)
+    out = verified_labels(spec.params, spec.settings, spec.ladder.rtols, spec.ladder.dts,
+                          states, control)
+    arrays = {name: getattr(out, name).reshape(shape) for name in spec.array_names}
     return TileResult(tile=tuple(tile), arrays=arrays, cpu_seconds=time.thread_time() - cpu0,
                       wall_seconds=time.perf_counter() - wall0)
 
 
 __all__ = ["AXIS_INFO", "Axis", "DEFAULT_CHUNK", "DEFAULT_RANGES", "DEFAULT_RES", "Grid",
-           "IC_NAMES", "SweepSpec", "TileResult", "UNCERTAIN_NOT_COMPUTED", "certify_attrs",
-           "certify_setting", "compute_tile", "format_range", "make_grid", "make_spec",
-           "method_attrs", "parse_pair", "parse_range", "split_options"]
+           "IC_NAMES", "SweepSpec", "TileResult", "compute_tile", "format_range", "make_grid",
+           "make_spec", "method_attrs", "parse_pair", "parse_range", "split_options"]

@@ -79,6 +79,8 @@ class Integration:
     ``dt`` is the step of a fixed-step method (or the initial step of an adaptive one), ``rtol``
     the relative tolerance of an adaptive one. ``stop_on_settle`` stops a run as soon as its
     outcome is certain (total energy below E_crit); the paper's own runs always last ``t_end``.
+    ``verify`` computes every outcome at a ladder of tighter settings until two agree
+    (coincli.integrators.ladder); without it a run is a single pass, its label unverified.
     ``max_steps`` bounds the work of one run (like diffrax's ``max_steps``): a run that needs
     more ends with status ``budget``, not with a label. By default an adaptive run may take
     ADAPTIVE_MAX_STEPS steps (a typical throw takes under a hundred), a fixed-step run the
@@ -91,6 +93,7 @@ class Integration:
     t_end: float = 2.0
     stop_on_settle: bool = True
     max_steps: int | None = None  # the step budget of one run; None: the method's default
+    verify: bool = True  # climb the ladder of settings until the label converges
 
     def __post_init__(self):
         # presets, stores and options name the method; the scene holds the member
@@ -223,8 +226,9 @@ def validate(scene: Scene) -> Scene:
                                     or not isinstance(i.max_steps, int) or i.max_steps < 1):
         raise ParameterError(f"max_steps must be a whole number of at least 1, got "
                              f"{i.max_steps!r}")
-    if not isinstance(i.stop_on_settle, bool):
-        raise ParameterError(f"stop_on_settle must be true or false, got {i.stop_on_settle!r}")
+    for name in ("stop_on_settle", "verify"):
+        if not isinstance(getattr(i, name), bool):
+            raise ParameterError(f"{name} must be true or false, got {getattr(i, name)!r}")
     return scene
 
 

@@ -1,19 +1,21 @@
-"""Statistics of a basin map (pure numpy): outcome counts, the probability of standing with a
-Wilson 95 % interval, the cells without a trustworthy label, and the sweep's cost.
+"""Statistics of a basin map (pure numpy), accumulated tile by tile so that memory stays flat at
+any resolution: outcome counts, the probability of standing with a Wilson 95 % interval, the
+cells without a label, the verification, and the sweep's cost.
 
-Fractions and probabilities are taken over the *labelled* cells: computed and finite (settled, or
-unsettled at t_end and labelled round(2 phi / pi) there, as the paper labels every run). With a
-certified sweep they are given twice: over all labelled cells, and over the certain ones only.
-Where there is nothing to divide by they are NaN.
+Fractions and probabilities are taken over the *labelled* cells: computed and finite (settled,
+or unsettled at t_end and labelled round(2 phi / pi) there, as the paper labels every run); in a
+verified sweep they are given again over the *certain* cells only. Where there is nothing to
+divide by they are NaN.
 """
 
 from __future__ import annotations
 
 import math
+from collections import Counter
 
 import numpy as np
 
-from .enums import Status
+from .enums import Certainty, Status
 
 
 def wilson(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
@@ -28,76 +30,116 @@ def wilson(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
     return lo, hi
 
 
+def proportion(count: int, total: int) -> dict:
+    """A count out of a total with its probability and 95 % Wilson interval."""
+    lo, hi = wilson(count, total)
+    return {"count": int(count), "of": int(total),
+            "probability": count / total if total else math.nan, "low": lo, "high": hi,
+            "ci95": [lo, hi]}
+
+
 def _direction(n: int) -> str:
     # phi grows counter-clockwise, so n > 0 is a counter-clockwise net rotation
     return "none" if n == 0 else ("counter-clockwise" if n > 0 else "clockwise")
 
 
-def outcome_table(labels: np.ndarray) -> tuple[list[dict], dict]:
-    """Count and fraction per n, and the standing probability with its interval."""
-    labels = np.asarray(labels).ravel().astype(np.int64)
-    total = int(labels.size)
-    values, counts = np.unique(labels, return_counts=True)
-    rows = [{"n": int(v), "pose": "standing" if v % 2 else "lying", "direction": _direction(int(v)),
-             "count": int(c), "fraction": c / total if total else math.nan}
-            for v, c in zip(values, counts, strict=True)]
-    standing = int(np.count_nonzero(labels % 2))
-    lo, hi = wilson(standing, total)
-    return rows, {"count": standing, "of": total,
-                  "probability": standing / total if total else math.nan, "ci95": [lo, hi]}
+def outcome_rows(counts: Counter) -> list[dict]:
+    """One row per n: pose, direction, count and fraction with its interval."""
+    total = sum(counts.values())
+    return [{"n": int(n), "pose": "standing" if n % 2 else "lying", "direction": _direction(n),
+             **proportion(c, total), "fraction": c / total if total else math.nan}
+            for n, c in sorted(counts.items())]
+
+
+class BasinCounts:
+    """Counts of a basin, added tile by tile (:meth:`add`), summarised by :meth:`summary`."""
+
+    def __init__(self):
+        self.cells = 0
+        self.status = Counter()
+        self.certainty = Counter()
+        self.outcomes = Counter()  # labelled cells
+        self.certain_outcomes = Counter()  # labelled and certain
+        self.uncertain_outcomes = Counter()
+
+    def add(self, quarter_turns: np.ndarray, status: np.ndarray,
+            certainty: np.ndarray | None = None) -> None:
+        q = np.asarray(quarter_turns).ravel().astype(np.int64)
+        st = np.asarray(status).ravel()
+        self.cells += q.size
+        self.status.update(dict(zip(*np.unique(st, return_counts=True), strict=True)))
+        labelled = (st == Status.SETTLED) | (st == Status.UNSETTLED)
+        self.outcomes.update(dict(zip(*np.unique(q[labelled], return_counts=True), strict=True)))
+        if certainty is None:
+            certainty = np.where(st == Status.NOT_COMPUTED, Certainty.NOT_COMPUTED,
+                                 Certainty.UNVERIFIED)
+        cert = np.asarray(certainty).ravel()
+        self.certainty.update(dict(zip(*np.unique(cert, return_counts=True), strict=True)))
+        for flag, counter in ((Certainty.CERTAIN, self.certain_outcomes),
+                              (Certainty.UNCERTAIN, self.uncertain_outcomes)):
+            sel = labelled & (cert == flag)
+            counter.update(dict(zip(*np.unique(q[sel], return_counts=True), strict=True)))
+
+    def summary(self) -> dict:
+        """Everything `coin basin stats` reports, as plain values."""
+        by_status = {s.label: int(self.status.get(int(s), 0)) for s in Status}
+        labelled = sum(self.outcomes.values())
+        standing = sum(c for n, c in self.outcomes.items() if n % 2)
+        out = {
+            "cells": self.cells,
+            "computed": self.cells - by_status[Status.NOT_COMPUTED.label],
+            "not_computed": by_status[Status.NOT_COMPUTED.label],
+            "status": by_status,
+            "labelled": labelled,
+            "outcomes": outcome_rows(self.outcomes),
+            "standing": proportion(standing, labelled),
+            "lying": proportion(labelled - standing, labelled),
+        }
+        verified = (self.certainty.get(int(Certainty.CERTAIN), 0)
+                    + self.certainty.get(int(Certainty.UNCERTAIN), 0)) > 0
+        out["verified"] = verified
+        if verified:
+            certain = sum(self.certain_outcomes.values())
+            uncertain_cells = int(self.certainty.get(int(Certainty.UNCERTAIN), 0))
+            computed = out["computed"]
+            standing_certain = sum(c for n, c in self.certain_outcomes.items() if n % 2)
+            out["certain"] = proportion(certain, labelled)
+            out["uncertain"] = {**proportion(uncertain_cells, computed),
+                                "standing": sum(c for n, c in self.uncertain_outcomes.items()
+                                                if n % 2)}
+            out["outcomes_certain"] = outcome_rows(self.certain_outcomes)
+            out["standing_certain"] = proportion(standing_certain, certain)
+            out["lying_certain"] = proportion(certain - standing_certain, certain)
+        return out
 
 
 def basin_stats(quarter_turns: np.ndarray, status: np.ndarray,
-                uncertain: np.ndarray | None = None, tile_seconds: np.ndarray | None = None,
-                done: np.ndarray | None = None, runs: list[dict] | None = None) -> dict:
-    """Everything `coin basin stats` reports, as plain JSON-able values."""
-    q = np.asarray(quarter_turns)
-    st = np.asarray(status)
-    computed = st != Status.NOT_COMPUTED
-    labelled = computed & ((st == Status.SETTLED) | (st == Status.UNSETTLED))
-    out: dict = {
-        "cells": int(q.size),
-        "computed": int(computed.sum()),
-        "not_computed": int((~computed).sum()),
-        "settled": int((st == Status.SETTLED).sum()),
-        "unsettled": int((st == Status.UNSETTLED).sum()),
-        "non_finite": int((st == Status.NONFINITE).sum()),
-        "labelled": int(labelled.sum()),
-    }
-    out["outcomes"], out["standing"] = outcome_table(q[labelled])
-    if uncertain is not None:
-        unc = np.asarray(uncertain)
-        flagged = labelled & (unc == 1)
-        certain = labelled & (unc == 0)
-        rows, standing = outcome_table(q[certain])
-        out["certified"] = True
-        out["uncertain"] = {
-            "count": int(flagged.sum()),
-            "fraction": flagged.sum() / labelled.sum() if labelled.any() else math.nan,
-            "certain": int(certain.sum()),
-            "outcomes_certain": rows,
-            "standing_certain": standing,
-            "standing_uncertain": int(np.count_nonzero(q[flagged] % 2)),
-        }
-    else:
-        out["certified"] = False
-        out["uncertain"] = None
+                certainty: np.ndarray | None = None) -> dict:
+    """The statistics of whole arrays (one tile)."""
+    counts = BasinCounts()
+    counts.add(quarter_turns, status, certainty)
+    return counts.summary()
+
+
+def cost_summary(cells: int, tile_seconds: np.ndarray, done: np.ndarray, runs: list[dict],
+                 rungs_run: np.ndarray | None = None) -> dict:
+    """CPU and wall time of a sweep: from the per-tile CPU seconds of the tiles done and the
+    records of each invocation."""
     cost: dict = {}
-    if tile_seconds is not None:
-        ts = np.asarray(tile_seconds, dtype=float)
-        mask = np.isfinite(ts) if done is None else (np.asarray(done) == 1) & np.isfinite(ts)
+    ts = np.asarray(tile_seconds, dtype=float)
+    mask = (np.asarray(done) == 1) & np.isfinite(ts)
+    if mask.any():
         cpu = float(ts[mask].sum())
         cost["cpu_seconds"] = cpu
-        cost["trajectories_per_cpu_second"] = out["computed"] / cpu if cpu > 0 else math.nan
-        cost["cpu_ms_per_cell"] = 1e3 * cpu / out["computed"] if out["computed"] else math.nan
+        cost["trajectories_per_cpu_second"] = cells / cpu if cpu > 0 else math.nan
+        cost["cpu_ms_per_cell"] = 1e3 * cpu / cells if cells else math.nan
     if runs:
         wall = float(sum(r.get("wall_seconds", 0.0) for r in runs))
-        cells = int(sum(r.get("cells", 0) for r in runs))
+        run_cells = int(sum(r.get("cells", 0) for r in runs))
         cost["runs"] = len(runs)
         cost["wall_seconds"] = wall
-        cost["trajectories_per_second"] = cells / wall if wall > 0 else math.nan
-    out["cost"] = cost
-    return out
+        cost["trajectories_per_second"] = run_cells / wall if wall > 0 else math.nan
+    return cost
 
 
-__all__ = ["basin_stats", "outcome_table", "wilson"]
+__all__ = ["BasinCounts", "basin_stats", "cost_summary", "outcome_rows", "proportion", "wilson"]

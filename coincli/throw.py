@@ -1,8 +1,11 @@
 """One trajectory: run a scene, return its outcome as plain data (no printing, no files).
 
-:func:`simulate` returns a :class:`Trajectory` (outcome, status, final state, energies, and on
-request the samples at a display rate and every contact event); :func:`classify` only the
-:class:`Outcome` of one initial condition, as Attractors.jl classifies one initial condition.
+:func:`simulate` returns a :class:`Trajectory` (outcome, status, certainty, final state,
+energies, and on request the samples at a display rate and every contact event);
+:func:`classify` only the :class:`Outcome` of one initial condition, as Attractors.jl classifies
+one initial condition. Both climb the ladder of settings (:mod:`coincli.integrators.ladder`)
+until two successive rungs agree, unless the scene's integration says ``verify=False``; the
+trajectory returned is the last rung's.
 """
 
 from __future__ import annotations
@@ -14,9 +17,11 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .enums import Engine, Status
+from .enums import Certainty, Engine, Status
 from .integrators import check_step, integrate, new_control, warm_up
+from .integrators.batch import NO_LABEL, outcome_label
 from .integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
+from .integrators.ladder import ladder_of
 from .jit import compiled, is_active, python
 from .model import energies, rounded_quarter_turns
 from .params import STATE_NAMES, Scene, model_params, run_settings, state_array, validate
@@ -28,11 +33,23 @@ MAX_EVENTS = 200_000
 PYTHON_STEPS = 3000
 
 
+class Rung(NamedTuple):
+    """One run of the ladder: its setting and what it gave."""
+
+    setting: str  # "rtol = 1e-06"
+    quarter_turns: int | None
+    status: Status
+    settle_time: float
+    steps: int
+
+
 @dataclass
 class Trajectory:
-    """Outcome of one run. ``quarter_turns`` is the certified count (the well holding the coin
+    """Outcome of one throw. ``quarter_turns`` is the final count (the well holding the coin
     once its energy fell below E_crit) when ``settled``, else round(2 phi / pi) at the end time;
-    ``rounded_quarter_turns`` is always the paper's round(2 phi / pi) at the end."""
+    ``rounded_quarter_turns`` is always the paper's round(2 phi / pi) at the end. ``certainty``
+    says whether it converged on the ladder (``rungs``: every run made, coarse to fine; the
+    trajectory's own numbers are the last one's)."""
 
     scene: Scene
     status: Status
@@ -49,6 +66,8 @@ class Trajectory:
     samples: np.ndarray | None = None  # rows: t, x, y, phi, vx, vy, vphi
     events: np.ndarray | None = None  # rows: t, corner, kind (+1 onset, -1 lift-off), state
     notes: list[str] = field(default_factory=list)
+    certainty: Certainty = Certainty.UNVERIFIED
+    rungs: list[Rung] = field(default_factory=list)
 
     @property
     def settled(self) -> bool:
@@ -66,6 +85,10 @@ class Trajectory:
             "pose": self.pose,
             "status": self.status.label,
             "settled": self.settled,
+            "certainty": self.certainty.label,
+            "certain": self.certainty == Certainty.CERTAIN,
+            "rungs": [{"setting": r.setting, "quarter_turns": r.quarter_turns,
+                       "status": r.status.label, "steps": r.steps} for r in self.rungs],
             "settle_time": None if math.isnan(self.settle_time) else self.settle_time,
             "rounded_quarter_turns": self.rounded_quarter_turns,
             "t_final": self.t_final,
@@ -91,6 +114,7 @@ class Outcome(NamedTuple):
     quarter_turns: int | None  # final n if settled; round(2 phi / pi) at t_end if unsettled
     status: Status
     settle_time: float  # s, NaN if it never settled
+    certainty: Certainty  # CERTAIN: converged on the ladder of settings
 
     @property
     def pose(self) -> str:
@@ -106,16 +130,18 @@ def pose_of(quarter_turns: int | None) -> str:
 
 def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: bool = False,
              force: bool = False, engine: Engine = Engine.AUTO, control=None) -> Trajectory:
-    """Integrate one trajectory. With ``sample_dt`` the state is kept every ``sample_dt`` seconds
-    of simulated time (exact times for the adaptive methods); with ``record_events`` every contact
-    onset and lift-off is kept with its state. ``force`` allows a fixed step beyond the method's
-    stable step. ``engine`` chooses what runs the kernel (the result is the same to the bit);
-    ``control`` (from :func:`coincli.integrators.new_control`) lets another thread stop it."""
+    """Integrate one throw, verified on the ladder of settings unless ``verify=False``. With
+    ``sample_dt`` the state is kept every ``sample_dt`` seconds of simulated time (exact times
+    for the adaptive methods); with ``record_events`` every contact onset and lift-off is kept
+    with its state. ``force`` allows a fixed step beyond the method's stable step. ``engine``
+    chooses what runs the kernel (the result is the same to the bit); ``control`` (from
+    :func:`coincli.integrators.new_control`) lets another thread stop it."""
     validate(scene)
     method = check_step(scene, force=force)
     integ = scene.integration
     p = model_params(scene)
-    settings = run_settings(integ, float(sample_dt or 0.0))
+    base = run_settings(integ, float(sample_dt or 0.0))
+    ladder = ladder_of(integ)
     state0 = state_array(scene)
     if sample_dt:
         samples = np.empty((int(integ.t_end / sample_dt) + 3, SAMPLE_COLUMNS))
@@ -127,27 +153,56 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     if engine == Engine.AUTO:
         short = method.adaptive and integ.stop_on_settle and not is_active()
         engine = Engine.PYTHON if short else Engine.NUMBA
-    result = None
+    rungs: list[Rung] = []
+    certainty = Certainty.UNVERIFIED if not ladder.verified else Certainty.UNCERTAIN
+    wall = 0.0
+    for k in range(len(ladder)):
+        settings = base._replace(rtol=ladder.rtols[k], dt=ladder.dts[k])
+        result, seconds, engine = _run(p, settings, state0, samples, events, final, control,
+                                       engine)
+        wall += seconds
+        label = outcome_label(result.status, result.n_well, final[2])
+        label = None if label == NO_LABEL else int(label)
+        rungs.append(Rung(ladder.rung_text(k), label, Status(result.status),
+                          float(result.settle_time), int(result.steps)))
+        if result.status == Status.INTERRUPTED:
+            break
+        if k and _agree(rungs[-2], rungs[-1]):
+            certainty = Certainty.CERTAIN
+            break
+    return _trajectory(scene, p, state0, final, result, samples, events, sample_dt,
+                       record_events, wall, certainty, rungs)
+
+
+def _agree(coarse: Rung, fine: Rung) -> bool:
+    """The ladder's rule: the same count of quarter turns, both runs settled."""
+    return (coarse.status == fine.status == Status.SETTLED
+            and coarse.quarter_turns == fine.quarter_turns)
+
+
+def _run(p, settings, state0, samples, events, final, control, engine: Engine):
+    """One kernel run: (result, wall seconds, the engine for the next rung). A Python run that
+    outgrows PYTHON_STEPS is run again compiled (the same floats), and so is every rung after."""
     if engine == Engine.PYTHON:
         start = time.perf_counter()
         capped = settings._replace(max_steps=min(settings.max_steps, PYTHON_STEPS))
         result = python(integrate)(p, capped, state0, samples, events, final, control)
-        wall = time.perf_counter() - start
-        if result.status == Status.BUDGET and capped.max_steps < settings.max_steps:
-            result = None  # a long run: compiled code from the start (the same floats)
-    if result is None:
-        warm_up(p, run_settings(integ), state0)  # before the clock starts
-        start = time.perf_counter()
-        result = compiled(integrate)(p, settings, state0, samples, events, final, control)
-        wall = time.perf_counter() - start
+        if not (result.status == Status.BUDGET and capped.max_steps < settings.max_steps):
+            return result, time.perf_counter() - start, engine
+    warm_up(p, settings._replace(sample_dt=0.0), state0)  # before the clock starts
+    start = time.perf_counter()
+    result = compiled(integrate)(p, settings, state0, samples, events, final, control)
+    return result, time.perf_counter() - start, Engine.NUMBA
+
+
+def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, record_events,
+                wall, certainty, rungs) -> Trajectory:
+    integ = scene.integration
     status = Status(result.status)
     t = result.t
-    finite = status != Status.NONFINITE
+    finite = status in (Status.SETTLED, Status.UNSETTLED)
     rounded = int(rounded_quarter_turns(final[2])) if finite else None
-    if status == Status.SETTLED:
-        quarter_turns = int(result.n_well)
-    else:
-        quarter_turns = rounded if finite else None
+    quarter_turns = rungs[-1].quarter_turns
     settle_time = result.settle_time
     notes = []
     if status == Status.SETTLED and not integ.stop_on_settle and rounded != quarter_turns:
@@ -157,21 +212,29 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     if status == Status.UNSETTLED:
         notes.append(f"the energy is still above E_crit at t = {t:g} s: n = {rounded} is "
                      "round(2 phi / pi) at the end and may still change; raise --t-end")
-    if not finite:
+    if status == Status.NONFINITE:
         notes.append(f"the run went non-finite near t = {t:.4g} s: no outcome (try a smaller "
                      "step or tolerance)")
+    if status == Status.BUDGET:
+        notes.append(f"the run used up its budget of {result.steps:,} steps at t = {t:.4g} s: "
+                     "no outcome (raise --max-steps, or check the throw: a spin or a damping "
+                     "this large needs steps too small to finish)")
+    if certainty == Certainty.UNCERTAIN and status == Status.SETTLED:
+        tried = "; ".join(f"{r.setting}: n = {r.quarter_turns} {r.status.label}" for r in rungs)
+        notes.append(f"the label did not converge: no two successive rungs agreed ({tried})")
     e0 = sum(energies(p, state0))
-    e1 = sum(energies(p, final)) if finite else math.nan
+    e1 = sum(energies(p, final)) if status != Status.NONFINITE else math.nan
     return Trajectory(
         scene=scene, status=status, t_final=float(t), final_state=final.copy(),
-        steps=int(result.steps), settle_time=float(settle_time), quarter_turns=quarter_turns,
-        rounded_quarter_turns=rounded, energy_initial=float(e0), energy_final=float(e1),
-        e_crit=scene.e_crit, wall_time=wall,
+        steps=int(sum(r.steps for r in rungs)), settle_time=float(settle_time),
+        quarter_turns=quarter_turns, rounded_quarter_turns=rounded, energy_initial=float(e0),
+        energy_final=float(e1), e_crit=scene.e_crit, wall_time=wall,
         samples=samples[:result.n_samples].copy() if sample_dt else None,
-        events=events[:result.n_events].copy() if record_events else None, notes=notes)
+        events=events[:result.n_events].copy() if record_events else None, notes=notes,
+        certainty=certainty, rungs=rungs)
 
 
 def classify(scene: Scene, *, force: bool = False) -> Outcome:
     """The outcome of the scene's initial condition (nothing recorded on the way)."""
     run = simulate(scene, force=force)
-    return Outcome(run.quarter_turns, run.status, run.settle_time)
+    return Outcome(run.quarter_turns, run.status, run.settle_time, run.certainty)

@@ -16,19 +16,21 @@ from coincli.params import RunSettings, model_params
 from coincli.presets import load
 
 
+# The scenes of the integrator and model tests run a single pass (verify=False): they test one
+# method at one setting. Verification itself is tested on the presets as shipped.
 @pytest.fixture(scope="session")
 def paper():
-    return load("paper").scene
+    return load("paper").scene.with_overrides(verify=False)
 
 
 @pytest.fixture(scope="session")
 def undamped():
-    return load("undamped").scene
+    return load("undamped").scene.with_overrides(verify=False)
 
 
 @pytest.fixture(scope="session")
 def thick():
-    return load("thick").scene
+    return load("thick").scene.with_overrides(verify=False)
 
 
 class KernelRun(NamedTuple):

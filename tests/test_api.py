@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 import coincli
 from coincli.cli import app
-from coincli.enums import Method, Status
+from coincli.enums import Certainty, Method, Status
 from coincli.params import ParameterError
 
 SMALL = dict(vy=(0.3, 1.0), vphi=(-15.0, 15.0), res=16)
@@ -79,7 +79,9 @@ def test_simulate_and_classify_give_named_results():
     assert run.settle_time == pytest.approx(0.3622, abs=1e-4)
     assert run.energy_final < run.e_crit < run.energy_initial
     outcome = coincli.classify(scene)
-    assert outcome == (6, Status.SETTLED, run.settle_time) and outcome.pose == "lying"
+    assert outcome == (6, Status.SETTLED, run.settle_time, Certainty.CERTAIN)
+    assert outcome.pose == "lying" and run.certainty is Certainty.CERTAIN
+    assert [r.setting for r in run.rungs] == ["rtol = 1e-06", "rtol = 1e-07"]
     recorded = coincli.simulate(scene, sample_dt=1e-3, record_events=True)
     assert recorded.samples.shape[1] == 7 and recorded.events.shape[1] == 9
     assert recorded.quarter_turns == run.quarter_turns

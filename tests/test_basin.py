@@ -1,5 +1,5 @@
 """`coin basin`: grid parsing, the Zarr store, resume after kill -9 and Ctrl-C, parameter checks,
-rendering and statistics of partial stores, mirror symmetry, and --certify.
+rendering and statistics of partial stores, mirror symmetry, and verified labels.
 
 Grids are tiny (the default method costs ~0.1 ms a trajectory once numba's cache is warm)."""
 
@@ -24,6 +24,7 @@ from coincli.grid import compute_tile, make_grid, make_spec, parse_pair, parse_r
 from coincli.integrators import NO_LABEL, info
 from coincli.io import store
 from coincli.io.runner import run_tile_task
+from coincli.io.schema import basin_attrs
 from coincli.params import ParameterError, Scene
 from coincli.stats import basin_stats, wilson
 
@@ -184,7 +185,7 @@ def test_tile_equal_to_fill_value_is_written(tmp_path):
     # every cell non-finite would equal the fill values; simulate it through the writer
     path = tmp_path / "s.zarr"
     grid = make_grid(Scene(), {"vy": (0.1, 0.2), "vphi": (0.0, 1.0)}, (4, 4), (2, 2))
-    spec = make_spec(Scene(), info("event"), grid)
+    spec = make_spec(Scene(), grid)
     store.prepare(path, {"coin_basin": {}, "version": "t"}, spec)
     result = compute_tile(spec, (0, 0))
     result.arrays["quarter_turns"][:] = NO_LABEL
@@ -206,8 +207,8 @@ def test_parameter_mismatch_is_refused(tmp_path):
     assert result.exit_code == 2 and "--vphi LO = -20 in the store, -10 here" in result.output
     result = coin(path, "--res", "16", "--chunk", "4", "-q")
     assert result.exit_code == 2 and "cells = 8 in the store, 16 here" in result.output
-    result = coin(path, *SMALL, "--certify")
-    assert result.exit_code == 2 and "certify" in result.output
+    result = coin(path, *SMALL, "--single-pass")
+    assert result.exit_code == 2 and "verification" in result.output
     # the same command resumes (nothing left to do); --overwrite replaces
     assert "done already" in coin_ok(path, *SMALL).output
     coin_ok(path, *SMALL, "--k", "5000", "--overwrite")
@@ -225,7 +226,7 @@ def test_sweep_subcommand_alias_and_help(tmp_path):
     coin_ok("sweep", str(b), *SMALL, "--threads", "1")
     assert_same_store(a, b)
     assert "render" in coin_ok("--help").output
-    assert "--certify" in coin_ok("sweep", "--help").output
+    assert "--single-pass" in coin_ok("sweep", "--help").output
 
 
 # -- resuming ------------------------------------------------------------------------------------
@@ -286,7 +287,7 @@ def test_dask_runs_give_the_same_store(tmp_path):
 def test_task_function_is_importable_and_writes_its_tile(tmp_path):
     path = tmp_path / "s.zarr"
     grid = make_grid(Scene(), {"vy": (0.1, 0.5), "vphi": (-5.0, 5.0)}, (4, 4), (2, 2))
-    spec = make_spec(Scene(), info("event"), grid)
+    spec = make_spec(Scene(), grid)
     store.prepare(path, {"coin_basin": {}, "version": "t"}, spec)
     tile, cells, cpu = run_tile_task(str(path), spec, (1, 0))
     assert tile == (1, 0) and cells == 4 and cpu >= 0
@@ -294,25 +295,22 @@ def test_task_function_is_importable_and_writes_its_tile(tmp_path):
 
 
 # -- pictures and statistics ---------------------------------------------------------------------
-def _partial_store(tmp_path, certify=False) -> Path:
+def _partial_store(tmp_path, verify=True) -> Path:
     """A 8 x 8 sweep with 2 of its 4 tiles computed."""
     path = tmp_path / "partial.zarr"
-    scene = Scene()
+    scene = Scene().with_overrides(verify=verify)
     grid = make_grid(scene, {"vy": (0.3, 1.9), "vphi": (-15.0, 15.0)}, (8, 8), (4, 4))
-    spec = make_spec(scene, info("event"), grid, certify=certify)
-    attrs = {"coin_basin": {"format": 1}, "version": "test", "parameters": scene.to_dict(),
-             "sweep": grid.to_dict(), "method": {"name": "event", "adaptive": True,
-                                                 "rtol": 1e-7, "dt": 1e-6, "t_end": 2.0},
-             "certify": None}
+    spec = make_spec(scene, grid)
+    attrs = basin_attrs(scene, info("event"), spec)
     store.prepare(path, attrs, spec)
     for tile in ((0, 0), (1, 1)):
         run_tile_task(str(path), spec, tile)
     return path
 
 
-@pytest.mark.parametrize("certify", [False, True])
-def test_render_and_stats_on_a_partial_store(tmp_path, certify):
-    path = _partial_store(tmp_path, certify)
+@pytest.mark.parametrize("verify", [False, True])
+def test_render_and_stats_on_a_partial_store(tmp_path, verify):
+    path = _partial_store(tmp_path, verify)
     png = tmp_path / "basin.png"
     coin_ok("render", str(path), "-o", str(png), "--dpi", "60", "--n-max", "40")
     assert png.stat().st_size > 5000
@@ -325,7 +323,7 @@ def test_render_and_stats_on_a_partial_store(tmp_path, certify):
     assert stats["tiles_done"] == 2 and stats["tiles"] == 4
     assert sum(r["count"] for r in stats["outcomes"]) == stats["labelled"] == 32
     assert stats["cost"]["cpu_seconds"] > 0
-    assert stats["certified"] is certify
+    assert stats["verified"] is verify
     text = coin_ok("stats", str(path)).output
     assert "not computed" in text and "standing" in text
     basin = store.read_basin(path)
@@ -349,11 +347,8 @@ def test_render_and_stats_errors(tmp_path):
 def test_render_and_stats_of_an_empty_store(tmp_path):
     path = tmp_path / "empty.zarr"
     grid = make_grid(Scene(), {"vy": (0.1, 0.5), "vphi": (-5.0, 5.0)}, (4, 4), (2, 2))
-    store.prepare(path, {"coin_basin": {}, "version": "t", "sweep": grid.to_dict(),
-                         "parameters": Scene().to_dict(),
-                         "method": {"name": "event", "adaptive": True, "rtol": 1e-7,
-                                    "dt": 1e-6, "t_end": 2.0}},
-                  make_spec(Scene(), info("event"), grid))
+    spec = make_spec(Scene(), grid)
+    store.prepare(path, basin_attrs(Scene(), info("event"), spec), spec)
     coin_ok("render", str(path), "-o", str(tmp_path / "e.png"), "--dpi", "40")
     stats = json.loads(coin_ok("stats", str(path), "--json").output)  # valid JSON: no NaN
     assert stats["computed"] == 0 and stats["standing"]["probability"] is None
@@ -367,12 +362,16 @@ def test_wilson_and_stats_pure():
     assert wilson(0, 10)[0] == 0.0 and wilson(10, 10)[1] == 1.0
     q = np.array([[0, 1, 2, NO_LABEL], [-1, 0, 0, NO_LABEL]], dtype=np.int16)
     st = np.array([[0, 0, 1, 2], [0, 0, 0, 255]], dtype=np.uint8)
-    unc = np.array([[0, 1, 0, 0], [0, 0, 0, 255]], dtype=np.uint8)
-    s = basin_stats(q, st, unc)
-    assert (s["computed"], s["not_computed"], s["non_finite"], s["unsettled"]) == (7, 1, 1, 1)
+    certainty = np.array([[1, 0, 0, 0], [1, 1, 1, 255]], dtype=np.uint8)  # 1 certain
+    s = basin_stats(q, st, certainty)
+    assert (s["computed"], s["not_computed"]) == (7, 1)
+    assert (s["status"]["non-finite"], s["status"]["unsettled"]) == (1, 1)
     assert s["labelled"] == 6 and s["standing"]["count"] == 2
-    assert s["uncertain"]["count"] == 1 and s["uncertain"]["standing_certain"]["count"] == 1
+    assert s["verified"] and s["certain"]["count"] == 4
+    assert s["uncertain"]["count"] == 3 and s["uncertain"]["standing"] == 1
+    assert s["standing_certain"]["count"] == 1 and s["standing_certain"]["of"] == 4
     assert {r["n"]: r["count"] for r in s["outcomes"]} == {-1: 1, 0: 3, 1: 1, 2: 1}
+    assert {r["n"]: r["count"] for r in s["outcomes_certain"]} == {-1: 1, 0: 3}
 
 
 # -- physics -------------------------------------------------------------------------------------
@@ -380,27 +379,27 @@ def test_mirror_symmetry_vphi_to_minus_vphi():
     """Reflecting x -> -x maps (vphi0, n) to (-vphi0, -n) at low vy0, where labels are robust."""
     scene = Scene()
     grid = make_grid(scene, {"vy": (0.1, 0.75), "vphi": (-20.0, 20.0)}, (8, 9), (8, 9))
-    result = compute_tile(make_spec(scene, info("event"), grid), (0, 0))
+    result = compute_tile(make_spec(scene, grid), (0, 0))
     q = result.arrays["quarter_turns"].astype(int)
     assert (result.arrays["status"] == 0).all()
     np.testing.assert_array_equal(q, -q[:, ::-1])
     assert np.abs(q).max() >= 2  # not trivially all zero
 
 
-def test_certify_flags_chaotic_cells_only(tmp_path):
-    """rtol 1e-4 against rtol 1e-5: cells with vy0 >= 1.8 m/s change, none below 0.8 m/s."""
-    path = tmp_path / "c.zarr"
-    coin_ok(str(path), "--vy", "0.2:2", "--res", "16", "--chunk", "8", "--rtol", "1e-4",
-            "--certify", "-q")
+def test_verified_labels_of_the_thick_coin_are_those_of_rtol_1e_10(tmp_path):
+    """On a small thick-preset grid, every cell the default calls certain has the label of a run
+    at rtol 1e-10; the uncertain cells are drawn and counted."""
+    import coincli
+
+    path = tmp_path / "thick.zarr"
+    coin_ok(str(path), "--preset", "thick", "--vy", "0.8:2", "--res", "12", "--chunk", "6", "-q")
     basin = store.read_basin(path)
-    assert basin.attrs["certify"]["rtol"] == pytest.approx(1e-5)
-    unc = basin.arrays["uncertain"]
-    vy = basin.coords[0]
-    assert set(np.unique(unc)) <= {0, 1}
-    assert unc[vy < 0.8].sum() == 0
-    assert unc[vy >= 1.8].sum() > 0
+    certain = basin.arrays["certainty"] == 1
+    assert certain.mean() > 0.5
+    tight = coincli.load_preset("thick").with_overrides(verify=False, rtol=1e-10)
+    reference = coincli.basin(tight, vy=(0.8, 2.0), res=12)["quarter_turns"].values
+    np.testing.assert_array_equal(basin.arrays["quarter_turns"][certain], reference[certain])
     stats = json.loads(coin_ok("stats", str(path), "--json").output)
-    u = stats["uncertain"]
-    assert u["count"] == int(unc.sum()) and 0 < u["fraction"] < 1
-    assert u["certain"] + u["count"] == stats["labelled"]
-    coin_ok("render", str(path), "-o", str(tmp_path / "c.png"), "--dpi", "50")
+    assert stats["verified"] and stats["certain"]["count"] == int(certain.sum())
+    assert stats["uncertain"]["count"] + stats["certain"]["count"] == stats["labelled"]
+    coin_ok("render", str(path), "-o", str(tmp_path / "t.png"), "--dpi", "50")

@@ -73,7 +73,7 @@ def test_simulate_json_with_a_recording_is_still_pure_json(in_tmp):
 
 def test_simulate_json_options_reach_the_scene():
     result = run("simulate", "--vy", "0.3", "--vphi", "-5", "--method", "rk4", "--dt", "2e-6",
-                 "--t-end", "0.05", "--full", "--json", "--no-rrd")
+                 "--t-end", "0.05", "--full", "--json", "--no-rrd", "--single-pass")
     assert result.exit_code == 0, (result.stdout, result.stderr, result.exception)
     data = json.loads(result.stdout)
     assert data["method"] == "rk4" and data["dt"] == 2e-6

@@ -41,9 +41,11 @@ from .common import (
     JsonOpt,
     KOpt,
     MassOpt,
+    MaxStepsOpt,
     MethodOpt,
     PresetOpt,
     RtolOpt,
+    SinglePassOpt,
     StopOpt,
     TEndOpt,
     ThicknessOpt,
@@ -155,10 +157,7 @@ def sweep_command(
     chunk: Annotated[str, typer.Option("--chunk", help="Tile size in cells, N or NxM: the "
                                        "unit of work, of writing and of resuming.",
                                        rich_help_panel=SWEEP)] = str(DEFAULT_CHUNK),
-    certify: Annotated[bool, typer.Option("--certify", help="Compute every cell again with "
-                                          "a tenfold smaller error bound (rtol/10; fixed step "
-                                          "dt/10^(1/order)) and flag the cells whose n changes "
-                                          "as uncertain.", rich_help_panel=SWEEP)] = False,
+
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing store "
                                             "instead of resuming it.",
                                             rich_help_panel=SWEEP)] = False,
@@ -180,7 +179,8 @@ def sweep_command(
     diameter: DiameterOpt = None, thickness: ThicknessOpt = None, mass: MassOpt = None,
     inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, g: GOpt = None,
     method: MethodOpt = None, dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
-    stop_on_settle: StopOpt = None, force: ForceOpt = False,
+    stop_on_settle: StopOpt = None, force: ForceOpt = False, single_pass: SinglePassOpt = False,
+    max_steps: MaxStepsOpt = None,
 ) -> None:
     """Sweep two initial conditions over a grid and store n for every cell (resumable).
 
@@ -193,15 +193,16 @@ def sweep_command(
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
                             inertia=inertia, k=k, c=c, g=g, method=method, dt=dt, rtol=rtol,
-                            t_end=t_end, stop_on_settle=stop_on_settle)
-        plan = api.plan_sweep(scene, res=res, chunk=chunk, certify=certify, force=force, x0=x0,
+                            t_end=t_end, stop_on_settle=stop_on_settle, max_steps=max_steps,
+                            verify=False if single_pass else None)
+        plan = api.plan_sweep(scene, res=res, chunk=chunk, force=force, x0=x0,
                               y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
         api.check_where(threads, workers, scheduler)
     grid = plan.grid
     progress = Progress(
         TextColumn("[bold]basin[/]"), BarColumn(),
         TextColumn("{task.fields[tiles]}/{task.fields[ntiles]} tiles"),
-        RateColumn("cells" if certify else "traj"), TimeElapsedColumn(),
+        RateColumn("cells"), TimeElapsedColumn(),
         TextColumn("ETA"), TimeRemainingColumn(),
         console=err_console, disable=quiet, transient=False)
     task = None
@@ -231,7 +232,7 @@ def sweep_command(
     console.print(f"{path}: {report.tiles_done}/{total} tiles done; this run computed "
                   f"{report.tiles_computed} tiles ({report.cells:,} cells) in "
                   f"{report.wall_seconds:.1f} s wall, {rate:,.0f} "
-                  f"{'cells' if certify else 'trajectories'}/s on {where}.")
+                  f"cells/s on {where}.")
     if not report.complete:
         err_console.print(f"[yellow]stopped:[/] {total - report.tiles_done} tiles left; run the "
                           "same command again to resume.")
@@ -285,8 +286,17 @@ def render_command(
             console.print(f"wrote {rrd} (open with: rerun {rrd})")
 
 
-def _pct(x: float) -> str:
+def _pct(x) -> str:
     return "-" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{100 * x:.3g} %"
+
+
+def _share(p: dict) -> str:
+    """'770 of 262,144 = 0.294 % (95 % CI 0.274 % to 0.315 %)'"""
+    return (f"{p['count']:,} of {p['of']:,} = {_pct(p['probability'])} "
+            f"(95 % CI {_pct(p['low'])} to {_pct(p['high'])})")
+
+
+TURN = {"none": "none", "clockwise": "cw", "counter-clockwise": "ccw"}
 
 
 @basin_app.command("stats")
@@ -294,17 +304,23 @@ def stats_command(
     path: Annotated[Path, typer.Argument(help="A basin store (complete or partial).",
                                          metavar="STORE")],
     json_out: JsonOpt = False,
+    csv_out: Annotated[Path | None, typer.Option("--csv", metavar="FILE", help="Also write the "
+                                                 "outcome table to this CSV file.")] = None,
 ) -> None:
-    """Outcome counts, the probability of standing (95 % Wilson interval), and the cost.
+    """Outcome probabilities (95 % Wilson intervals), certain and uncertain cells, and cost.
 
-    Count and fraction of each n over the labelled cells, the cells unsettled, non-finite or not computed, the uncertain fraction of a certified sweep with the outcome probabilities with and without the uncertain cells, and the CPU and wall time of the sweep.
-    """  # noqa: E501
+    Count and fraction of each n over the labelled cells and, for a verified sweep, over the
+    certain cells only; P(standing) with and without the uncertain cells; the cells unsettled,
+    non-finite, over budget or not computed; the CPU and wall time of the sweep.
+    """
     from .. import api
     from ..io.store import read_basin
 
     with user_errors():
         basin = read_basin(path)
-    stats = api.basin_stats(basin)
+        stats = api.basin_stats(basin)
+        if csv_out is not None:
+            _write_csv(stats, csv_out)
     attrs = basin.attrs
     if json_out:
         print_json({"path": str(path), "version": __version__, "store_version": attrs["version"],
@@ -312,62 +328,86 @@ def stats_command(
                     "tiles_done": int(basin.done.sum()), "tiles": int(basin.done.size), **stats})
         return
     ax0, ax1 = basin.axes
-    console.print(f"[bold]coin basin stats[/] {path}: {ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} "
-                  f"{ax0['units']} x {ax1['name']} {ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, "
-                  f"{ax0['n']} x {ax1['n']} cells, {attrs['method']['name']}")
-    table = Table(title="Outcomes (over labelled cells)", title_justify="left")
-    for col, just in (("n", "right"), ("pose", "left"), ("turn", "left"), ("count", "right"),
+    console.print(f"[bold]coin basin stats[/] {path}", highlight=False)
+    console.print(f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
+                  f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells, "
+                  f"{attrs['method']['name']}", highlight=False)
+    verified = stats["verified"]
+    table = Table(title="Outcomes (fractions of the labelled cells)", title_justify="left")
+    for col, just in (("n", "right"), ("pose", "left"), ("turn", "left"), ("cells", "right"),
                       ("fraction", "right")):
-        table.add_column(col, justify=just)
+        table.add_column(col, justify=just, no_wrap=True)
     certain_rows = {}
-    if stats["uncertain"] is not None:
-        table.add_column("certain cells", justify="right")
-        certain_rows = {r["n"]: r for r in stats["uncertain"]["outcomes_certain"]}
+    if verified:
+        table.add_column("certain", justify="right", no_wrap=True)
+        table.add_column("of certain", justify="right", no_wrap=True)
+        certain_rows = {r["n"]: r for r in stats["outcomes_certain"]}
     for row in stats["outcomes"]:
         style = "bold magenta" if row["pose"] == "standing" else None
-        cells = [str(row["n"]), row["pose"], row["direction"], f"{row['count']:,}",
+        cells = [str(row["n"]), row["pose"], TURN[row["direction"]], f"{row['count']:,}",
                  _pct(row["fraction"])]
-        if stats["uncertain"] is not None:
+        if verified:
             r = certain_rows.get(row["n"])
-            cells.append(f"{r['count']:,} ({_pct(r['fraction'])})" if r else "0")
+            cells += [f"{r['count']:,}", _pct(r["fraction"])] if r else ["0", "-"]
         table.add_row(*cells, style=style)
     console.print(table)
     summary = Table(show_header=False, box=None, pad_edge=False)
-    summary.add_column(style="bold")
+    summary.add_column(style="bold", no_wrap=True)
     summary.add_column()
-    s = stats["standing"]
     summary.add_row("cells", f"{stats['cells']:,}: {stats['computed']:,} computed "
                              f"({int(basin.done.sum())}/{basin.done.size} tiles), "
                              f"{stats['not_computed']:,} not computed")
-    summary.add_row("status", f"{stats['settled']:,} settled, {stats['unsettled']:,} unsettled "
-                              f"at t_end, {stats['non_finite']:,} non-finite")
-    summary.add_row("standing", f"{s['count']:,} of {s['of']:,} = {_pct(s['probability'])} "
-                                f"(95 % CI {_pct(s['ci95'][0])} to {_pct(s['ci95'][1])})")
-    if stats["uncertain"] is not None:
+    counts = ", ".join(f"{count:,} {name}" for name, count in stats["status"].items()
+                       if count and name != "not computed")
+    summary.add_row("status", counts or "-")
+    if verified:
         u = stats["uncertain"]
-        sc = u["standing_certain"]
-        summary.add_row("uncertain", f"{u['count']:,} of {stats['labelled']:,} = "
-                                     f"{_pct(u['fraction'])} (n changes under the certifying "
-                                     "run)")
-        summary.add_row("standing, certain", f"{sc['count']:,} of {sc['of']:,} = "
-                                             f"{_pct(sc['probability'])} (95 % CI "
-                                             f"{_pct(sc['ci95'][0])} to {_pct(sc['ci95'][1])}); "
-                                             f"{u['standing_uncertain']} standing cells "
-                                             "uncertain")
+        summary.add_row("certain", _share(stats["certain"]))
+        summary.add_row("uncertain", f"{u['count']:,} of {u['of']:,} = {_pct(u['probability'])}"
+                                     f" (no two rungs agreed); {u['standing']:,} of them "
+                                     "standing")
+        summary.add_row("standing", f"{_share(stats['standing_certain'])} of the certain "
+                                    "cells")
+        summary.add_row("", f"{_share(stats['standing'])} of all labelled cells")
     else:
-        summary.add_row("uncertain", "not certified (sweep with --certify to flag cells)")
+        summary.add_row("standing", _share(stats["standing"]))
+        summary.add_row("verified", "no: a single pass (labels unverified)")
     cost = stats["cost"]
     if not stats["computed"]:
         summary.add_row("cost", "nothing computed yet")
     elif "cpu_seconds" in cost:
-        per = " (two runs a cell)" if stats["certified"] else ""
         summary.add_row("cost", f"{cost['cpu_seconds']:.4g} CPU s, "
-                                f"{cost['cpu_ms_per_cell']:.3g} ms a cell{per}, "
+                                f"{cost['cpu_ms_per_cell']:.3g} ms a cell, "
                                 f"{cost['trajectories_per_cpu_second']:,.0f} cells per CPU s")
     if cost.get("wall_seconds"):
-        summary.add_row("wall", f"{cost['wall_seconds']:.4g} s over {cost['runs']} run(s), "
+        runs = cost["runs"]
+        summary.add_row("wall", f"{cost['wall_seconds']:.4g} s over {runs} "
+                                f"run{'s' if runs != 1 else ''}, "
                                 f"{cost['trajectories_per_second']:,.0f} cells/s")
     console.print(summary)
+
+
+def _write_csv(stats: dict, target: Path) -> None:
+    import csv
+
+    from ..io.paths import check_rrd_path
+
+    check_rrd_path(target)  # a writable file path
+    certain = {r["n"]: r for r in stats.get("outcomes_certain", [])}
+    with open(target, "w", newline="") as fh:
+        writer = csv.writer(fh)
+        header = ["n", "pose", "direction", "cells", "fraction", "low", "high"]
+        if stats["verified"]:
+            header += ["certain_cells", "fraction_of_certain", "certain_low", "certain_high"]
+        writer.writerow(header)
+        for row in stats["outcomes"]:
+            line = [row["n"], row["pose"], row["direction"], row["count"], row["fraction"],
+                    row["low"], row["high"]]
+            if stats["verified"]:
+                r = certain.get(row["n"])
+                line += ([r["count"], r["fraction"], r["low"], r["high"]] if r
+                         else [0, 0.0, "", ""])
+            writer.writerow(line)
 
 
 __all__ = ["basin_app"]

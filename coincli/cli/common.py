@@ -65,6 +65,15 @@ StopOpt = Annotated[bool | None, typer.Option("--stop-on-settle/--full", help="S
                                               rich_help_panel=INTEG)]
 ForceOpt = Annotated[bool, typer.Option("--force", help="Run a fixed step beyond the method's "
                                         "stable step anyway.", rich_help_panel=INTEG)]
+SinglePassOpt = Annotated[bool, typer.Option("--single-pass", help="Run once at the given "
+                                             "setting, without climbing the ladder of tighter "
+                                             "settings that verifies each label (the label "
+                                             "is then unverified).", rich_help_panel=INTEG)]
+MaxStepsOpt = Annotated[int | None, typer.Option("--max-steps", help="Step budget of one run "
+                                                 "(default: 1,000,000 for an adaptive method, "
+                                                 "t_end / dt for a fixed step); a run that "
+                                                 "needs more ends with status budget.",
+                                                 rich_help_panel=INTEG)]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout instead "
                                        "of tables.")]
 

@@ -10,7 +10,7 @@ import typer
 from rich.table import Table
 
 from ..defaults import DEFAULT_LOG_EVERY
-from ..enums import Status
+from ..enums import Certainty, Status
 from ..version import __version__
 from . import app
 from .common import (
@@ -23,10 +23,12 @@ from .common import (
     JsonOpt,
     KOpt,
     MassOpt,
+    MaxStepsOpt,
     MethodOpt,
     Phi0Opt,
     PresetOpt,
     RtolOpt,
+    SinglePassOpt,
     StopOpt,
     TEndOpt,
     ThicknessOpt,
@@ -71,7 +73,8 @@ def simulate_command(
     diameter: DiameterOpt = None, thickness: ThicknessOpt = None, mass: MassOpt = None,
     inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, g: GOpt = None,
     method: MethodOpt = None, dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
-    stop_on_settle: StopOpt = None, force: ForceOpt = False, json_out: JsonOpt = False,
+    stop_on_settle: StopOpt = None, force: ForceOpt = False, single_pass: SinglePassOpt = False,
+    max_steps: MaxStepsOpt = None, json_out: JsonOpt = False,
     rrd: RrdOpt = Path("coin.rrd"), no_rrd: NoRrdOpt = False, spawn: SpawnOpt = False,
     connect: ConnectOpt = None, log_every: LogEveryOpt = DEFAULT_LOG_EVERY,
 ) -> None:
@@ -89,7 +92,8 @@ def simulate_command(
         scene = build_scene(preset, x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi,
                             diameter=diameter, thickness=thickness, mass=mass, inertia=inertia,
                             k=k, c=c, g=g, method=method, dt=dt, rtol=rtol, t_end=t_end,
-                            stop_on_settle=stop_on_settle)
+                            stop_on_settle=stop_on_settle, max_steps=max_steps,
+                            verify=False if single_pass else None)
         if recording:
             _check_recording_options(scene, rrd_path, connect, log_every)
         trajectory = api.simulate(scene, sample_dt=log_every if recording else None,
@@ -112,8 +116,8 @@ def simulate_command(
         print_summary(trajectory)
         if info is not None:
             print_recording(info)
-    if trajectory.status == Status.NONFINITE:
-        raise SystemExit(1)
+    if trajectory.status not in (Status.SETTLED, Status.UNSETTLED):
+        raise SystemExit(1)  # no outcome: non-finite, out of budget or interrupted
 
 
 def _check_recording_options(scene, rrd_path, connect, log_every) -> None:
@@ -147,26 +151,41 @@ def print_recording(info) -> None:
                   f"{info.events} contact events", highlight=False, soft_wrap=True)
 
 
+def outcome_text(tr) -> str:
+    """The headline: the outcome and how sure it is, or why there is none."""
+    if tr.status == Status.SETTLED:
+        colour = "magenta" if tr.pose == "standing" else "cyan"
+        text = f"n = {tr.quarter_turns} quarter turns: [{colour}]{tr.pose}[/]"
+        if tr.certainty == Certainty.CERTAIN:
+            return f"{text} (certain: {tr.rungs[-2].setting} and {tr.rungs[-1].setting} agree)"
+        if tr.certainty == Certainty.UNCERTAIN:
+            return f"{text} [yellow](uncertain: no two rungs of the ladder agreed)[/]"
+        return f"{text} (single pass, not verified)"
+    if tr.status == Status.UNSETTLED:
+        return (f"[yellow]none by t_end[/]: still moving at t = {tr.t_final:g} s "
+                f"(round(2 phi / pi) = {tr.rounded_quarter_turns} there, not final)")
+    if tr.status == Status.BUDGET:
+        return f"[red]none[/]: the step budget ran out at t = {tr.t_final:.4g} s"
+    if tr.status == Status.INTERRUPTED:
+        return f"[red]none[/]: interrupted at t = {tr.t_final:.4g} s"
+    return f"[red]none[/]: the run went non-finite near t = {tr.t_final:.4g} s"
+
+
 def print_summary(tr) -> None:
+    from ..integrators.ladder import describe
+
     s = tr.summary()
     integ = tr.scene.integration
     init = tr.scene.initial
     console.print(f"[bold]coin simulate[/]  vy0 = {init.vy:g} m/s, vphi0 = {init.vphi:g} rad/s, "
                   f"phi0 = {init.phi0:g}, vx0 = {init.vx:g}, y0 = {tr.scene.y0:.6g} m")
     table = Table(show_header=False, box=None, pad_edge=False)
-    table.add_column(style="bold")
+    table.add_column(style="bold", no_wrap=True)
     table.add_column()
-    if tr.quarter_turns is None:
-        outcome = "[red]no outcome: the run went non-finite[/]"
-    else:
-        colour = "magenta" if tr.pose == "standing" else "cyan"
-        outcome = f"n = {tr.quarter_turns} quarter turns: [{colour}]{tr.pose}[/]"
-    table.add_row("outcome", outcome)
+    table.add_row("outcome", outcome_text(tr))
     if tr.settled:
-        table.add_row("settled", f"yes, at t = {tr.settle_time:.6g} s (energy below E_crit = "
-                                 f"{tr.e_crit * 1e3:.4g} mJ: n is final)")
-    else:
-        table.add_row("settled", f"[yellow]no[/] ({tr.status.label} at t = {tr.t_final:g} s)")
+        table.add_row("decided", f"at t = {tr.settle_time:.6g} s: the energy fell below "
+                                 f"E_crit = {tr.e_crit * 1e3:.4g} mJ, so n is final")
     if tr.rounded_quarter_turns is not None and tr.rounded_quarter_turns != tr.quarter_turns:
         table.add_row("round(2 phi/pi)", f"{tr.rounded_quarter_turns} at t = {tr.t_final:g} s")
     fs = s["final_state"]
@@ -177,12 +196,15 @@ def print_summary(tr) -> None:
                       f"vphi = {fs['vphi']:.4g} rad/s")
     table.add_row("energy", f"{tr.energy_initial * 1e3:.5g} mJ -> {tr.energy_final * 1e3:.5g} "
                             f"mJ ({s['energy_dissipated'] * 1e3:.5g} mJ dissipated)")
-    from ..integrators.registry import setting_text
-
-    setting = setting_text(integ.method, integ.dt, integ.rtol)
-    run_to = "stop when settled" if integ.stop_on_settle else f"full {integ.t_end:g} s"
-    table.add_row("method", f"{integ.method.label}, {setting}, {run_to}")
-    table.add_row("cost", f"{tr.steps:,} steps, {tr.wall_time * 1e3:.3g} ms wall")
+    run_to = "stop when decided" if integ.stop_on_settle else f"full {integ.t_end:g} s"
+    table.add_row("method", f"{integ.method.label}, {describe(integ)}, {run_to}")
+    if len(tr.rungs) > 1:
+        table.add_row("ladder", "; ".join(f"{r.setting}: n = {r.quarter_turns}"
+                                          for r in tr.rungs))
+    rungs = len(tr.rungs)
+    table.add_row("cost", f"{tr.steps:,} step{'s' if tr.steps != 1 else ''}"
+                          + (f" over {rungs} rungs" if rungs > 1 else "")
+                          + f", {tr.wall_time * 1e3:.3g} ms wall")
     console.print(table)
     for note in tr.notes:
         console.print(f"[yellow]note:[/] {note}")

@@ -11,9 +11,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..enums import Method, Status
+from ..enums import Certainty, Method, Status
 from ..jit import compiled, kernel
 from ..model import rounded_quarter_turns
+from ..params import RunSettings
 from .adaptive import integrate_adaptive
 from .common import EVENT_COLUMNS, NO_WELL, SAMPLE_COLUMNS
 from .fixed import integrate_fixed
@@ -60,6 +61,53 @@ def run_batch(p, settings, states, quarter_turns, status, settle_time, steps, co
         steps[row] = result.steps
 
 
+@kernel(inline=True)
+def rung_settings(settings, rtols, dts, k):
+    """The settings of rung k of a ladder: the base settings with that rung's rtol and dt."""
+    return RunSettings(settings.method, dts[k], rtols[k], settings.t_end,
+                       settings.stop_on_settle, settings.max_steps, settings.sample_dt)
+
+
+@kernel
+def run_ladder(p, settings, rtols, dts, states, quarter_turns, status, settle_time, steps,
+               certainty, rung, control):
+    """Verified labels: each row of ``states`` is run at rung 0, 1, ... of the ladder (rtols,
+    dts: the rungs' settings, coarse to fine) until two successive rungs agree: the same count
+    of quarter turns, both settled. Writes the finest run's outcome, the total steps, the
+    certainty (CERTAIN, UNCERTAIN if no two rungs agreed, UNVERIFIED for a one-rung ladder) and
+    the index of the last rung run. Releases the GIL; ``control[0]`` set stops it."""
+    no_samples = np.empty((0, SAMPLE_COLUMNS))
+    no_events = np.empty((0, EVENT_COLUMNS))
+    final = np.empty(6)
+    n_rungs = rtols.shape[0]
+    for row in range(states.shape[0]):
+        result = integrate(p, rung_settings(settings, rtols, dts, 0), states[row], no_samples,
+                           no_events, final, control)
+        label = outcome_label(result.status, result.n_well, final[2])
+        total = result.steps
+        verdict = Certainty.UNVERIFIED if n_rungs == 1 else Certainty.UNCERTAIN
+        last = 0
+        for k in range(1, n_rungs):
+            finer = integrate(p, rung_settings(settings, rtols, dts, k), states[row],
+                              no_samples, no_events, final, control)
+            finer_label = outcome_label(finer.status, finer.n_well, final[2])
+            total += finer.steps
+            last = k
+            agree = (finer_label == label and finer.status == Status.SETTLED
+                     and result.status == Status.SETTLED)
+            result = finer
+            label = finer_label
+            if agree:
+                verdict = Certainty.CERTAIN
+                break
+        quarter_turns[row] = label
+        status[row] = result.status
+        settle_time[row] = result.settle_time
+        steps[row] = total
+        certainty[row] = verdict
+        rung[row] = last
+
+
 class Labels(NamedTuple):
     """Per-trajectory outcomes of a batch, one entry per row of the states."""
 
@@ -67,6 +115,29 @@ class Labels(NamedTuple):
     status: np.ndarray  # uint8 Status values
     settle_time: np.ndarray  # float32 s, NaN where never settled
     steps: np.ndarray  # int64
+
+
+class VerifiedLabels(NamedTuple):
+    """Per-trajectory verified outcomes: Labels plus how sure each is."""
+
+    quarter_turns: np.ndarray  # int16, NO_LABEL where there is none
+    status: np.ndarray  # uint8 Status values
+    settle_time: np.ndarray  # float32 s
+    steps: np.ndarray  # int64, summed over the rungs run
+    certainty: np.ndarray  # uint8 Certainty values
+    rung: np.ndarray  # int8, index of the last rung run
+
+
+def verified_labels(p, settings, rtols, dts, states, control=None) -> VerifiedLabels:
+    """Run every row of ``states`` up the ladder (compiled; releases the GIL)."""
+    n = states.shape[0]
+    out = VerifiedLabels(np.empty(n, np.int16), np.empty(n, np.uint8), np.empty(n, np.float32),
+                         np.empty(n, np.int64), np.empty(n, np.uint8), np.empty(n, np.int8))
+    compiled(run_ladder)(p, settings, np.ascontiguousarray(rtols, dtype=np.float64),
+                         np.ascontiguousarray(dts, dtype=np.float64),
+                         np.ascontiguousarray(states, dtype=np.float64), *out,
+                         new_control() if control is None else control)
+    return out
 
 
 def new_control():
@@ -101,5 +172,6 @@ def warm_up(p, settings, state) -> None:
     label_states(p, short._replace(stop_on_settle=True), np.array([state], dtype=np.float64))
 
 
-__all__ = ["Labels", "NO_LABEL", "final_state", "integrate", "label_states", "new_control",
-           "outcome_label", "run_batch", "warm_up"]
+__all__ = ["Labels", "NO_LABEL", "VerifiedLabels", "final_state", "integrate", "label_states",
+           "new_control", "outcome_label", "run_batch", "run_ladder", "verified_labels",
+           "warm_up"]

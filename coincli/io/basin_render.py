@@ -4,7 +4,7 @@ Rerun recording of the map as a SegmentationImage with an AnnotationContext.
 Colours: phi grows counter-clockwise, so n < 0 is a net clockwise rotation, drawn yellow (small
 |n|) to red (large |n|) as in the paper; n > 0 (counter-clockwise) green to blue; n = 0 white.
 Standing cells (odd n) are black, ringed when the cells are too small to see one alone. Cells
-without a trustworthy label are drawn over the colours: uncertain (a certified sweep's flag)
+without a trustworthy label are drawn over the colours: uncertain (not converged on the ladder)
 grey (and crossed when they are few and small), unsettled at t_end purple, non-finite
 magenta; cells not computed are left transparent over a hatched background. The first swept
 axis is horizontal, the second vertical.
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..enums import Status
+from ..enums import Certainty, Status
 from ..grid import AXIS_INFO
 from .dataset import Basin
 
@@ -79,8 +79,8 @@ def basin_rgba(basin: Basin, n_max: int | None = None) -> tuple[np.ndarray, dict
     standing = labelled & (q % 2 == 1)
     rgba[standing] = STANDING
     classes = {"standing": standing}
-    if "uncertain" in basin.arrays:
-        uncertain = labelled & (basin.arrays["uncertain"] == 1)
+    if basin.verified:
+        uncertain = labelled & (basin.arrays["certainty"] == Certainty.UNCERTAIN)
         rgba[uncertain] = UNCERTAIN
         classes["uncertain"] = uncertain
         classes["standing"] = standing & ~uncertain
@@ -243,8 +243,8 @@ def log_rerun(basin: Basin, rrd: str | os.PathLike) -> Path:
     ids[st == Status.NONFINITE] = 1
     flags = np.zeros(q.shape, dtype=np.uint8)
     flags[st == Status.UNSETTLED] = 2
-    if "uncertain" in basin.arrays:
-        flags[labelled & (basin.arrays["uncertain"] == 1)] = 1
+    if basin.verified:
+        flags[labelled & (basin.arrays["certainty"] == Certainty.UNCERTAIN)] = 1
     # images are row = vertical axis from the top: second swept axis, highest value first
     rec = rr.RecordingStream("coin_basin")
     rec.save(str(rrd))

@@ -16,8 +16,8 @@ class Basin:
     """Arrays indexed [first swept axis, second swept axis]; cells of tiles not done hold the
     fill values (status NOT_COMPUTED)."""
 
-    attrs: dict  # the schema's attributes: parameters, sweep, method, certify, version
-    arrays: dict[str, np.ndarray]  # quarter_turns, status, settle_time, steps[, uncertain]
+    attrs: dict  # the schema's attributes: parameters, sweep, method, version
+    arrays: dict[str, np.ndarray]  # the schema's variables (coincli.io.schema.VARIABLES)
     done: np.ndarray  # per tile, 1 = complete
     tile_seconds: np.ndarray  # CPU seconds of each tile, NaN where unknown
     runs: list = field(default_factory=list)  # one record per invocation (wall time, mode)
@@ -40,8 +40,8 @@ class Basin:
         return tuple(np.linspace(a["lo"], a["hi"], a["n"]) for a in self.axes)
 
     @property
-    def certified(self) -> bool:
-        return "uncertain" in self.arrays
+    def verified(self) -> bool:
+        return len(self.attrs["method"]["verification"]["rungs"]) > 1
 
     @property
     def computed(self) -> np.ndarray:

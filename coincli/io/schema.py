@@ -6,15 +6,15 @@ from __future__ import annotations
 
 import math
 
-from ..enums import Status
-from ..grid import UNCERTAIN_NOT_COMPUTED, Grid, SweepSpec, certify_attrs, method_attrs
+from ..enums import Certainty, Status
+from ..grid import Grid, SweepSpec, method_attrs
 from ..integrators import NO_LABEL
 from ..integrators.registry import MethodInfo
 from ..params import Scene
 from ..version import __version__
 
-FORMAT = 1
-COMPARED_ATTRS = ("version", "parameters", "sweep", "method", "certify")
+FORMAT = 2
+COMPARED_ATTRS = ("version", "parameters", "sweep", "method")
 
 # name -> (dtype, fill value, attributes)
 VARIABLES = {
@@ -24,17 +24,21 @@ VARIABLES = {
         "description": "the well that holds the settled coin; round(2 phi / pi) at t_end when "
                        "unsettled; -32768 where not computed or non-finite"}),
     "status": ("uint8", int(Status.NOT_COMPUTED), {
-        "long_name": "run status",
-        "flag_values": [int(s) for s in (Status.SETTLED, Status.UNSETTLED, Status.NONFINITE,
-                                         Status.NOT_COMPUTED)],
-        "flag_meanings": "settled unsettled_at_t_end non_finite not_computed"}),
+        "long_name": "run status (of the last rung run)",
+        "flag_values": [int(s) for s in Status],
+        "flag_meanings": " ".join(s.label.replace(" ", "_").replace("-", "_") for s in Status)}),
     "settle_time": ("float32", math.nan, {
         "long_name": "time at which the energy fell below E_crit (n final)", "units": "s"}),
-    "steps": ("int64", -1, {"long_name": "integrator steps", "units": "1"}),
-    "uncertain": ("uint8", UNCERTAIN_NOT_COMPUTED, {
-        "long_name": "n changes under the certifying run (see the certify attribute)",
-        "flag_values": [0, 1, UNCERTAIN_NOT_COMPUTED],
-        "flag_meanings": "certain uncertain not_computed"}),
+    "steps": ("int64", -1, {"long_name": "integrator steps, summed over the rungs run",
+                            "units": "1"}),
+    "certainty": ("uint8", int(Certainty.NOT_COMPUTED), {
+        "long_name": "whether the label converged on the ladder of settings (attribute "
+                     "method.verification)",
+        "flag_values": [int(c) for c in Certainty],
+        "flag_meanings": " ".join(c.label.replace(" ", "_") for c in Certainty)}),
+    "rung": ("int8", -1, {
+        "long_name": "index of the last rung of the ladder run: the rung at which a certain "
+                     "label converged", "units": "1"}),
 }
 DTYPES = {name: spec[0] for name, spec in VARIABLES.items()}
 FILLS = {name: spec[1] for name, spec in VARIABLES.items()}
@@ -44,14 +48,14 @@ COORD_NOTE = "linspace(lo, hi, n), ends included"
 
 def basin_attrs(scene: Scene, method: MethodInfo, spec: SweepSpec) -> dict:
     """Everything needed to reproduce a basin: every parameter (the swept ones null, see
-    ``sweep``), the grid, the method and its settings, the certifying run, the version."""
+    ``sweep``), the grid, the method with its settings and verification ladder, the version."""
     grid = spec.grid
     parameters = scene.to_dict()
     for name in grid.dims:
         parameters["initial"][name] = None  # swept: see sweep.axes
     return {"coin_basin": {"format": FORMAT, "command": "coin basin"}, "version": __version__,
             "parameters": parameters, "sweep": grid.to_dict(),
-            "method": method_attrs(scene, method), "certify": certify_attrs(spec)}
+            "method": method_attrs(scene, method)}
 
 
 def tile_dims(grid: Grid) -> tuple[str, str]:

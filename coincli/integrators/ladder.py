@@ -1,0 +1,74 @@
+"""The ladder of settings behind a verified label.
+
+Every initial condition is computed at rung 0, 1, ... until two successive rungs agree (the
+same count of quarter turns, both runs settled): the label is then *certain*, converged at that
+rung. A cell whose label has not converged by the last rung is *uncertain*. Cells that agree at
+once cost two runs; only the disagreeing ones climb.
+
+Adaptive methods climb in tolerance, rtol, rtol / 10, ... down to the floor; fixed-step methods
+in step, dt / 10^(1/p) (a tenfold smaller error for a method of order p) for FIXED_RUNGS rungs.
+A single pass (``verify=False``) is a ladder of one rung: its labels are UNVERIFIED.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..params import Integration
+from .registry import info, setting_text
+
+RTOL_FLOOR = 1e-10  # the tightest tolerance a ladder climbs to (see README: the ladder)
+FIXED_RUNGS = 3
+
+
+@dataclass(frozen=True)
+class Ladder:
+    """The rungs of one integration's verification, coarse to fine."""
+
+    rtols: tuple[float, ...]
+    dts: tuple[float, ...]
+    adaptive: bool
+
+    @property
+    def verified(self) -> bool:
+        return len(self.rtols) > 1
+
+    def __len__(self) -> int:
+        return len(self.rtols)
+
+    def rung_text(self, k: int) -> str:
+        """``rtol = 1e-07`` or ``dt = 5e-07 s``: what rung k sets."""
+        return f"rtol = {self.rtols[k]:g}" if self.adaptive else f"dt = {self.dts[k]:g} s"
+
+    def to_dict(self) -> dict:
+        knob = "rtol" if self.adaptive else "dt"
+        return {"rungs": [{knob: (self.rtols if self.adaptive else self.dts)[k]}
+                          for k in range(len(self))],
+                "rule": "a label is certain when two successive rungs give the same count of "
+                        "quarter turns and both runs settled; uncertain if none do"}
+
+
+def ladder_of(integration: Integration) -> Ladder:
+    """The ladder of an integration's settings (one rung if it does not verify)."""
+    method = info(integration.method)
+    if not integration.verify:
+        return Ladder((integration.rtol,), (integration.dt,), method.adaptive)
+    if method.adaptive:
+        rtols = [integration.rtol]
+        while rtols[-1] / 10.0 >= RTOL_FLOOR * (1 - 1e-9) or len(rtols) < 2:
+            rtols.append(rtols[-1] / 10.0)
+        return Ladder(tuple(rtols), (integration.dt,) * len(rtols), True)
+    dts = tuple(integration.dt / 10.0 ** (k / method.order) for k in range(FIXED_RUNGS))
+    return Ladder((integration.rtol,) * FIXED_RUNGS, dts, False)
+
+
+def describe(integration: Integration) -> str:
+    """The setting of a run as a user reads it, with its verification."""
+    ladder = ladder_of(integration)
+    base = setting_text(integration.method, integration.dt, integration.rtol)
+    if not ladder.verified:
+        return f"{base}, single pass"
+    return f"{base}, verified up to {ladder.rung_text(len(ladder) - 1)}"
+
+
+__all__ = ["FIXED_RUNGS", "Ladder", "RTOL_FLOOR", "describe", "ladder_of"]
