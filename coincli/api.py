@@ -251,7 +251,7 @@ def _load_kernels(spec: SweepSpec) -> None:
     """Load the compiled kernels before the clock starts (and before the threads race to)."""
     state = np.asarray([spec.grid.base_state], dtype=np.float64)
     verified_labels(spec.params, spec.settings._replace(t_end=spec.settings.dt * 4),
-                    spec.ladder.rtols, spec.ladder.dts, state)
+                    spec.ladder, state)
 
 
 def check_where(threads, workers, scheduler) -> None:

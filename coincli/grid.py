@@ -301,8 +301,7 @@ def compute_tile(spec: SweepSpec, tile: tuple[int, int], control=None) -> TileRe
     states = spec.grid.tile_states(tile)
     s0, s1 = spec.grid.tile_slices(tile)
     shape = (s0.stop - s0.start, s1.stop - s1.start)
-    out = verified_labels(spec.params, spec.settings, spec.ladder.rtols, spec.ladder.dts,
-                          states, control)
+    out = verified_labels(spec.params, spec.settings, spec.ladder, states, control)
     arrays = {name: getattr(out, name).reshape(shape) for name in spec.array_names}
     return TileResult(tile=tuple(tile), arrays=arrays, cpu_seconds=time.thread_time() - cpu0,
                       wall_seconds=time.perf_counter() - wall0)

@@ -19,7 +19,7 @@ import numpy as np
 
 from .enums import Certainty, Engine, Status
 from .integrators import check_step, integrate, new_control, warm_up
-from .integrators.batch import NO_LABEL, outcome_label
+from .integrators.batch import NO_LABEL, outcome_label, rungs_agree
 from .integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
 from .integrators.ladder import ladder_of
 from .jit import compiled, is_active, python
@@ -167,17 +167,13 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
                           float(result.settle_time), int(result.steps)))
         if result.status == Status.INTERRUPTED:
             break
-        if k and _agree(rungs[-2], rungs[-1]):
+        if k and rungs_agree(rungs[-2].quarter_turns, rungs[-2].status, rungs[-2].settle_time,
+                             label, result.status, result.settle_time,
+                             ladder.settle_tolerance):
             certainty = Certainty.CERTAIN
             break
     return _trajectory(scene, p, state0, final, result, samples, events, sample_dt,
                        record_events, wall, certainty, rungs)
-
-
-def _agree(coarse: Rung, fine: Rung) -> bool:
-    """The ladder's rule: the same count of quarter turns, both runs settled."""
-    return (coarse.status == fine.status == Status.SETTLED
-            and coarse.quarter_turns == fine.quarter_turns)
 
 
 def _run(p, settings, state0, samples, events, final, control, engine: Engine):

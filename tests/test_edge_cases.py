@@ -28,7 +28,8 @@ def strict_json(text: str):
 def test_flat_landing_touches_with_both_corners_at_once(method, vy):
     """A coin thrown straight up lands flat on two corners at the same instant: no torque may
     appear, so phi stays exactly 0 (the event method once added the corners one by one)."""
-    scene = load("paper").scene.with_overrides(verify=False).with_overrides(vy=vy, vphi=0.0, method=method, t_end=3.0)
+    scene = load("paper").scene.with_overrides(verify=False, vy=vy, vphi=0.0, method=method,
+                                               t_end=3.0)
     tr = simulate(scene, record_events=True)
     assert tr.final_state[2] == 0.0 and tr.final_state[5] == 0.0
     assert tr.quarter_turns == 0

@@ -136,9 +136,9 @@ def test_stable_step_predictions(paper):
     se = info("symplectic_euler").stable_step(paper)
     assert se < 2 / omega
     assert se == pytest.approx(3.29e-4, rel=0.01)
-    undamped = info("symplectic_euler").stable_step(load("undamped").scene.with_overrides(verify=False))
+    undamped = info("symplectic_euler").stable_step(load("undamped").scene)
     assert undamped == pytest.approx(2 / omega, rel=1e-3)
-    assert info("rk4").stable_step(load("undamped").scene.with_overrides(verify=False)) == pytest.approx(
+    assert info("rk4").stable_step(load("undamped").scene) == pytest.approx(
         2 * math.sqrt(2) / omega, rel=1e-3)
     for name in ADAPTIVE:
         assert info(name).stable_step(paper) is None
@@ -206,8 +206,8 @@ def test_no_impact_is_skipped_in_flight(name):
     between two steps; an integrator that checks corner heights only at step ends may step over
     the whole impact. Every adaptive method must see the same impacts as the closed-form flight
     of the event method."""
-    scene = load("undamped").scene.with_overrides(verify=False).with_overrides(vy=1.0, vphi=5.0, t_end=0.5, rtol=1e-10,
-                                                  stop_on_settle=False)
+    scene = load("undamped").scene.with_overrides(verify=False, vy=1.0, vphi=5.0, t_end=0.5,
+                                                  rtol=1e-10, stop_on_settle=False)
     ref = simulate(scene.with_overrides(method="event"), record_events=True)
     tr = simulate(scene.with_overrides(method=name), record_events=True)
     n = 6

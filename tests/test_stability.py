@@ -68,7 +68,7 @@ def test_paper_figures_from_cli_json():
     assert round(data["k_min"], 1) == 154.9
     assert round(data["k_cr"], 2) == 308.96
     assert data["standing_static"] is True and data["lying_static"] is True
-    assert data["e_crit"] == pytest.approx(load("paper").scene.with_overrides(verify=False).e_crit, rel=1e-14)
+    assert data["e_crit"] == pytest.approx(load("paper").scene.e_crit, rel=1e-14)
     assert data["parameters"]["coin"]["mass"] == pytest.approx(math.pi * 1e-3)
 
 

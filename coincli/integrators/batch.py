@@ -69,13 +69,23 @@ def rung_settings(settings, rtols, dts, k):
 
 
 @kernel
-def run_ladder(p, settings, rtols, dts, states, quarter_turns, status, settle_time, steps,
-               certainty, rung, control):
+def rungs_agree(label_a, status_a, settle_a, label_b, status_b, settle_b, settle_tolerance):
+    """The ladder's rule: two runs agree when both settled, with the same count of quarter
+    turns, within ``settle_tolerance`` seconds of each other. The settle time fingerprints the
+    whole trajectory: two runs that parted at some bounce settle at clearly different times,
+    even when, as often in a chaotic region, they happen to end in the same well."""
+    return (status_a == Status.SETTLED and status_b == Status.SETTLED and label_a == label_b
+            and abs(settle_a - settle_b) <= settle_tolerance)
+
+
+@kernel
+def run_ladder(p, settings, rtols, dts, settle_tolerance, states, quarter_turns, status,
+               settle_time, steps, certainty, rung, control):
     """Verified labels: each row of ``states`` is run at rung 0, 1, ... of the ladder (rtols,
-    dts: the rungs' settings, coarse to fine) until two successive rungs agree: the same count
-    of quarter turns, both settled. Writes the finest run's outcome, the total steps, the
-    certainty (CERTAIN, UNCERTAIN if no two rungs agreed, UNVERIFIED for a one-rung ladder) and
-    the index of the last rung run. Releases the GIL; ``control[0]`` set stops it."""
+    dts: the rungs' settings, coarse to fine) until two successive rungs agree
+    (:func:`rungs_agree`). Writes the finest run's outcome, the total steps, the certainty
+    (CERTAIN, UNCERTAIN if no two rungs agreed, UNVERIFIED for a one-rung ladder) and the index
+    of the last rung run. Releases the GIL; ``control[0]`` set stops it."""
     no_samples = np.empty((0, SAMPLE_COLUMNS))
     no_events = np.empty((0, EVENT_COLUMNS))
     final = np.empty(6)
@@ -93,8 +103,8 @@ def run_ladder(p, settings, rtols, dts, states, quarter_turns, status, settle_ti
             finer_label = outcome_label(finer.status, finer.n_well, final[2])
             total += finer.steps
             last = k
-            agree = (finer_label == label and finer.status == Status.SETTLED
-                     and result.status == Status.SETTLED)
+            agree = rungs_agree(label, result.status, result.settle_time, finer_label,
+                                finer.status, finer.settle_time, settle_tolerance)
             result = finer
             label = finer_label
             if agree:
@@ -128,13 +138,14 @@ class VerifiedLabels(NamedTuple):
     rung: np.ndarray  # int8, index of the last rung run
 
 
-def verified_labels(p, settings, rtols, dts, states, control=None) -> VerifiedLabels:
-    """Run every row of ``states`` up the ladder (compiled; releases the GIL)."""
+def verified_labels(p, settings, ladder, states, control=None) -> VerifiedLabels:
+    """Run every row of ``states`` up the ladder (a Ladder; compiled, releases the GIL)."""
     n = states.shape[0]
     out = VerifiedLabels(np.empty(n, np.int16), np.empty(n, np.uint8), np.empty(n, np.float32),
                          np.empty(n, np.int64), np.empty(n, np.uint8), np.empty(n, np.int8))
-    compiled(run_ladder)(p, settings, np.ascontiguousarray(rtols, dtype=np.float64),
-                         np.ascontiguousarray(dts, dtype=np.float64),
+    compiled(run_ladder)(p, settings, np.asarray(ladder.rtols, dtype=np.float64),
+                         np.asarray(ladder.dts, dtype=np.float64),
+                         float(ladder.settle_tolerance),
                          np.ascontiguousarray(states, dtype=np.float64), *out,
                          new_control() if control is None else control)
     return out
@@ -173,5 +184,5 @@ def warm_up(p, settings, state) -> None:
 
 
 __all__ = ["Labels", "NO_LABEL", "VerifiedLabels", "final_state", "integrate", "label_states",
-           "new_control", "outcome_label", "run_batch", "run_ladder", "verified_labels",
-           "warm_up"]
+           "new_control", "outcome_label", "run_batch", "run_ladder", "rungs_agree",
+           "verified_labels", "warm_up"]

@@ -19,6 +19,7 @@ from .registry import info, setting_text
 
 RTOL_FLOOR = 1e-10  # the tightest tolerance a ladder climbs to (see README: the ladder)
 FIXED_RUNGS = 3
+SETTLE_TOLERANCE = 1e-4  # s: two agreeing runs settle within this of each other
 
 
 @dataclass(frozen=True)
@@ -28,6 +29,7 @@ class Ladder:
     rtols: tuple[float, ...]
     dts: tuple[float, ...]
     adaptive: bool
+    settle_tolerance: float = SETTLE_TOLERANCE
 
     @property
     def verified(self) -> bool:
@@ -44,8 +46,10 @@ class Ladder:
         knob = "rtol" if self.adaptive else "dt"
         return {"rungs": [{knob: (self.rtols if self.adaptive else self.dts)[k]}
                           for k in range(len(self))],
-                "rule": "a label is certain when two successive rungs give the same count of "
-                        "quarter turns and both runs settled; uncertain if none do"}
+                "settle_tolerance": self.settle_tolerance,
+                "rule": "a label is certain when two successive rungs both settle, with the "
+                        "same count of quarter turns, within settle_tolerance seconds of each "
+                        "other; uncertain if no two do"}
 
 
 def ladder_of(integration: Integration) -> Ladder:
