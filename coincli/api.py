@@ -37,7 +37,7 @@ from .grid import (
 )
 from .integrators import check_step
 from .integrators.batch import verified_labels
-from .params import ParameterError, Scene, validate
+from .params import ParameterError, Scene, check_start, validate
 from .presets import load
 from .statics import StabilityReport, analyse
 from .throw import Outcome, Trajectory, classify, simulate
@@ -81,9 +81,20 @@ def plan_sweep(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, force: boo
     for axis in grid.axes:  # every swept value must make a valid scene too
         for value in (axis.lo, axis.hi):
             validate(scene.with_overrides(**{axis.name: value}))
+    _check_starts(scene, grid)
     method = check_step(scene, force=force)
     spec = make_spec(scene, grid)
     return SweepPlan(scene, spec, basin_attrs(scene, method, spec))
+
+
+def _check_starts(scene: Scene, grid: Grid) -> None:
+    """No cell may start deeper in the foundation than the scene allows: the deepest pose has
+    the lowest y0 and the angle that reaches furthest down (checked over every phi0 cell)."""
+    coords = {axis.name: axis.coords for axis in grid.axes}
+    y0 = float(np.min(coords["y0"])) if "y0" in coords else scene.y0
+    phis = coords.get("phi0", np.array([scene.initial.phi0]))
+    reach = scene.coin.r_d * np.abs(np.sin(phis)) + scene.coin.r_t * np.abs(np.cos(phis))
+    check_start(scene, y0, float(phis[int(np.argmax(reach))]))
 
 
 @dataclass(frozen=True)

@@ -198,6 +198,37 @@ def _check_number(name: str, value, positive: bool = False, nonnegative: bool = 
         raise ParameterError(f"{name} must not be negative, got {value}")
 
 
+DEEPEST_FORCE = 100.0  # a start deeper than where the spring force is this many weights is refused
+
+
+def penetration(scene: Scene, y0: float | None = None, phi0: float | None = None) -> float:
+    """How deep (m) the lowest corner of the initial pose sits in the foundation (0 above it)."""
+    y0 = scene.y0 if y0 is None else y0
+    phi0 = scene.initial.phi0 if phi0 is None else phi0
+    reach = scene.coin.r_d * abs(math.sin(phi0)) + scene.coin.r_t * abs(math.cos(phi0))
+    return max(0.0, reach - y0)
+
+
+def deepest_start(scene: Scene) -> float:
+    """The deepest a corner may start in the foundation: where its spring pushes with
+    DEEPEST_FORCE times the coin's weight (0.3 mm for the paper's coin). Deeper, the throw is
+    not a throw: the coin would be fired out of the ground."""
+    return DEEPEST_FORCE * scene.coin.mass * scene.g / scene.foundation.k
+
+
+def check_start(scene: Scene, y0: float | None = None, phi0: float | None = None) -> None:
+    """Refuse an initial pose deeper in the foundation than deepest_start (one line)."""
+    depth = penetration(scene, y0, phi0)
+    limit = deepest_start(scene)
+    if depth > limit:
+        y0 = scene.y0 if y0 is None else y0
+        phi0 = scene.initial.phi0 if phi0 is None else phi0
+        raise ParameterError(
+            f"y0 = {y0:g} m, phi0 = {phi0:g} rad puts a corner {depth * 1e3:.4g} mm deep in the "
+            f"foundation; at most {limit * 1e3:.3g} mm (where its spring force is "
+            f"{DEEPEST_FORCE:g} times the coin's weight)")
+
+
 def validate(scene: Scene) -> Scene:
     """Raise ParameterError with a one-line message if a value is unusable; return the scene."""
     c, f, s, i = scene.coin, scene.foundation, scene.initial, scene.integration
@@ -214,6 +245,7 @@ def validate(scene: Scene) -> Scene:
         _check_number(name, getattr(s, name))
     if s.y0 is not None:
         _check_number("y0", s.y0)
+    check_start(scene)
     _check_number("dt", i.dt, positive=True)
     _check_number("rtol", i.rtol, positive=True)
     _check_number("t_end", i.t_end, positive=True)

@@ -165,8 +165,8 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
         label = None if label == NO_LABEL else int(label)
         rungs.append(Rung(ladder.rung_text(k), label, Status(result.status),
                           float(result.settle_time), int(result.steps)))
-        if result.status == Status.INTERRUPTED:
-            break
+        if result.status in (Status.BUDGET, Status.INTERRUPTED):
+            break  # a tighter rung would need more steps still, or was told to stop
         if k and rungs_agree(rungs[-2].quarter_turns, rungs[-2].status, rungs[-2].settle_time,
                              label, result.status, result.settle_time,
                              ladder.settle_tolerance):
@@ -187,8 +187,29 @@ def _run(p, settings, state0, samples, events, final, control, engine: Engine):
             return result, time.perf_counter() - start, engine
     warm_up(p, settings._replace(sample_dt=0.0), state0)  # before the clock starts
     start = time.perf_counter()
-    result = compiled(integrate)(p, settings, state0, samples, events, final, control)
+    result = _interruptible(compiled(integrate), (p, settings, state0, samples, events, final,
+                                                   control), control)
     return result, time.perf_counter() - start, Engine.NUMBA
+
+
+def _interruptible(kernel, args, control):
+    """Run a compiled kernel in a worker thread (it releases the GIL), so that this thread
+    still takes Ctrl-C: it then sets the control flag, the kernel returns within microseconds
+    (status INTERRUPTED) and KeyboardInterrupt goes on up."""
+    import threading
+
+    box = []
+    worker = threading.Thread(target=lambda: box.append(kernel(*args)), daemon=True,
+                              name="coin-kernel")
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.1)
+    except KeyboardInterrupt:
+        control[0] = 1
+        worker.join()
+        raise
+    return box[0]
 
 
 def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, record_events,

@@ -39,6 +39,7 @@ from .common import (
     Y0Opt,
     build_scene,
     console,
+    err_console,
     fail,
     print_json,
     user_errors,
@@ -96,8 +97,13 @@ def simulate_command(
                             verify=False if single_pass else None)
         if recording:
             _check_recording_options(scene, rrd_path, connect, log_every)
-        trajectory = api.simulate(scene, sample_dt=log_every if recording else None,
-                                  record_events=recording, force=force)
+        _announce(scene)
+        try:
+            trajectory = api.simulate(scene, sample_dt=log_every if recording else None,
+                                      record_events=recording, force=force)
+        except KeyboardInterrupt:
+            err_console.print("[yellow]interrupted[/]: no outcome, nothing written")
+            raise typer.Exit(code=130) from None
     info = None
     if recording:
         from ..io.rrd import write_recording
@@ -118,6 +124,24 @@ def simulate_command(
             print_recording(info)
     if trajectory.status not in (Status.SETTLED, Status.UNSETTLED):
         raise SystemExit(1)  # no outcome: non-finite, out of budget or interrupted
+
+
+SLOW_STEPS = 1e8  # fixed steps above which a run is announced (about 2 s of compiled work)
+
+
+def _announce(scene) -> None:
+    """Say before it starts how long a long fixed-step run will take at most."""
+    from ..integrators import info
+    from ..params import step_budget
+
+    integ = scene.integration
+    if info(integ.method).adaptive:
+        return
+    steps = step_budget(integ)
+    if steps > SLOW_STEPS:
+        hours = steps * 2e-8 / 3600  # ~20 ns a step compiled, the paper's method
+        err_console.print(f"[yellow]note[/]: up to {steps:.3g} steps of {integ.dt:g} s "
+                          f"(about {hours:.2g} hours); Ctrl-C stops it", highlight=False)
 
 
 def _check_recording_options(scene, rrd_path, connect, log_every) -> None:

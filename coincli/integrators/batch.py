@@ -98,6 +98,8 @@ def run_ladder(p, settings, rtols, dts, settle_tolerance, states, quarter_turns,
         verdict = Certainty.UNVERIFIED if n_rungs == 1 else Certainty.UNCERTAIN
         last = 0
         for k in range(1, n_rungs):
+            if result.status == Status.BUDGET or result.status == Status.INTERRUPTED:
+                break  # a tighter rung would need more steps still, or was told to stop
             finer = integrate(p, rung_settings(settings, rtols, dts, k), states[row],
                               no_samples, no_events, final, control)
             finer_label = outcome_label(finer.status, finer.n_well, final[2])
