@@ -20,9 +20,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .enums import Method, Status
+from .enums import Certainty, Method, Status
 from .grid import Grid, make_grid
 from .integrators import METHODS, final_state, label_states, warm_up
+from .integrators.batch import verified_labels
+from .integrators.ladder import ladder_of
 from .model import total_energy
 from .params import Scene, model_params, run_settings, state_array
 from .stats import wilson
@@ -37,6 +39,7 @@ class Setting:
     method: Method
     dt: float
     rtol: float
+    verify: bool = False  # climb the verification ladder from this setting
 
     def __post_init__(self):
         object.__setattr__(self, "method", Method.parse(self.method))
@@ -52,11 +55,13 @@ class Setting:
 
     @property
     def label(self) -> str:
-        return f"{self.method.label} {'rtol' if self.adaptive else 'h'}={self.knob:g}"
+        return (f"{self.method.label} {'rtol' if self.adaptive else 'h'}={self.knob:g}"
+                + (" verified" if self.verify else ""))
 
     def apply(self, scene: Scene, **extra) -> Scene:
         return scene.with_overrides(method=self.method, dt=self.dt,
-                                    rtol=self.rtol if self.adaptive else None, **extra)
+                                    rtol=self.rtol if self.adaptive else None,
+                                    verify=self.verify, **extra)
 
 
 REFERENCE_A = Setting(Method.EVENT, 1e-6, 1e-12)
@@ -83,6 +88,12 @@ def ladder_settings(methods: list[Method] | None = None) -> list[Setting]:
     return out
 
 
+def verified_default(scene: Scene) -> Setting:
+    """The scene's own setting, verified: what `coin basin` and `coin simulate` run."""
+    integ = scene.integration
+    return Setting(integ.method, integ.dt, integ.rtol, verify=True)
+
+
 def vy_vphi_grid(scene: Scene, vy=(0.05, 2.0), vphi=(-20.0, 20.0), res=(32, 32)) -> Grid:
     """The (vy0, vphi0) grid of the studies, the other initial conditions from the scene."""
     return make_grid(scene, {"vy": tuple(vy), "vphi": tuple(vphi)}, tuple(res), tuple(res))
@@ -95,6 +106,7 @@ class GridRun:
     status: np.ndarray
     cpu_seconds: float  # summed over threads
     wall_seconds: float
+    certainty: np.ndarray | None = None  # uint8 Certainty of a verified setting
 
     @property
     def cpu_per_trajectory(self) -> float:
@@ -109,17 +121,23 @@ def run_grid(scene: Scene, setting: Setting, grid: Grid, threads: int = 2,
     run_scene = setting.apply(scene, stop_on_settle=stop_on_settle, t_end=t_end)
     p = model_params(run_scene)
     settings = run_settings(run_scene.integration)
+    ladder = ladder_of(run_scene.integration)
     states = grid.states()
     n = states.shape[0]
     n_out = np.empty(n, np.int16)
     st_out = np.empty(n, np.uint8)
+    certainty = np.empty(n, np.uint8)
     warm_up(p, settings, states[0])  # before timing
     # interleave cells across threads so each gets a fair share of hard and easy cells
     parts = [np.arange(i, n, threads) for i in range(threads)]
 
     def work(idx):
         start = time.thread_time()
-        labels = label_states(p, settings, states[idx])
+        if setting.verify:
+            labels = verified_labels(p, settings, ladder, states[idx])
+            certainty[idx] = labels.certainty
+        else:
+            labels = label_states(p, settings, states[idx])
         n_out[idx], st_out[idx] = labels.quarter_turns, labels.status
         return time.thread_time() - start
 
@@ -127,14 +145,25 @@ def run_grid(scene: Scene, setting: Setting, grid: Grid, threads: int = 2,
     with ThreadPoolExecutor(threads) as pool:
         cpu = sum(pool.map(work, parts))
     wall = time.perf_counter() - wall
-    return GridRun(setting, n_out.reshape(grid.shape), st_out.reshape(grid.shape), cpu, wall)
+    return GridRun(setting, n_out.reshape(grid.shape), st_out.reshape(grid.shape), cpu, wall,
+                   certainty.reshape(grid.shape) if setting.verify else None)
 
 
 def label_error(run: GridRun, reference: np.ndarray, robust: np.ndarray) -> float:
     """Fraction of robust cells whose label differs from the reference (a non-finite or
-    unsettled cell counts as wrong)."""
+    unsettled cell counts as wrong). For a verified run, the cells it calls certain and gets
+    wrong (its uncertain cells are counted by :func:`uncertain_fraction`)."""
     ok = (run.quarter_turns == reference) & (run.status == Status.SETTLED)
+    if run.certainty is not None:
+        ok |= run.certainty != Certainty.CERTAIN
     return float(np.mean(~ok[robust])) if robust.any() else math.nan
+
+
+def uncertain_fraction(run: GridRun, robust: np.ndarray) -> float:
+    """Fraction of robust cells a verified run flags uncertain (NaN for a single pass)."""
+    if run.certainty is None or not robust.any():
+        return math.nan
+    return float(np.mean(run.certainty[robust] != Certainty.CERTAIN))
 
 
 # -- trajectory error ------------------------------------------------------------------------------
@@ -180,10 +209,11 @@ def reference_states(scene: Scene, setting: Setting) -> list[np.ndarray]:
 class Point:
     setting: Setting
     trajectory_error: float
-    label_error: float
+    label_error: float  # of a verified setting: certain and wrong
     cpu_per_trajectory: float
     nonfinite: int
     unsettled: int
+    uncertain: float = math.nan  # of a verified setting: flagged uncertain
 
 
 @dataclass
@@ -196,6 +226,7 @@ class Study:
     trajectory_reference_gap: float  # state error between the two trajectory references
     points: list[Point] = field(default_factory=list)
     paper_point: Point | None = None
+    verified_point: Point | None = None  # the scene's own setting, verified
 
     @property
     def robust_cells(self) -> int:
@@ -246,8 +277,11 @@ def run_references(scene: Scene, grid: Grid, threads: int = 2, progress=None) ->
 
 
 def run_study(scene: Scene, grid: Grid, settings: list[Setting], threads: int = 2,
-              progress=None) -> Study:
-    """The whole work-precision study. ``progress(text)`` is called before each piece."""
+              progress=None, verified: bool = True) -> Study:
+    """The whole work-precision study. ``progress(text)`` is called before each piece. With
+    ``verified``, the scene's own setting verified (what `coin basin` runs) is a point too:
+    its label error counts the cells it calls certain and gets wrong; its uncertain cells are
+    counted apart."""
     say = progress or (lambda text: None)
     refs = run_references(scene, grid, threads, say)
     ref_a, ref_b, robust = refs.a, refs.b, refs.robust
@@ -256,14 +290,19 @@ def run_study(scene: Scene, grid: Grid, settings: list[Setting], threads: int = 
     gap = float(np.median([state_error(scene, a, b) for a, b in zip(traj_ref, traj_check,
                                                                      strict=True)]))
     study = Study(grid, ref_a, ref_b, robust, refs.agreement, gap)
-    for setting in settings:
+
+    def measure(setting: Setting) -> Point:
         say(setting.label)
         run = run_grid(scene, setting, grid, threads)
-        study.points.append(Point(
-            setting, trajectory_error(scene, setting, traj_ref),
-            label_error(run, ref_a.quarter_turns, robust), run.cpu_per_trajectory,
-            int(np.sum(run.status == Status.NONFINITE)),
-            int(np.sum(run.status == Status.UNSETTLED))))
+        return Point(setting, trajectory_error(scene, setting, traj_ref),
+                     label_error(run, ref_a.quarter_turns, robust), run.cpu_per_trajectory,
+                     int(np.sum(run.status == Status.NONFINITE)),
+                     int(np.sum(run.status == Status.UNSETTLED)),
+                     uncertain_fraction(run, robust))
+
+    study.points = [measure(setting) for setting in settings]
+    if verified:
+        study.verified_point = measure(verified_default(scene))
     # The paper's setting: symplectic Euler, h = 1e-6, always 2 s. Its labels are those of the
     # same step stopped early (the early stop is certified), so only its cost needs measuring,
     # on a few cells of the grid.

@@ -35,8 +35,7 @@ from .grid import (
     parse_pair,
     split_options,
 )
-from .integrators import check_step
-from .integrators.batch import verified_labels
+from .integrators import check_step, warm_up
 from .params import ParameterError, Scene, check_start, validate
 from .presets import load
 from .statics import StabilityReport, analyse
@@ -260,9 +259,7 @@ def _basin_in_memory(plan: SweepPlan, threads, progress, stop):
 
 def _load_kernels(spec: SweepSpec) -> None:
     """Load the compiled kernels before the clock starts (and before the threads race to)."""
-    state = np.asarray([spec.grid.base_state], dtype=np.float64)
-    verified_labels(spec.params, spec.settings._replace(t_end=spec.settings.dt * 4),
-                    spec.ladder, state)
+    warm_up(spec.params, spec.settings, np.asarray(spec.grid.base_state, dtype=np.float64))
 
 
 def check_where(threads, workers, scheduler) -> None:

@@ -71,6 +71,34 @@ def python(fn):
     return getattr(fn, "py_func", fn)
 
 
+FIRST_COMPILE_SECONDS = 60  # about how long the first compilation takes on 2 cores
+
+
+def _marker() -> Path:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        numba_version = version("numba")
+    except PackageNotFoundError:
+        numba_version = "unknown"
+    return cache_dir() / f"numba-{numba_version}" / f"compiled-{sources_digest()}"
+
+
+def kernels_cached() -> bool:
+    """Whether this machine has compiled this version of the kernels already (so that using
+    them takes a second, not a minute): a marker written by :func:`mark_cached`."""
+    return _marker().exists()
+
+
+def mark_cached() -> None:
+    """Record that the kernels of these sources are compiled and cached."""
+    try:
+        _marker().parent.mkdir(parents=True, exist_ok=True)
+        _marker().touch()
+    except OSError:
+        pass  # an unwritable cache only means the notice shows again
+
+
 def cache_dir() -> Path:
     base = os.environ.get("NUMBA_CACHE_DIR")
     if base:
@@ -144,4 +172,5 @@ def _install_locator(numba) -> None:
     CacheImpl._locator_classes.insert(0, CoincliCacheLocator)
 
 
-__all__ = ["cache_dir", "compiled", "is_active", "kernel", "python", "sources_digest"]
+__all__ = ["FIRST_COMPILE_SECONDS", "cache_dir", "compiled", "is_active", "kernel",
+           "kernels_cached", "mark_cached", "python", "sources_digest"]

@@ -49,6 +49,7 @@ class StabilityReport:
     single_corner_contact: bool
     standing_well_depth: float  # J, E_crit minus the exact resting energy of a standing coin
     k_stand_exact: float  # N/m, the stiffness where that depth vanishes (k_cr / 2)
+    k_rock: float  # N/m, below it a standing coin is no minimum at all: m g r_d / (2 r_t^2)
 
     def to_dict(self) -> dict:
         out = asdict(self)
@@ -78,4 +79,4 @@ def analyse(scene: Scene) -> StabilityReport:
         phi_cr=coin.phi_cr, rigid=rigid, elastic=elastic, k=k, k_min=k_min, k_cr=k_cr,
         e_crit=scene.e_crit, lying_static=True, standing_static=k > k_cr,
         single_corner_contact=k >= k_min, standing_well_depth=scene.e_crit - standing_rest,
-        k_stand_exact=weight / (4 * (r - r_d)))
+        k_stand_exact=weight / (4 * (r - r_d)), k_rock=weight * r_d / (2 * r_t**2))

@@ -2,16 +2,36 @@
 
 from __future__ import annotations
 
+from typing import Annotated
+
 import typer
 
 app = typer.Typer(
     name="coin",
     help="The plane model of a rigid coin impacting an elastic foundation: simulate one throw, "
-         "map which throws make the coin lie or stand, and check the numbers.",
+         "map which throws make the coin lie or stand, and check the numbers. Every command "
+         "has --help; the README has a tour.",
     no_args_is_help=True,
     pretty_exceptions_enable=False,
-    add_completion=False,
+    add_completion=True,
 )
+
+
+def _version(value: bool) -> None:
+    if value:
+        from ..version import __version__
+
+        typer.echo(f"coin (coincli) {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _options(
+    version: Annotated[bool, typer.Option("--version", metavar="", callback=_version,
+                                          is_eager=True, help="Print the version and exit.")]
+    = False,
+) -> None:
+    """The plane model of a rigid coin impacting an elastic foundation: simulate one throw, map which throws make the coin lie or stand, and check the numbers. Every command has --help; the README has a tour."""  # noqa: E501
 
 
 def _register() -> None:

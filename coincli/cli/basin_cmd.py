@@ -49,6 +49,7 @@ from .common import (
     StopOpt,
     TEndOpt,
     ThicknessOpt,
+    announce_compilation,
     build_scene,
     console,
     err_console,
@@ -214,6 +215,7 @@ def sweep_command(
                                      ntiles=update.tiles_total)
         progress.update(task, completed=update.cells_done, tiles=update.tiles_done)
 
+    announce_compilation()
     try:
         with user_errors(), _Stop() as stop, progress:
             report = api.sweep(plan, path, overwrite=overwrite, threads=threads,

@@ -21,61 +21,85 @@ PHYS = "Physical parameters (override the preset)"
 INIT = "Initial state"
 INTEG = "Integration"
 
-PresetOpt = Annotated[str, typer.Option("--preset", "-p", help="Preset name (see `coin presets`) "
-                                        "or path to a TOML file.", rich_help_panel=PHYS)]
-DiameterOpt = Annotated[float | None, typer.Option("--diameter", help="Coin diameter d (m).",
-                                                   rich_help_panel=PHYS)]
-ThicknessOpt = Annotated[float | None, typer.Option("--thickness", help="Coin thickness t (m).",
-                                                    rich_help_panel=PHYS)]
-MassOpt = Annotated[float | None, typer.Option("--mass", help="Coin mass m (kg).",
-                                               rich_help_panel=PHYS)]
-InertiaOpt = Annotated[float | None, typer.Option("--inertia", help="Moment of inertia I "
-                                                  "(kg m^2).", rich_help_panel=PHYS)]
-KOpt = Annotated[float | None, typer.Option("--k", help="Foundation stiffness per corner "
-                                            "(N/m).", rich_help_panel=PHYS)]
-COpt = Annotated[float | None, typer.Option("--c", help="Viscous damping per corner (N s/m).",
-                                            rich_help_panel=PHYS)]
-GOpt = Annotated[float | None, typer.Option("--g", help="Gravity (m/s^2).", rich_help_panel=PHYS)]
 
-X0Opt = Annotated[float | None, typer.Option("--x0", help="Initial x (m).", rich_help_panel=INIT)]
-Y0Opt = Annotated[float | None, typer.Option("--y0", help="Initial height of the centroid (m) "
-                                             "(default r, as in the paper).",
-                                             rich_help_panel=INIT)]
-Phi0Opt = Annotated[float | None, typer.Option("--phi0", help="Initial angle (rad).",
-                                               rich_help_panel=INIT)]
-VxOpt = Annotated[float | None, typer.Option("--vx", help="Initial horizontal velocity (m/s).",
-                                             rich_help_panel=INIT)]
-VyOpt = Annotated[float | None, typer.Option("--vy", help="Initial vertical velocity (m/s).",
-                                             rich_help_panel=INIT)]
-VphiOpt = Annotated[float | None, typer.Option("--vphi", help="Initial angular velocity "
-                                               "(rad/s).", rich_help_panel=INIT)]
+def _paper_defaults() -> dict:
+    """The default preset's values, for the help texts (read once: a small TOML file)."""
+    try:
+        scene = load(None).scene
+    except ParameterError:
+        return {}
+    integ = scene.integration
+    return {"diameter": scene.coin.diameter, "thickness": scene.coin.thickness,
+            "mass": scene.coin.mass, "inertia": scene.coin.inertia, "k": scene.foundation.k,
+            "c": scene.foundation.c, "g": scene.g, "method": integ.method.label, "dt": integ.dt,
+            "rtol": integ.rtol, "t_end": integ.t_end}
 
-MethodOpt = Annotated[str | None, typer.Option("--method", help="Integration method (see "
-                                               "`coin methods`).", rich_help_panel=INTEG)]
-DtOpt = Annotated[float | None, typer.Option("--dt", help="Step of a fixed-step method, first "
-                                             "step of an adaptive one (s).",
-                                             rich_help_panel=INTEG)]
-RtolOpt = Annotated[float | None, typer.Option("--rtol", help="Relative tolerance of an "
-                                               "adaptive method.", rich_help_panel=INTEG)]
-TEndOpt = Annotated[float | None, typer.Option("--t-end", help="End time (s).",
-                                               rich_help_panel=INTEG)]
-StopOpt = Annotated[bool | None, typer.Option("--stop-on-settle/--full", help="Stop as soon as "
-                                              "the outcome is certain (E < E_crit), or always "
-                                              "run to --t-end as the paper does.",
-                                              rich_help_panel=INTEG)]
-ForceOpt = Annotated[bool, typer.Option("--force", help="Run a fixed step beyond the method's "
-                                        "stable step anyway.", rich_help_panel=INTEG)]
-SinglePassOpt = Annotated[bool, typer.Option("--single-pass", help="Run once at the given "
-                                             "setting, without climbing the ladder of tighter "
-                                             "settings that verifies each label (the label "
-                                             "is then unverified).", rich_help_panel=INTEG)]
-MaxStepsOpt = Annotated[int | None, typer.Option("--max-steps", help="Step budget of one run "
-                                                 "(default: 1,000,000 for an adaptive method, "
-                                                 "t_end / dt for a fixed step); a run that "
-                                                 "needs more ends with status budget.",
-                                                 rich_help_panel=INTEG)]
-JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout instead "
-                                       "of tables.")]
+
+_PAPER = _paper_defaults()
+
+
+def _opt(flag: str, text: str, unit: str, panel: str, key: str | None = None):
+    """An option overriding the preset: its unit as the metavar, the default preset's value in
+    the help."""
+    key = key or flag.lstrip("-").replace("-", "_")
+    if key in _PAPER:
+        text += f" [dim]\\[paper: {_PAPER[key]:.6g}][/dim]" if isinstance(
+            _PAPER[key], float) else f" [dim]\\[paper: {_PAPER[key]}][/dim]"
+    return typer.Option(flag, help=text, metavar=unit, rich_help_panel=panel, show_default=False)
+
+
+def _flag(flags: str, text: str, panel: str | None = None):
+    return typer.Option(flags, help=text, metavar="", rich_help_panel=panel)
+
+
+PresetOpt = Annotated[str, typer.Option("--preset", "-p", metavar="NAME|FILE",
+                                        help="Preset name (see `coin presets`) or path to a "
+                                             "TOML file.", rich_help_panel=PHYS)]
+DiameterOpt = Annotated[float | None, _opt("--diameter", "Coin diameter d.", "M", PHYS)]
+ThicknessOpt = Annotated[float | None, _opt("--thickness", "Coin thickness t.", "M", PHYS)]
+MassOpt = Annotated[float | None, _opt("--mass", "Coin mass m.", "KG", PHYS)]
+InertiaOpt = Annotated[float | None, _opt("--inertia", "Moment of inertia I about the axis "
+                                          "normal to the plane.", "KG*M^2", PHYS)]
+KOpt = Annotated[float | None, _opt("--k", "Foundation stiffness per corner.", "N/M", PHYS)]
+COpt = Annotated[float | None, _opt("--c", "Viscous damping per corner.", "N*S/M", PHYS)]
+GOpt = Annotated[float | None, _opt("--g", "Gravity.", "M/S^2", PHYS)]
+
+X0Opt = Annotated[float | None, _opt("--x0", "Initial x [dim]\\[0][/dim]", "M", INIT)]
+Y0Opt = Annotated[float | None, _opt("--y0", "Initial height of the centroid [dim]\\[r: "
+                                     "standing on a corner, as in the paper][/dim]", "M", INIT)]
+Phi0Opt = Annotated[float | None, _opt("--phi0", "Initial angle [dim]\\[0][/dim]", "RAD",
+                                       INIT)]
+VxOpt = Annotated[float | None, _opt("--vx", "Initial horizontal velocity [dim]\\[0][/dim]",
+                                     "M/S", INIT)]
+VyOpt = Annotated[float | None, _opt("--vy", "Initial vertical velocity [dim]\\[0][/dim]",
+                                     "M/S", INIT)]
+VphiOpt = Annotated[float | None, _opt("--vphi", "Initial angular velocity [dim]\\[0][/dim]",
+                                       "RAD/S", INIT)]
+
+MethodOpt = Annotated[str | None, _opt("--method", "Integration method (see `coin methods`).",
+                                       "NAME", INTEG)]
+DtOpt = Annotated[float | None, _opt("--dt", "Step of a fixed-step method, first step of an "
+                                     "adaptive one.", "S", INTEG)]
+RtolOpt = Annotated[float | None, _opt("--rtol", "Relative tolerance of an adaptive method "
+                                       "(the first rung of the verification ladder).", "RTOL",
+                                       INTEG)]
+TEndOpt = Annotated[float | None, _opt("--t-end", "End time.", "S", INTEG)]
+StopOpt = Annotated[bool | None, _flag("--stop-on-settle/--full", "Stop as soon as the outcome "
+                                       "is decided (E < E_crit), or always run to --t-end as "
+                                       "the paper does [dim]\\[paper: --stop-on-settle][/dim]",
+                                       INTEG)]
+ForceOpt = Annotated[bool, _flag("--force", "Run a fixed step beyond the method's stable step "
+                                 "anyway.", INTEG)]
+SinglePassOpt = Annotated[bool, _flag("--single-pass", "Run once at the given setting, without "
+                                      "climbing the ladder of tighter settings that verifies "
+                                      "each label (labels are then unverified).", INTEG)]
+MaxStepsOpt = Annotated[int | None, typer.Option("--max-steps", metavar="N", help="Step budget "
+                                                 "of one run; a run that needs more ends with "
+                                                 "status budget [dim]\\[1,000,000 for an "
+                                                 "adaptive method, t_end / dt for a fixed "
+                                                 "step][/dim]", rich_help_panel=INTEG)]
+JsonOpt = Annotated[bool, typer.Option("--json", metavar="", help="Print one JSON object on "
+                                       "stdout instead of tables.")]
 
 
 def fail(message: str) -> typer.Exit:
@@ -100,6 +124,16 @@ def build_scene(preset: str, **overrides) -> Scene:
     """The preset, overridden by every option the user gave, validated."""
     scene = load(preset).scene.with_overrides(**overrides)
     return validate(scene)
+
+
+def announce_compilation() -> None:
+    """Say it once, before the first run on this machine compiles the kernels."""
+    from ..jit import FIRST_COMPILE_SECONDS, kernels_cached
+
+    if not kernels_cached():
+        err_console.print(f"[yellow]compiling[/] the numerical kernels for this machine: once "
+                          f"after installing or updating, about {FIRST_COMPILE_SECONDS} s; "
+                          "later runs load them in a second", highlight=False)
 
 
 def print_json(data) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from rich import box
 from rich.table import Table
 
 from . import app
@@ -46,14 +47,20 @@ def methods_command(
     if json_out:
         print_json({"omega_max": omega, "zeta": zeta, "methods": rows})
         return
-    table = Table(title=f"Integration methods (stiffest mode: rocking on two corners, "
-                        f"omega = {omega:.4g} rad/s, damping ratio {zeta:.3f})",
-                  title_justify="left")
-    for col in ("method", "order", "adaptive", "symplectic", "stable step", "what it is"):
-        table.add_column(col)
+    console.print(f"[bold]Integration methods[/] (stiffest mode: rocking on two corners, "
+                  f"omega = {omega:.4g} rad/s, damping ratio {zeta:.3f})", highlight=False)
+    table = Table(box=box.SIMPLE_HEAD, pad_edge=False)
+    for col, justify in (("method", "left"), ("order", "right"), ("adaptive", "left"),
+                         ("symplectic", "left"), ("stable step", "right")):
+        table.add_column(col, justify=justify, no_wrap=True)
     for r in rows:
         name = f"{r['name']} (default)" if r["default"] else r["name"]
         limit = "-" if r["stable_step"] is None else f"{r['stable_step']:.3g} s"
         table.add_row(name, str(r["order"]), "yes" if r["adaptive"] else "no",
-                      "yes" if r["symplectic"] else "no", limit, r["summary"])
+                      "yes" if r["symplectic"] else "no", limit)
     console.print(table)
+    for r in rows:
+        console.print(f"[bold]{r['name']}[/]: {r['summary']}", highlight=False)
+    console.print("stable step: the largest fixed step whose error on the stiffest mode does "
+                  "not grow (simulate and basin refuse a larger --dt without --force).",
+                  highlight=False)

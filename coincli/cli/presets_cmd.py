@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from rich import box
 from rich.table import Table
 
 from .. import presets as presets_mod
@@ -13,7 +14,7 @@ from .common import JsonOpt, console, print_json, user_errors
 @app.command("presets")
 def presets_command(json_out: JsonOpt = False) -> None:
     """List the presets in presets/ with their parameter values."""
-    from ..integrators.registry import setting_text
+    from ..integrators.ladder import describe
 
     with user_errors():
         found = presets_mod.available()
@@ -21,20 +22,20 @@ def presets_command(json_out: JsonOpt = False) -> None:
         print_json({p.name: {"path": str(p.path), "description": p.description,
                              **p.scene.to_dict()} for p in found})
         return
-    table = Table(title=f"Presets ({presets_mod.presets_dir()})", title_justify="left")
-    for col in ("name", "d (mm)", "t (mm)", "m (g)", "I (kg m^2)", "k (N/m)", "c (N s/m)",
-                "integration"):
-        table.add_column(col, overflow="fold")
+    console.print(f"[bold]Presets[/] in {presets_mod.presets_dir()} (--preset NAME, or "
+                  "--preset PATH.toml for your own)", highlight=False)
+    table = Table(box=box.SIMPLE_HEAD, pad_edge=False)
+    for col in ("name", "d (mm)", "t (mm)", "m (g)", "I (kg m^2)", "k (N/m)", "c (N s/m)"):
+        table.add_column(col, justify="left" if col == "name" else "right", no_wrap=True)
     for p in found:
         s = p.scene
-        integ = s.integration
-        method = f"{integ.method.label} {setting_text(integ.method, integ.dt, integ.rtol)}"
-        if not integ.stop_on_settle:
-            method += f" full {integ.t_end:g} s"
         name = f"{p.name} (default)" if p.name == DEFAULT_PRESET else p.name
         table.add_row(name, f"{s.coin.diameter * 1e3:g}", f"{s.coin.thickness * 1e3:g}",
                       f"{s.coin.mass * 1e3:.5g}", f"{s.coin.inertia:.4g}",
-                      f"{s.foundation.k:g}", f"{s.foundation.c:g}", method)
+                      f"{s.foundation.k:g}", f"{s.foundation.c:g}")
     console.print(table)
     for p in found:
-        console.print(f"[bold]{p.name}[/]: {p.description}", highlight=False)
+        integ = p.scene.integration
+        run_to = "stop when decided" if integ.stop_on_settle else f"full {integ.t_end:g} s"
+        console.print(f"[bold]{p.name}[/]: {integ.method.label}, {describe(integ)}, {run_to}. "
+                      f"{p.description}", highlight=False)

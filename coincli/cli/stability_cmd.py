@@ -89,11 +89,18 @@ def stability_command(
                 "foundation's elastic energy, a shallow standing well of "
                 f"{report.standing_well_depth * mj:.3g} mJ remains down to k = "
                 f"{report.k_stand_exact:.1f} N/m, so a coin may still end standing.")
+        elif report.k > report.k_rock:
+            console.print(
+                f"[bold yellow]k = {report.k:g} N/m is below k_cr / 2 = "
+                f"{report.k_stand_exact:.1f} N/m:[/] a standing coin is still a shallow minimum "
+                f"of the potential (down to k = {report.k_rock:.1f} N/m, where rocking on its "
+                "rim turns unstable), but its energy is above E_crit, so a throw that ends "
+                "there is never certified: it stays unsettled.")
         else:
             console.print(f"[bold yellow]k = {report.k:g} N/m is below k_cr = {report.k_cr:.2f} "
-                          f"N/m and below k_cr / 2 = {report.k_stand_exact:.1f} N/m: a standing "
-                          "coin cannot be at rest (by the paper's criterion and by the exact "
-                          "energies); every coin ends lying.[/]")
+                          f"N/m and below {report.k_rock:.1f} N/m, where rocking on the rim "
+                          "turns unstable: a standing coin cannot be at rest (by the paper's "
+                          "criterion and by the exact energies); every coin ends lying.[/]")
     if not report.single_corner_contact:
         console.print(f"[yellow]k is below k_min = {report.k_min:.1f} N/m: a coin at phi_cr "
                       "sinks onto a second corner (eq. 10 does not hold).[/]")

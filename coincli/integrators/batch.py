@@ -12,7 +12,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..enums import Certainty, Method, Status
-from ..jit import compiled, kernel
+from ..jit import compiled, kernel, mark_cached
 from ..model import rounded_quarter_turns
 from ..params import RunSettings
 from .adaptive import integrate_adaptive
@@ -178,11 +178,16 @@ def final_state(p, settings, state) -> tuple[np.ndarray, Status]:
 
 
 def warm_up(p, settings, state) -> None:
-    """Load the compiled kernels (from numba's cache) for one method before a clock starts.
+    """Load the compiled kernels (from numba's cache, or compiling them) before a clock starts.
     The arrays have the same types as in every real call, so the same specialisations load."""
+    from ..integrators.ladder import Ladder
+
     short = settings._replace(t_end=settings.dt * 4)
     final_state(p, short._replace(stop_on_settle=False), state)
-    label_states(p, short._replace(stop_on_settle=True), np.array([state], dtype=np.float64))
+    states = np.array([state], dtype=np.float64)
+    label_states(p, short._replace(stop_on_settle=True), states)
+    verified_labels(p, short, Ladder((settings.rtol,) * 2, (settings.dt,) * 2, True), states)
+    mark_cached()
 
 
 __all__ = ["Labels", "NO_LABEL", "VerifiedLabels", "final_state", "integrate", "label_states",

@@ -54,6 +54,12 @@ def write_table(study, path: Path, scene) -> None:
             "label_error_robust": paper.label_error,
             "trajectory_error": paper.trajectory_error},
         "cheapest_under_1_percent": None if best is None else best.setting.label,
+        "verified_default": None if study.verified_point is None else {
+            "setting": study.verified_point.setting.label,
+            "cpu_ms_per_trajectory": study.verified_point.cpu_per_trajectory * 1e3,
+            "certain_and_wrong_robust": study.verified_point.label_error,
+            "uncertain_robust": study.verified_point.uncertain,
+            "trajectory_error": study.verified_point.trajectory_error},
     }
     path.write_text(json.dumps(data, indent=2) + "\n")
 
@@ -87,6 +93,12 @@ def plot_study(study, path: Path, title: str = "") -> None:
         for ax, y in ((ax_traj, pp.trajectory_error), (ax_label, max(pp.label_error, floor))):
             ax.plot([pp.cpu_per_trajectory * 1e3], [y], marker="*", ms=16, color="black",
                     ls="none", label="paper: symplectic Euler h=1e-6, 2 s", zorder=5)
+    vp = study.verified_point
+    if vp is not None:
+        ax_label.plot([vp.cpu_per_trajectory * 1e3], [max(vp.label_error, floor)], marker="D",
+                      ms=10, color="#9467bd", markeredgecolor="black", ls="none", zorder=6,
+                      label=f"default, verified ({vp.setting.label}): "
+                            f"{100 * vp.uncertain:.2g} % uncertain")
     ax_label.axhline(0.01, color="grey", ls="--", lw=1)
     ax_label.text(ax_label.get_xlim()[0], 0.0105, " 1 % label error", color="grey",
                   fontsize=8, va="bottom")
