@@ -314,12 +314,18 @@ def basin_stats(basin) -> dict:
     return out
 
 
-def render_basin(basin, out: str | os.PathLike, *, title: str | None = None, dpi: int = 150,
-                 n_max: int | None = None) -> Path:
-    """Draw a basin (Dataset or store path) to a PNG in the paper's colours."""
-    from .io.basin_render import render_png
+def render_basin(basin, out: str | os.PathLike, *, field: str = "n", title: str | None = None,
+                 dpi: int = 150, n_max: int | None = None) -> Path:
+    """Draw a basin (Dataset or store path) to a PNG, SVG or PDF (by the extension): the count
+    n in the paper's colours (``field="n"``; colour scale fixed to |n| <= ``n_max``, 24 by
+    default) or the time each outcome was decided (``field="settle_time"``)."""
+    from .io.basin_render import render_map
 
-    return render_png(_as_basin(basin), out, title=title, dpi=dpi, n_max=n_max)
+    try:
+        return render_map(_as_basin(basin), out, title=title, dpi=dpi, n_max=n_max,
+                          field=field)
+    except ValueError as exc:
+        raise ParameterError(str(exc)) from None
 
 
 __all__ = ["Method", "Outcome", "Status", "SweepPlan", "SweepProgress", "SweepReport", "Trajectory",

@@ -246,21 +246,24 @@ def sweep_command(
 def render_command(
     path: Annotated[Path, typer.Argument(help="A basin store (complete or partial).",
                                          metavar="STORE")],
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="PNG to write (default: "
-                                             "the store's name with .png).")] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", metavar="FILE", help="PNG, SVG or "
+                                             "PDF to write (default: the store's name with "
+                                             ".png).")] = None,
     title: Annotated[str | None, typer.Option("--title", help="Title of the picture.")] = None,
     dpi: Annotated[int, typer.Option("--dpi", help="Resolution of the PNG.")] = 150,
-    n_max: Annotated[int | None, typer.Option("--n-max", help="Colour scale up to |n| = N "
-                                              "(default: the largest |n| in the store); fix "
-                                              "it to keep a zoom's colours equal to the full "
-                                              "map's.")] = None,
+    n_max: Annotated[int | None, typer.Option("--n-max", metavar="N", help="Colour scale up "
+                                              "to |n| = N (larger |n| take its ends) "
+                                              "[dim]\\[24][/dim]")] = None,
+    field: Annotated[str, typer.Option("--field", metavar="NAME", help="What to draw: n (the "
+                                       "outcome) or settle_time (when it was decided).")]
+    = "n",
     rrd: Annotated[Path | None, typer.Option("--rrd", help="Also save the map to this Rerun "
                                              "recording (SegmentationImage with an "
                                              "AnnotationContext).")] = None,
 ) -> None:
-    """Draw a basin store to a PNG in the paper's colours.
+    """Draw a basin store to a PNG, SVG or PDF in the paper's colours, or its settle-time map.
 
-    n < 0 (clockwise) yellow to red, n > 0 (counter-clockwise) green to blue, n = 0 white, standing (odd n) black; uncertain cells grey, unsettled purple, non-finite magenta, not computed hatched. Works on partial stores.
+    n < 0 (clockwise) yellow to red, n > 0 (counter-clockwise) green to blue, n = 0 white, standing (odd n) black; uncertain cells grey, no outcome by t_end purple, non-finite magenta, not computed hatched. Works on partial stores.
     """  # noqa: E501
     from .. import api
     from ..io.basin_render import log_rerun
@@ -274,14 +277,14 @@ def render_command(
             raise ParameterError(f"--rrd {rrd}: the file name must end in .rrd")
         basin = read_basin(path)
         target = out if out is not None else path.with_suffix(".png")
-        if target.suffix.lower() != ".png":
-            raise ParameterError(f"-o {target}: the file name must end in .png")
+        if target.suffix.lower() not in (".png", ".svg", ".pdf"):
+            raise ParameterError(f"-o {target}: the file name must end in .png, .svg or .pdf")
         if n_max is not None and n_max < 1:
             raise ParameterError(f"--n-max must be at least 1, got {n_max}")
         check_rrd_path(target)  # a writable file path
         if rrd is not None:
             check_rrd_path(rrd)
-        api.render_basin(basin, target, title=title, dpi=dpi, n_max=n_max)
+        api.render_basin(basin, target, title=title, dpi=dpi, n_max=n_max, field=field)
         console.print(f"wrote {target}")
         if rrd is not None:
             log_rerun(basin, rrd)

@@ -25,15 +25,20 @@ from .dataset import Basin
 WHITE = (1.0, 1.0, 1.0, 1.0)
 STANDING = (0.0, 0.0, 0.0, 1.0)
 UNCERTAIN = (0.62, 0.62, 0.62, 1.0)
-UNCERTAIN_MARK = "#505050"
 UNSETTLED = (0.56, 0.27, 0.68, 1.0)
 NONFINITE = (1.0, 0.0, 1.0, 1.0)
 NOT_COMPUTED_BG = "#eeeeee"
 NOT_COMPUTED_HATCH = "////"
 
 
+DEFAULT_N_MAX = 24  # the colour scale's end: the same colours on every map, partial or zoomed
+MIN_MARK_PX = 2.0  # standing and uncertain cells are drawn at least this many pixels wide
+
+
 def _ramp_colours(n_max_even: int):
-    """Colours of the even n in -n_max..n_max (n_max even, >= 2), as {n: rgba}."""
+    """Colours of the even n in -n_max..n_max (n_max even, >= 2), as {n: rgba}: clockwise
+    yellow to red, counter-clockwise green to blue as in the paper, spaced by the square root of
+    |n| so that the common small counts stay far apart and visible against white."""
     from matplotlib import colormaps
 
     steps = n_max_even // 2
@@ -41,9 +46,9 @@ def _ramp_colours(n_max_even: int):
     ccw = colormaps["YlGnBu"]
     colours = {0: WHITE}
     for k in range(1, steps + 1):
-        t = (k - 1) / max(steps - 1, 1)
-        colours[-2 * k] = tuple(cw(0.22 + 0.78 * t))
-        colours[2 * k] = tuple(ccw(0.30 + 0.70 * t))
+        t = math.sqrt((k - 1) / max(steps - 1, 1))
+        colours[-2 * k] = tuple(cw(0.30 + 0.68 * t))
+        colours[2 * k] = tuple(ccw(0.35 + 0.63 * t))
     return colours
 
 
@@ -53,13 +58,11 @@ def _labelled_mask(basin: Basin) -> np.ndarray:
 
 
 def n_range(basin: Basin, n_max: int | None = None) -> int:
-    """Largest even |n| on the colour bar (at least 2): ``n_max`` rounded up to even if given
-    (a fixed scale keeps the colours of a zoom equal to those of the full map), else the
-    largest |n| in the store."""
-    if n_max is None:
-        q = basin.arrays["quarter_turns"][_labelled_mask(basin)].astype(np.int64)
-        n_max = int(np.abs(q).max()) if q.size else 2
-    n_max = int(n_max) + int(n_max) % 2
+    """Largest even |n| on the colour bar (at least 2): ``n_max`` rounded up to even, by default
+    DEFAULT_N_MAX, so that every map (partial, zoomed, another scene) has the same colours;
+    larger |n| take the ends of the scale."""
+    n_max = DEFAULT_N_MAX if n_max is None else int(n_max)
+    n_max = n_max + n_max % 2
     return max(n_max, 2)
 
 
@@ -108,22 +111,29 @@ def _fixed_text(basin: Basin) -> str:
     return ", ".join(parts)
 
 
-def render_png(basin: Basin, out: str | os.PathLike, title: str | None = None,
+FORMATS = (".png", ".svg", ".pdf")
+FIELDS = ("n", "settle_time")
+
+
+def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
                dpi: int = 150, size: tuple[float, float] = (8.6, 6.8),
-               n_max: int | None = None) -> Path:
-    """Draw the map to a PNG file; returns its path."""
+               n_max: int | None = None, field: str = "n") -> Path:
+    """Draw the map to a PNG, SVG or PDF file (by its extension); returns its path.
+    ``field``: "n", the outcome in the paper's colours, or "settle_time", when each throw's
+    outcome was decided (its energy fell below E_crit)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     out = Path(out)
+    if out.suffix.lower() not in FORMATS:
+        raise ValueError(f"{out}: the file name must end in {', '.join(FORMATS)}")
+    if field not in FIELDS:
+        raise ValueError(f"unknown field {field!r}; one of {', '.join(FIELDS)}")
     if out.parent and not out.parent.exists():
         raise FileNotFoundError(f"directory {out.parent} does not exist")
-    rgba, classes = basin_rgba(basin, n_max)
     ax0, ax1 = basin.axes
     x, y = basin.coords
     dx = (x[-1] - x[0]) / (x.size - 1)
@@ -134,76 +144,43 @@ def render_png(basin: Basin, out: str | os.PathLike, title: str | None = None,
     ax.set_facecolor(NOT_COMPUTED_BG)
     ax.patch.set_hatch(NOT_COMPUTED_HATCH)
     ax.patch.set_edgecolor("#b0b0b0")
-    ax.imshow(np.transpose(rgba, (1, 0, 2)), origin="lower", extent=extent, aspect="auto",
-              interpolation="nearest")
+    if field == "n":
+        rgba, classes = basin_rgba(basin, n_max)
+        ax.imshow(np.transpose(rgba, (1, 0, 2)), origin="lower", extent=extent, aspect="auto",
+                  interpolation="nearest")
+        # cells a pixel or two wide vanish in the image: mark standing and uncertain cells
+        # as squares at least MIN_MARK_PX wide (the same look at any resolution)
+        cell_px = size[0] * dpi * 0.75 / x.size
+        if cell_px < 3 * MIN_MARK_PX:
+            side = max(cell_px, MIN_MARK_PX) * 72.0 / dpi  # points
+            for name, colour in (("uncertain", UNCERTAIN), ("standing", STANDING)):
+                mask = classes.get(name)
+                if mask is not None and mask.any():
+                    i, j = np.nonzero(mask)
+                    ax.scatter(x[i], y[j], s=side ** 2, marker="s", color=colour,
+                               linewidths=0, zorder=3)
+        _n_colour_bar(fig, ax, plt, n_range(basin, n_max))
+        handles = _class_handles(basin, classes, Patch)
+    else:
+        handles = _settle_time_image(basin, ax, fig, extent, Patch)
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])
     ax.set_xlabel(_axis_label(ax0))
     ax.set_ylabel(_axis_label(ax1))
-
-    # ring the standing cells when one cell is only a pixel or two on the image
-    standing = classes["standing"]
-    fig_w_px = size[0] * dpi * 0.75
-    ring = standing.any() and fig_w_px / x.size < 4 and standing.mean() < 0.05
-    if ring:
-        i, j = np.nonzero(standing)
-        ax.scatter(x[i], y[j], s=14, facecolors="none", edgecolors="black", linewidths=0.6,
-                   zorder=3)
-
-    # likewise cross the uncertain cells when they are few and small
-    uncertain = classes.get("uncertain")
-    cross = (uncertain is not None and uncertain.any() and fig_w_px / x.size < 4
-             and uncertain.mean() < 0.05)
-    if cross:
-        i, j = np.nonzero(uncertain)
-        ax.scatter(x[i], y[j], s=12, marker="x", color=UNCERTAIN_MARK, linewidths=0.7,
-                   zorder=3)
-
-    n_max = n_range(basin, n_max)
-    colours = _ramp_colours(n_max)
-    evens = list(range(-n_max, n_max + 1, 2))
-    cmap = ListedColormap([colours[n] for n in evens])
-    norm = BoundaryNorm([n - 1 for n in evens] + [n_max + 1], cmap.N)
-    mappable = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
-    cbar = fig.colorbar(mappable, ax=ax, pad=0.02, fraction=0.05)
-    tick_step = 2 * max(1, math.ceil(len(evens) / 18))
-    cbar.set_ticks([n for n in evens if n % tick_step == 0])
-    cbar.set_label("n lying (even): < 0 clockwise, > 0 counter-clockwise")
-    cbar.ax.tick_params(labelsize=8)
-
-    counts = {name: int(mask.sum()) for name, mask in classes.items()}
-    handles = [Patch(facecolor=STANDING, edgecolor="black",
-                     label=f"standing (odd n): {counts['standing']:,}")]
-    if ring:
-        handles[0] = Line2D([], [], marker="o", markersize=7, linestyle="none",
-                            markeredgecolor="black", markerfacecolor="none",
-                            label=f"standing (odd n): black cell, ringed: "
-                                  f"{counts['standing']:,}")
-    for name, colour in (("uncertain", UNCERTAIN), ("unsettled", UNSETTLED),
-                         ("non-finite", NONFINITE)):
-        if name in counts and (counts[name] or name == "uncertain"):
-            label = {"unsettled": "unsettled at t_end"}.get(name, name)
-            if name == "uncertain" and cross:
-                handles.append(Line2D([], [], marker="x", markersize=6, linestyle="none",
-                                      color=UNCERTAIN_MARK,
-                                      label=f"uncertain: grey cell, crossed: {counts[name]:,}"))
-                continue
-            handles.append(Patch(facecolor=colour, edgecolor="black",
-                                 label=f"{label}: {counts[name]:,}"))
-    if counts["not computed"]:
-        handles.append(Patch(facecolor=NOT_COMPUTED_BG, edgecolor="#808080",
-                             hatch=NOT_COMPUTED_HATCH,
-                             label=f"not computed: {counts['not computed']:,}"))
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.09), ncols=3,
               fontsize=8, frameon=False)
 
     attrs = basin.attrs
     method = attrs["method"]
     setting = (f"rtol {method['rtol']:g}" if method["adaptive"] else f"h = {method['dt']:g} s")
-    done = int(basin.done.sum())
+    if len(method.get("verification", {}).get("rungs", [])) > 1:
+        setting += ", verified"
+    done = int((basin.done != 0).sum())
     total = int(basin.done.size)
     if title is None:
-        title = (f"Final number n of quarter turns, {x.size} x {y.size} cells"
+        what = ("Final number n of quarter turns" if field == "n"
+                else "When the outcome was decided (energy below E_crit)")
+        title = (f"{what}, {x.size} x {y.size} cells"
                  + (f" (partial: {done} of {total} tiles)" if done < total else ""))
     fig.suptitle(title, fontsize=11)
     params = attrs["parameters"]
@@ -213,6 +190,67 @@ def render_png(basin: Basin, out: str | os.PathLike, title: str | None = None,
     fig.savefig(out, dpi=dpi)
     plt.close(fig)
     return out
+
+
+def _n_colour_bar(fig, ax, plt, n_max: int) -> None:
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    colours = _ramp_colours(n_max)
+    evens = list(range(-n_max, n_max + 1, 2))
+    cmap = ListedColormap([colours[n] for n in evens])
+    norm = BoundaryNorm([n - 1 for n in evens] + [n_max + 1], cmap.N)
+    mappable = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
+    cbar = fig.colorbar(mappable, ax=ax, pad=0.02, fraction=0.05)
+    tick_step = 2 * max(1, math.ceil(len(evens) / 18))
+    ticks = [n for n in evens if n % tick_step == 0]
+    cbar.set_ticks(ticks)
+    cbar.set_ticklabels([f"≤ {n}" if n == -n_max else f"≥ {n}" if n == n_max else str(n)
+                         for n in ticks])
+    cbar.set_label("n lying (even): < 0 clockwise, > 0 counter-clockwise")
+    cbar.ax.tick_params(labelsize=8)
+
+
+def _class_handles(basin: Basin, classes: dict, Patch) -> list:
+    counts = {name: int(mask.sum()) for name, mask in classes.items()}
+    handles = [Patch(facecolor=STANDING, edgecolor="black",
+                     label=f"standing (odd n): {counts['standing']:,}")]
+    for name, colour in (("uncertain", UNCERTAIN), ("unsettled", UNSETTLED),
+                         ("non-finite", NONFINITE)):
+        if name in counts and (counts[name] or (name == "uncertain" and basin.verified)):
+            label = {"unsettled": "no outcome by t_end",
+                     "uncertain": "uncertain (not converged)"}.get(name, name)
+            handles.append(Patch(facecolor=colour, edgecolor="black",
+                                 label=f"{label}: {counts[name]:,}"))
+    if counts["not computed"]:
+        handles.append(Patch(facecolor=NOT_COMPUTED_BG, edgecolor="#808080",
+                             hatch=NOT_COMPUTED_HATCH,
+                             label=f"not computed: {counts['not computed']:,}"))
+    return handles
+
+
+def _settle_time_image(basin: Basin, ax, fig, extent, Patch) -> list:
+    """The settle time of the settled (and, verified, certain) cells; the rest grey."""
+    st = basin.arrays["status"]
+    shown = st == Status.SETTLED
+    if basin.verified:
+        shown &= basin.arrays["certainty"] == Certainty.CERTAIN
+    times = np.where(shown, basin.arrays["settle_time"], np.nan).astype(float)
+    other = (st != Status.NOT_COMPUTED) & ~shown
+    grey = np.zeros(times.shape + (4,))
+    grey[other] = UNCERTAIN
+    ax.imshow(np.transpose(grey, (1, 0, 2)), origin="lower", extent=extent, aspect="auto",
+              interpolation="nearest")
+    image = ax.imshow(times.T, origin="lower", extent=extent, aspect="auto",
+                      interpolation="nearest", cmap="viridis")
+    cbar = fig.colorbar(image, ax=ax, pad=0.02, fraction=0.05)
+    cbar.set_label("time at which the outcome was decided, t_settle [s]")
+    handles = [Patch(facecolor=UNCERTAIN, edgecolor="black",
+                     label=f"no certain outcome: {int(other.sum()):,}")]
+    missing = int((st == Status.NOT_COMPUTED).sum())
+    if missing:
+        handles.append(Patch(facecolor=NOT_COMPUTED_BG, edgecolor="#808080",
+                             hatch=NOT_COMPUTED_HATCH, label=f"not computed: {missing:,}"))
+    return handles
 
 
 def log_rerun(basin: Basin, rrd: str | os.PathLike) -> Path:
@@ -266,4 +304,4 @@ def log_rerun(basin: Basin, rrd: str | os.PathLike) -> Path:
     return rrd
 
 
-__all__ = ["basin_rgba", "log_rerun", "render_png"]
+__all__ = ["DEFAULT_N_MAX", "FIELDS", "FORMATS", "basin_rgba", "log_rerun", "render_map"]
