@@ -131,21 +131,35 @@ def test_world_is_flipped_so_y_points_up(fig2):
 
 
 def test_frames_are_the_samples_plus_the_exact_events(fig2):
+    """The simulated frames are the display samples and the exact events; a run that stopped
+    once settled ends with one more frame, the rest pose its well implies (scene only)."""
     tr, frames, info, rec = fig2
     sample_t, event_t = tr.samples[:, 0], tr.events[:, 0]
     assert len(tr.events) > 0
     expected = np.unique(np.concatenate([sample_t, event_t]))
     # the display rate, not the integrator's steps: about t_final / log_every frames
     assert len(sample_t) == pytest.approx(tr.t_final / LOG_EVERY, abs=3)
-    assert len(frames) == info.frames == len(expected)
-    np.testing.assert_array_equal(frames.t, expected)
+    simulated = frames.t[~frames.implied]
+    assert len(frames) == info.frames == len(expected) + 1 and frames.implied[-1]
+    np.testing.assert_array_equal(simulated, expected)
     for entity in ("/scene/world/coin", "/scene/world/corners", "/scene/world/forces",
-                   "/scene/world/path", "/plots/energy/total", "/plots/angle/quarter_turns",
-                   "/plots/penetration/corner0"):
+                   "/scene/world/path", "/scene/follow"):
         times = rec.times(entity)
         assert len(times) == len(frames), entity
         np.testing.assert_array_equal(times, ns(frames.t))
+    for entity in ("/plots/energy/total", "/plots/angle/quarter_turns",
+                   "/plots/penetration/corner0"):
+        np.testing.assert_array_equal(rec.times(entity), ns(simulated))
     assert set(ns(event_t)) <= set(rec.times("/scene/world/coin"))
+
+
+def test_the_recording_ends_at_rest_in_the_settled_well(fig2):
+    tr, frames, _, _ = fig2
+    rest = frames.state[-1]
+    assert rest[2] == pytest.approx(tr.quarter_turns * np.pi / 2) and not rest[3:].any()
+    sink = tr.scene.coin.mass * tr.scene.g / (2 * tr.scene.foundation.k)
+    assert rest[1] == pytest.approx(tr.scene.coin.r_t - sink)  # lying on two corners
+    assert frames.contact[-1].sum() == 2 and frames.t[-1] > tr.t_final
 
 
 def test_timeline_is_a_duration(fig2):
@@ -166,7 +180,8 @@ def test_logged_angle_is_the_simulated_one(fig2):
     at_samples = np.searchsorted(frames.t, tr.samples[:, 0])
     np.testing.assert_array_equal(quarter[at_samples], 2.0 * tr.samples[:, 3] / math.pi)
     n = rec.scalars("/plots/angle/n")
-    np.testing.assert_array_equal(n, np.round(2 * frames.state[:, 2] / math.pi))
+    simulated = frames.state[~frames.implied]
+    np.testing.assert_array_equal(n, np.round(2 * simulated[:, 2] / math.pi))
     assert n[-1] == tr.rounded_quarter_turns
     translation = np.array([row[0] for row in
                             rec.column("/scene/world/coin", "Transform3D:translation")])
@@ -177,6 +192,8 @@ def test_logged_angle_is_the_simulated_one(fig2):
 def _check_colours(tr, frames, rec):
     colours = np.array(rec.column("/scene/world/corners", "Points2D:colors"), dtype=np.int64)
     assert colours.shape == (len(frames), 4)
+    if frames.implied is not None and frames.implied.any():  # the rest pose: scene only
+        colours, frames = colours[~frames.implied], frames.subset(~frames.implied)
     assert set(np.unique(colours)) <= {RED, BLUE}
     penetration = np.column_stack([rec.scalars(f"/plots/penetration/corner{i}")
                                    for i in range(4)])  # um
@@ -190,10 +207,11 @@ def _check_colours(tr, frames, rec):
         row = np.searchsorted(frames.t, t)
         assert colours[row, int(corner)] == (RED if kind > 0 else BLUE), (t, corner, kind)
     # one force arrow per red corner
-    arrows = rec.column("/scene/world/forces", "Arrows2D:vectors")
+    arrows = rec.column("/scene/world/forces", "Arrows2D:vectors")[:len(frames)]
     np.testing.assert_array_equal([len(a) for a in arrows], (colours == RED).sum(axis=1))
     positions = np.array(rec.column("/scene/world/corners", "Points2D:positions"))
-    np.testing.assert_allclose(positions, frames.corners * 1e3, rtol=1e-6, atol=1e-5)
+    np.testing.assert_allclose(positions[:len(frames)], frames.corners * 1e3, rtol=1e-6,
+                               atol=1e-5)
 
 
 def test_contact_colours_agree_with_penetration(fig2):
@@ -249,7 +267,8 @@ def test_blueprint_is_stored(fig2):
                 target.update(v[0] for v in batch.column(column).to_pylist() if v)
     assert {"/scene", "/plots/energy", "/plots/height", "/plots/angle", "/plots/penetration",
             "/events", "/info"} <= {o if o.startswith("/") else "/" + o for o in origins}
-    assert "coin (y up, mm)" in names
+    assert {"whole throw (y up, mm)", "close-up, following the coin (mm)"} <= names
+    assert "/scene/follow" in {o if o.startswith("/") else "/" + o for o in origins}
     assert timelines == {"sim_time"}
 
 

@@ -64,6 +64,10 @@ def write_table(study, path: Path, scene) -> None:
     path.write_text(json.dumps(data, indent=2) + "\n")
 
 
+def _knob_text(point) -> str:
+    return f"{point.setting.knob:.0e}".replace("e-0", "e-")
+
+
 def plot_study(study, path: Path, title: str = "") -> None:
     import matplotlib
 
@@ -84,10 +88,18 @@ def plot_study(study, path: Path, title: str = "") -> None:
         style = dict(color=COLOURS.get(method), marker="o", ms=4, lw=1.5, label=method.label)
         ax_traj.plot(cost, traj, **style)
         ax_label.plot(cost, label, **style)
+        at_floor = [p for p in points if p.label_error <= 0]
         for p, x, y in zip(points, cost, label, strict=True):
-            ax_label.annotate(f"{p.setting.knob:.0e}".replace("e-0", "e-"), (x, y),
-                              textcoords="offset points", xytext=(3, 3), fontsize=6,
-                              color=COLOURS.get(method))
+            if p.label_error > 0:
+                ax_label.annotate(_knob_text(p), (x, y), textcoords="offset points",
+                                  xytext=(3, 3), fontsize=6, color=COLOURS.get(method))
+        if at_floor:  # one note for the run of zeros, not a pile of labels on the floor
+            first = min(at_floor, key=lambda p: p.cpu_per_trajectory)
+            ax_label.annotate(f"0 from {_knob_text(first)}", (first.cpu_per_trajectory * 1e3,
+                                                              floor),
+                              textcoords="offset points", xytext=(0, -10 - 7 * len(
+                                  [m for m in by_method if m < method])), fontsize=6,
+                              color=COLOURS.get(method), ha="center")
     if study.paper_point is not None:
         pp = study.paper_point
         for ax, y in ((ax_traj, pp.trajectory_error), (ax_label, max(pp.label_error, floor))):
@@ -99,21 +111,21 @@ def plot_study(study, path: Path, title: str = "") -> None:
                       ms=10, color="#9467bd", markeredgecolor="black", ls="none", zorder=6,
                       label=f"default, verified ({vp.setting.label}): "
                             f"{100 * vp.uncertain:.2g} % uncertain")
-    ax_label.axhline(0.01, color="grey", ls="--", lw=1)
-    ax_label.text(ax_label.get_xlim()[0], 0.0105, " 1 % label error", color="grey",
-                  fontsize=8, va="bottom")
-    ax_label.axhline(floor, color="lightgrey", ls=":", lw=1)
+    ax_label.axhline(0.01, color="grey", ls="--", lw=1, label="1 % label error")
+    ax_label.axhline(floor, color="lightgrey", ls=":", lw=1, label="no wrong label (drawn here)")
     for ax in (ax_traj, ax_label):
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("CPU time per trajectory [ms]")
         ax.grid(True, which="both", alpha=0.25)
-    ax_traj.set_ylabel("state error ~0.06 s after the first impact (median of 5 throws)")
+    ax_traj.set_ylabel("state error ~0.06 s after the first impact [natural units: r, 1 rad,\n"
+                       "$\\sqrt{2gr}$, $\\sqrt{2gr}/r$] (median of 5 throws)")
     ax_traj.set_title("Trajectory error vs cost")
-    ax_label.set_ylabel(f"label error on the {study.robust_cells} robust cells "
-                        f"(0 drawn at {floor:.1e})")
+    ax_label.set_ylabel(f"label error: fraction of the {study.robust_cells} robust cells "
+                        "wrong [1]")
     ax_label.set_title("Basin label error vs cost")
-    ax_label.legend(loc="lower right", fontsize=8)
+    ax_label.legend(loc="upper right", fontsize=7)
+    ax_traj.legend(loc="upper right", fontsize=7)
     if title:
         fig.suptitle(title, fontsize=10)
     fig.savefig(path, dpi=130)

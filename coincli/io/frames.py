@@ -31,9 +31,16 @@ class Frames:
     gravitational: np.ndarray  # (N,) J
     elastic: np.ndarray  # (N,) J
     events: np.ndarray  # (M, 9) the contact events: t, corner, kind, state
+    implied: np.ndarray | None = None  # (N,) bool: the resting pose a settled run implies
 
     def __len__(self) -> int:
         return len(self.t)
+
+    def subset(self, rows: np.ndarray) -> Frames:
+        """The frames selected by a boolean mask (the contact events unchanged)."""
+        fields = {name: getattr(self, name) for name in self.__dataclass_fields__}
+        return Frames(**{name: value[rows] if name != "events" and value is not None
+                         else value for name, value in fields.items()})
 
     @property
     def penetration(self) -> np.ndarray:
@@ -78,11 +85,17 @@ def build_frames(trajectory) -> Frames:
     keep = np.ones(len(rows), bool)
     keep[1:] = rows[1:, 0] != rows[:-1, 0]
     rows, is_event = rows[keep], is_event[keep]
+    scene = trajectory.scene
+    p = model_params(scene)
+    implied = np.zeros(len(rows), bool)
+    rest = resting_state(trajectory)
+    if rest is not None:
+        rows = np.vstack([rows, np.concatenate([[rows[-1, 0] + REST_DELAY], rest])])
+        is_event = np.append(is_event, False)
+        implied = np.append(implied, True)
     t = rows[:, 0].copy()
     state = rows[:, 1:].copy()
 
-    scene = trajectory.scene
-    p = model_params(scene)
     x, y, phi, vx, vy, vphi = (column[:, None] for column in state.T)
     c, s = np.cos(phi), np.sin(phi)
     # the model's own formulas (its kernels in plain Python) on (N, 4) arrays
@@ -93,6 +106,7 @@ def build_frames(trajectory) -> Frames:
     corners = np.stack([x + dx, heights], axis=-1)
 
     contact = _contact_sets(t, heights, events)
+    contact[implied] = heights[implied] < 0.0
     fx, fy = python(corner_force)(p, y, dx, dy, vx, vy, vphi)
     forces = np.stack([np.where(contact, fx, 0.0), np.where(contact, fy, 0.0)], axis=-1)
 
@@ -102,7 +116,24 @@ def build_frames(trajectory) -> Frames:
     kinetic, gravitational = kinetic[:, 0], gravitational[:, 0]
     return Frames(t=t, state=state, is_event=is_event, contact=contact, corners=corners,
                   heights=heights, forces=forces, kinetic=kinetic, gravitational=gravitational,
-                  elastic=elastic, events=events)
+                  elastic=elastic, events=events, implied=implied)
+
+
+REST_DELAY = 0.05  # s after a settled run's last frame, where its implied rest pose is shown
+
+
+def resting_state(trajectory) -> np.ndarray | None:
+    """The pose a run that stopped once settled comes to rest in (it cannot leave its well):
+    phi = n pi/2, on its two lower corners, sunk by m g / 2k, at rest where it was. None when
+    the run went on (--full) or did not settle."""
+    integ = trajectory.scene.integration
+    if not (trajectory.settled and integ.stop_on_settle) or trajectory.quarter_turns is None:
+        return None
+    n = trajectory.quarter_turns
+    coin = trajectory.scene.coin
+    sink = coin.mass * trajectory.scene.g / (2 * trajectory.scene.foundation.k)
+    height = (coin.r_d if n % 2 else coin.r_t) - sink
+    return np.array([trajectory.final_state[0], height, n * math.pi / 2, 0.0, 0.0, 0.0])
 
 
 def _contact_sets(t: np.ndarray, heights: np.ndarray, events: np.ndarray) -> np.ndarray:
@@ -141,4 +172,5 @@ def force_arrows(frames: Frames, weight: float, diameter: float) -> np.ndarray:
     return unit * length[..., None]
 
 
-__all__ = ["ARROW_PEAK_DIAMETERS", "Frames", "build_frames", "force_arrows"]
+__all__ = ["ARROW_PEAK_DIAMETERS", "Frames", "REST_DELAY", "build_frames", "force_arrows",
+           "resting_state"]

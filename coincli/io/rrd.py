@@ -37,6 +37,7 @@ TIMELINE = "sim_time"
 
 # Entity paths.
 SCENE = "scene"  # origin of the 2-D view (screen coordinates, y down)
+FOLLOW = "scene/follow"  # moves with the centroid: origin of the close-up view
 WORLD = "scene/world"  # the physical plane, flipped so that y points up
 COIN = "scene/world/coin"
 COIN_BODY = "scene/world/coin/body"
@@ -105,28 +106,43 @@ def blueprint(frames: Frames | None = None, scene=None):
         view2d["visual_bounds"] = _visual_bounds(frames, scene)
     trail = rrb.VisibleTimeRanges(timeline=TIMELINE, start=rrb.TimeRangeBoundary.infinite(),
                                   end=rrb.TimeRangeBoundary.cursor_relative())
+    close = {}
+    if scene is not None:
+        d = scene.coin.diameter * MM
+        close["visual_bounds"] = rrb.VisualBounds2D(x_range=[-0.9 * d, 0.9 * d],
+                                                    y_range=[-0.6 * d, 0.6 * d])
     return rrb.Blueprint(
         rrb.Horizontal(
             rrb.Vertical(
-                rrb.Spatial2DView(name="coin (y up, mm)", origin=SCENE,
-                                  background=(250, 250, 250, 255),
-                                  overrides={PATH: trail}, **view2d),
+                rrb.Horizontal(
+                    rrb.Spatial2DView(name="whole throw (y up, mm)", origin=SCENE,
+                                      background=(250, 250, 250, 255),
+                                      overrides={PATH: trail}, **view2d),
+                    rrb.Spatial2DView(name="close-up, following the coin (mm)",
+                                      origin=FOLLOW, contents=[f"{SCENE}/**"],
+                                      background=(250, 250, 250, 255),
+                                      overrides={PATH: trail}, **close),
+                    column_shares=[3, 2],
+                ),
                 rrb.Tabs(
                     rrb.TextLogView(name="contact events", origin=EVENTS,
-                                    columns=rrb.TextLogColumns(
+                                    columns=rrb.TextLogColumns(  # times are in the text
+                                        timeline_columns=[],
                                         text_log_columns=["LogLevel", "Body"])),
                     rrb.TextDocumentView(name="parameters", origin=INFO),
                 ),
-                row_shares=[5, 1],
+                row_shares=[3, 2],
             ),
             rrb.Vertical(
-                rrb.TimeSeriesView(name="energy [mJ]", origin=ENERGY,
-                                   plot_legend=rrb.PlotLegend(rrb.Corner2D.RightTop)),
+                rrb.TimeSeriesView(name="energy [mJ]: total (white), kinetic (blue), "
+                                        "gravitational (green), elastic (red), E_crit (purple)",
+                                   origin=ENERGY, plot_legend=rrb.PlotLegend(visible=False)),
                 rrb.TimeSeriesView(name="height y [mm]", origin=HEIGHT,
                                    plot_legend=rrb.PlotLegend(visible=False)),
-                rrb.TimeSeriesView(name="angle 2φ/π and n [quarter turns]", origin=ANGLE,
-                                   plot_legend=rrb.PlotLegend(rrb.Corner2D.LeftTop)),
-                rrb.TimeSeriesView(name="penetration [µm]", origin=PENETRATION,
+                rrb.TimeSeriesView(name="angle 2φ/π (blue) and n = round(2φ/π) (red) [quarter "
+                                        "turns]", origin=ANGLE,
+                                   plot_legend=rrb.PlotLegend(visible=False)),
+                rrb.TimeSeriesView(name="penetration of corners 0-3 [µm]", origin=PENETRATION,
                                    plot_legend=rrb.PlotLegend(rrb.Corner2D.RightTop)),
             ),
             column_shares=[1, 1],
@@ -357,6 +373,9 @@ def _send_scene(rec, rr, trajectory, frames: Frames) -> None:
     rec.send_columns(COIN, indexes=index, columns=rr.Transform3D.columns(
         translation=np.column_stack([x, y, np.zeros(n)]),
         rotation_axis_angle=_rotations_about_z(phi)))
+    # the close-up's frame: at the centroid, in screen coordinates (y down) like SCENE
+    rec.send_columns(FOLLOW, indexes=index, columns=rr.Transform3D.columns(
+        translation=np.column_stack([x, -y, np.zeros(n)])))
 
     colours = np.where(frames.contact, _rgba(CONTACT_COLOUR), _rgba(FREE_COLOUR)).astype(np.uint32)
     rec.send_columns(CORNERS, indexes=index, columns=rr.Points2D.columns(
@@ -381,6 +400,9 @@ def _send_scene(rec, rr, trajectory, frames: Frames) -> None:
 
 
 def _send_plots(rec, rr, trajectory, frames: Frames) -> None:
+    """The time series, of the simulated frames only (not the implied rest pose)."""
+    if frames.implied is not None and frames.implied.any():
+        frames = frames.subset(~frames.implied)
     index = _time(rr, frames)
     for name, values in (("kinetic", frames.kinetic), ("gravitational", frames.gravitational),
                          ("elastic", frames.elastic), ("total", frames.total)):
@@ -424,10 +446,10 @@ def _send_text_log(rec, rr, trajectory, frames: Frames) -> None:
                      f"{trajectory.e_crit * MJ:.4g} mJ, "
                      f"n = {trajectory.quarter_turns} is final ({trajectory.pose})")
         levels.append("INFO")
-        if trajectory.scene.integration.stop_on_settle:
-            times.append(end)
-            texts.append("the run stops as soon as the outcome is certain, and so does this "
-                         "recording (use --full to record the coin rocking until --t-end)")
+        if frames.implied is not None and frames.implied.any():
+            times.append(float(frames.t[frames.implied][0]))
+            texts.append(f"at rest in the well n = {trajectory.quarter_turns} "
+                         f"({trajectory.pose}): implied by its energy, not simulated")
             levels.append("INFO")
     for note in trajectory.notes:
         times.append(end)
