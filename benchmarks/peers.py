@@ -75,30 +75,33 @@ def coin_of(scene) -> Coin:
 
 
 def ours(scene, states, rtol):
-    """Our integrator on every row of ``states``: (labels, seconds per trajectory).
-    Labels are the settled well index, NO_LABEL for a run that did not settle by T_END."""
-    from coincli.integrators.kernels import label_states
-    from coincli.params import param_array
+    """Our integrator on every row of ``states`` (one pass of the event method at ``rtol``, as
+    the peers make one): (labels, seconds per trajectory). Labels are the settled well index,
+    NO_LABEL for a run that did not settle by T_END."""
+    from coincli.integrators import label_states, warm_up
+    from coincli.params import model_params, run_settings
 
-    p = param_array(scene)
+    run = scene.with_overrides(method="event", rtol=rtol, t_end=T_END, stop_on_settle=True)
+    p, settings = model_params(run), run_settings(run.integration)
     states = np.ascontiguousarray(states, dtype=np.float64)
-    label_states(4, p, states[:1], 1e-6, rtol, T_END, True)  # warm-up (numba cache / compile)
+    warm_up(p, settings, states[0])  # load the compiled kernels before the clock starts
     start = time.perf_counter()
-    n, status, _, _ = label_states(4, p, states, 1e-6, rtol, T_END, True)
+    out = label_states(p, settings, states)
     seconds = (time.perf_counter() - start) / len(states)
-    labels = np.where(status == 0, n.astype(np.int64), NO_LABEL)
+    labels = np.where(out.status == 0, out.quarter_turns.astype(np.int64), NO_LABEL)
     return labels, seconds
 
 
 def references(scene, vy, vphi):
     """The two references of coincli's accuracy study on the grid vy x vphi (indexing "ij",
     flattened like the states): {name: (labels, status)}."""
-    from coincli.accuracy import Grid, Setting, run_grid
+    from coincli.accuracy import REFERENCE_A, REFERENCE_B, run_grid, vy_vphi_grid
 
-    grid = Grid(np.asarray(vy, float), np.asarray(vphi, float))
+    vy, vphi = np.asarray(vy, float), np.asarray(vphi, float)
+    grid = vy_vphi_grid(scene, (vy[0], vy[-1]), (vphi[0], vphi[-1]), (vy.size, vphi.size))
+    assert np.allclose(grid.axes[0].coords, vy) and np.allclose(grid.axes[1].coords, vphi)
     out = {}
-    for name, setting in (("A: event rtol=1e-12", Setting("event", 1e-6, 1e-12)),
-                          ("B: rk4 h=2.5e-7", Setting("rk4", 2.5e-7, 0.0))):
+    for name, setting in (("A: event rtol=1e-12", REFERENCE_A), ("B: rk4 h=2.5e-7", REFERENCE_B)):
         run = run_grid(scene, setting, grid)
         out[name] = (run.quarter_turns.ravel().astype(np.int64), run.status.ravel().astype(int))
     return out
@@ -106,17 +109,20 @@ def references(scene, vy, vphi):
 
 def ours_state_at(scene, state0, t, rtol=1e-12):
     """Our state at time t from state0 (no early stop): used only to check the peers' model."""
-    from coincli.integrators.kernels import final_state
-    from coincli.params import param_array
+    from coincli.integrators import final_state
+    from coincli.params import model_params, run_settings
 
-    return final_state(4, param_array(scene), np.asarray(state0, float), 1e-6, rtol, t, False)[0]
+    run = scene.with_overrides(method="event", rtol=rtol, t_end=t, stop_on_settle=False,
+                               verify=False)
+    return final_state(model_params(run), run_settings(run.integration),
+                       np.asarray(state0, float))[0]
 
 
 def ours_well_index(scene, phi):
     from coincli.model import well_index as ours_well
-    from coincli.params import param_array
+    from coincli.params import model_params
 
-    return ours_well(param_array(scene), phi)
+    return ours_well(model_params(scene), phi)
 # ===============================================================================================
 
 

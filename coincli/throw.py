@@ -156,22 +156,27 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     rungs: list[Rung] = []
     certainty = Certainty.UNVERIFIED if not ladder.verified else Certainty.UNCERTAIN
     wall = 0.0
+    previous = None  # (label, status, end time, end state) of the last rung
     for k in range(len(ladder)):
-        settings = base._replace(rtol=ladder.rtols[k], dt=ladder.dts[k])
+        # each rung runs at least as long as the one before and keeps its state at that
+        # rung's end, where the two are compared (coincli.integrators.batch.run_ladder)
+        meet = previous[2] if previous is not None else 0.0
+        settings = base._replace(rtol=ladder.rtols[k], dt=ladder.dts[k], t_min=meet,
+                                 probe_time=meet if previous is not None else -1.0)
         result, seconds, engine = _run(p, settings, state0, samples, events, final, control,
                                        engine)
         wall += seconds
         label = outcome_label(result.status, result.n_well, final[2])
-        label = None if label == NO_LABEL else int(label)
-        rungs.append(Rung(ladder.rung_text(k), label, Status(result.status),
-                          float(result.settle_time), int(result.steps)))
+        rungs.append(Rung(ladder.rung_text(k), None if label == NO_LABEL else int(label),
+                          Status(result.status), float(result.settle_time), int(result.steps)))
         if result.status in (Status.BUDGET, Status.INTERRUPTED):
             break  # a tighter rung would need more steps still, or was told to stop
-        if k and rungs_agree(rungs[-2].quarter_turns, rungs[-2].status, rungs[-2].settle_time,
-                             label, result.status, result.settle_time,
-                             ladder.settle_tolerance):
+        if previous is not None and rungs_agree(p, previous[0], previous[1], previous[3],
+                                                label, result.status, result.probe,
+                                                ladder.state_tolerance):
             certainty = Certainty.CERTAIN
             break
+        previous = (label, result.status, result.t, tuple(final))
     return _trajectory(scene, p, state0, final, result, samples, events, sample_dt,
                        record_events, wall, certainty, rungs)
 

@@ -45,7 +45,7 @@ def run_kernel(scene, state, *, method: Method | str, t_end: float, dt: float = 
                max_samples: int = 0, max_events: int = 0) -> KernelRun:
     """One compiled run from ``state`` (samples and events cut to what was recorded)."""
     settings = RunSettings(method=int(Method.parse(method)), dt=dt, rtol=rtol, t_end=t_end,
-                           stop_on_settle=stop_on_settle, max_steps=10**9, sample_dt=sample_dt)
+                           stop_on_settle=stop_on_settle, max_steps=10**9, sample_dt=sample_dt)  # noqa: E501
     final = np.empty(6)
     samples = np.empty((max_samples, SAMPLE_COLUMNS))
     events = np.empty((max_events, EVENT_COLUMNS))

@@ -21,7 +21,15 @@ from ..model import (
     total_energy_at,
     well_index,
 )
-from .common import NO_WELL, RunResult, is_finite_state, record_events, record_sample, store_state
+from .common import (
+    NAN6,
+    NO_WELL,
+    RunResult,
+    is_finite_state,
+    record_events,
+    record_sample,
+    store_state,
+)
 
 CONTROL_EVERY = 4096  # steps between looks at the control flag (a few microseconds apart)
 
@@ -174,18 +182,24 @@ def integrate_fixed(p, settings, state, samples, events, final, control):
     n_well = NO_WELL
     steps = 0
     t = 0.0
+    t_min = settings.t_min
+    probe_time = settings.probe_time
+    probe = (x, y, phi, vx, vy, vphi) if probe_time == 0.0 else NAN6
     if total_energy(p, state) < e_crit:
         status = Status.SETTLED
         settle_time = 0.0
         n_well = well_index(p, phi)
-    if not (status == Status.SETTLED and stop_on_settle):
+    if not (status == Status.SETTLED and stop_on_settle and t_min <= 0.0):
         for steps in range(1, n_run + 1):
             if steps % CONTROL_EVERY == 0 and control[0] != 0:
                 status = Status.INTERRUPTED
                 steps -= 1
                 break
             x, y, phi, vx, vy, vphi = fixed_step(method, p, dt, x, y, phi, vx, vy, vphi)
+            t_old = t
             t = steps * dt
+            if t_old < probe_time <= t:  # the step end at or just after it (error O(dt))
+                probe = (x, y, phi, vx, vy, vphi)
             if not is_finite_state(x, y, phi, vx, vy, vphi):
                 status = Status.NONFINITE
                 break
@@ -202,8 +216,8 @@ def integrate_fixed(p, settings, state, samples, events, final, control):
                     status = Status.SETTLED
                     settle_time = t
                     n_well = well_index(p, phi)
-                    if stop_on_settle:
-                        break
+            if status == Status.SETTLED and stop_on_settle and t >= t_min:
+                break
         if status == Status.UNSETTLED and steps == n_run < n_total:
             status = Status.BUDGET
     if record and n_samples > 0 and samples[n_samples - 1, 0] < t:
@@ -215,4 +229,4 @@ def integrate_fixed(p, settings, state, samples, events, final, control):
         n_well = NO_WELL
         settle_time = math.nan
     store_state(final, x, y, phi, vx, vy, vphi)
-    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events)
+    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events, probe)

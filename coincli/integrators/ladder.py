@@ -19,7 +19,7 @@ from .registry import info, setting_text
 
 RTOL_FLOOR = 1e-10  # the tightest tolerance a ladder climbs to (see README: the ladder)
 FIXED_RUNGS = 3
-SETTLE_TOLERANCE = 1e-4  # s: two agreeing runs settle within this of each other
+STATE_TOLERANCE = 1e-3  # natural units: two agreeing runs are this close where they meet
 
 
 @dataclass(frozen=True)
@@ -29,7 +29,7 @@ class Ladder:
     rtols: tuple[float, ...]
     dts: tuple[float, ...]
     adaptive: bool
-    settle_tolerance: float = SETTLE_TOLERANCE
+    state_tolerance: float = STATE_TOLERANCE
 
     @property
     def verified(self) -> bool:
@@ -46,10 +46,11 @@ class Ladder:
         knob = "rtol" if self.adaptive else "dt"
         return {"rungs": [{knob: (self.rtols if self.adaptive else self.dts)[k]}
                           for k in range(len(self))],
-                "settle_tolerance": self.settle_tolerance,
-                "rule": "a label is certain when two successive rungs both settle, with the "
-                        "same count of quarter turns, within settle_tolerance seconds of each "
-                        "other; uncertain if no two do"}
+                "state_tolerance": self.state_tolerance,
+                "rule": "a label is certain when two successive rungs both settle with the "
+                        "same count of quarter turns and, at the end of the coarser run, their "
+                        "states differ by at most state_tolerance (natural units: r, 1 rad, "
+                        "sqrt(2 g r), sqrt(2 g r) / r); uncertain if no two do"}
 
 
 def ladder_of(integration: Integration) -> Ladder:
