@@ -301,8 +301,13 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
     if not todo:
         return SweepReport(str(path), total, total, total, 0, 0.0, mode, n_workers, False,
                            damaged=damaged, estimate=estimate)
+    def is_done(tile) -> bool:  # by another process, since the check above
+        if tile in state.damaged:  # its old digest is there: check the data
+            return store_io.tile_done(path, tile, grid)
+        return store_io.has_digest(path, tile)
+
     claims = Claims(store_io.claims_dir(path))
-    queue = TileQueue(todo, claims, is_done=partial(store_io.tile_done, path, grid=grid))
+    queue = TileQueue(todo, claims, is_done=is_done)
     if dask:
         # workers open the store by this path: make it absolute (same path on every machine)
         runner = run_dask(str(path.resolve()), spec, queue, scheduler=scheduler,

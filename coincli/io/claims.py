@@ -15,7 +15,8 @@ so two processes taking over the same tile cannot both win.
 it out and checks, once claimed, that nobody finished it meanwhile; tiles claimed by live others
 are watched until they are done, or until their claim is dropped or goes stale, in which case it
 claims and computes them itself. So when a queue is :attr:`~TileQueue.finished`, every tile of
-the sweep is done, whoever computed it.
+the sweep is done, whoever computed it. A process that meets a tile held by another moves on to
+the middle of the tiles it has left, so processes spread over the grid rather than take turns.
 """
 
 from __future__ import annotations
@@ -245,16 +246,26 @@ class TileQueue:
         self.done_elsewhere: list[tuple[int, int]] = []
         self._last_look = 0.0
 
+    def _finished_elsewhere(self, tile) -> bool:
+        if self.is_done is not None and self.is_done(tile):
+            self.done_elsewhere.append(tile)
+            return True
+        return False
+
     def _get(self, tile) -> bool:
         """Claim ``tile``; True if this process is to compute it."""
         if self.claims is None:
             return True
+        if self._finished_elsewhere(tile):
+            return False
         if not self.claims.try_claim(tile):
             self.watched.append(tile)
+            # another process works here: move on to the middle of what is left, so that
+            # processes spread over the grid instead of taking turns tile by tile
+            self.pending.rotate(-(len(self.pending) // 2))
             return False
-        if self.is_done is not None and self.is_done(tile):  # finished while we looked away
+        if self._finished_elsewhere(tile):  # finished between our look and our claim
             self.claims.release(tile)
-            self.done_elsewhere.append(tile)
             return False
         return True
 

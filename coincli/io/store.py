@@ -575,6 +575,12 @@ def prepare(path: str | os.PathLike, attrs: dict, spec: SweepSpec,
     return check(path, repair_with=attrs, view=view)
 
 
+def has_digest(path: str | os.PathLike, tile: tuple[int, int]) -> bool:
+    """Whether a tile's ``done`` chunk exists (one stat). Written last, after all its data, so a
+    digest that appears while a sweep runs means another process finished the tile."""
+    return _chunk_file(Path(path), "done", tile).is_file()
+
+
 def tile_done(path: str | os.PathLike, tile: tuple[int, int],
               grid: Grid | None = None) -> bool:
     """Whether one tile is done and verified (read now, from disk; without a ``done`` chunk
@@ -720,6 +726,6 @@ def check_store_writable(path: str | os.PathLike) -> None:
 
 __all__ = ["ARRAY_NAMES", "StoreCheck", "StoreDamaged", "StoreView", "Tile", "check",
            "check_store_writable", "claims_dir", "cost_dir", "differences", "grid_of",
-           "is_store", "open_view", "prepare", "read_basin", "read_costs", "read_done",
-           "record_run", "run_record", "scan", "template", "tidy", "tile_digest", "tile_done",
-           "write_tile"]
+           "has_digest", "is_store", "open_view", "prepare", "read_basin", "read_costs",
+           "read_done", "record_run", "run_record", "scan", "template", "tidy", "tile_digest",
+           "tile_done", "write_tile"]
