@@ -12,9 +12,10 @@ Names load on first use, so ``import coincli`` (and ``coin --help``) stays cheap
 
 from .version import __version__
 
-_API = ("Method", "Outcome", "Scene", "Status", "SweepPlan", "SweepProgress", "SweepReport",
-        "Trajectory", "basin", "basin_stats", "classify", "load_preset", "open_basin",
-        "plan_sweep", "render_basin", "simulate", "stability", "sweep")
+_API = ("Method", "Outcome", "Scene", "Status", "SweepEstimate", "SweepPlan", "SweepProgress",
+        "SweepReport", "SweepStart", "SweepTooLong", "Trajectory", "basin", "basin_stats",
+        "classify", "estimate_sweep", "load_preset", "open_basin", "plan_sweep",
+        "render_basin", "simulate", "stability", "sweep", "verify_basin")
 
 __all__ = ["__version__", *_API]
 

@@ -14,6 +14,7 @@ takes a basin takes a Dataset from :func:`basin` or :func:`open_basin`, or the p
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 from collections.abc import Callable
@@ -36,6 +37,7 @@ from .grid import (
     split_options,
 )
 from .integrators import check_step, warm_up
+from .integrators.batch import verified_labels
 from .params import ParameterError, Scene, check_start, validate
 from .presets import load
 from .statics import StabilityReport, analyse
@@ -100,11 +102,48 @@ def _check_starts(scene: Scene, grid: Grid) -> None:
 class SweepProgress:
     """Passed to a sweep's ``progress`` callback after every tile."""
 
-    tiles_done: int  # complete tiles, including those done before this run
+    tiles_done: int  # complete tiles, including those done before this run and by others
     tiles_total: int
     cells_done: int  # cells computed by this run so far
     cells_todo: int  # cells this run set out to compute
     elapsed: float  # s of wall time since this run started
+
+
+@dataclass(frozen=True)
+class SweepEstimate:
+    """How long a sweep should take, from a pilot: a few dozen cells spread over the grid
+    (always the same ones), timed one by one on this machine."""
+
+    seconds: float  # wall time: cells x CPU s a cell / workers (CPU s if workers is None)
+    cells: int  # cells to compute
+    cpu_per_cell: float  # CPU s a cell, the mean over the pilot
+    workers: int | None  # threads or Dask workers assumed; None: a cluster of unknown size
+    pilot_cells: int  # cells timed
+    at_least: bool  # a pilot cell ran out of the pilot's time: the sweep takes longer still
+
+
+class SweepTooLong(ParameterError):
+    """A sweep whose estimate is over the limit it was given (``max_seconds``)."""
+
+    def __init__(self, estimate: SweepEstimate, limit: float):
+        self.estimate = estimate
+        self.limit = limit
+        super().__init__(f"this sweep would take {'at least' if estimate.at_least else 'about'} "
+                         f"{format_duration(estimate.seconds)}, over the limit of "
+                         f"{format_duration(limit)}")
+
+
+@dataclass(frozen=True)
+class SweepStart:
+    """Passed to a sweep's ``on_start`` callback once the store is open, before any work."""
+
+    path: str
+    tiles_total: int
+    tiles_done: int  # complete and verified
+    damaged: tuple  # tiles whose data failed their check: recomputed now
+    repaired: tuple  # metadata files rewritten
+    cells_todo: int
+    estimate: SweepEstimate | None
 
 
 @dataclass(frozen=True)
@@ -113,81 +152,205 @@ class SweepReport:
 
     path: str
     tiles_total: int
-    tiles_done: int  # complete tiles in the store now
+    tiles_done: int  # complete tiles in the store now (as far as this run saw)
     tiles_before: int  # complete tiles when this run started
     cells: int  # cells computed by this run
     wall_seconds: float
     mode: str  # "threads" or "dask"
     workers: int
     interrupted: bool
-
-    @property
-    def tiles_computed(self) -> int:
-        return self.tiles_done - self.tiles_before
+    tiles_computed: int = 0  # tiles this run computed and wrote
+    tiles_elsewhere: int = 0  # tiles other processes finished while this one ran
+    damaged: tuple = ()  # tiles found damaged at the start (recomputed if not interrupted)
+    estimate: SweepEstimate | None = None
 
     @property
     def complete(self) -> bool:
         return self.tiles_done == self.tiles_total
 
 
+PILOT_CELLS = 24  # cells a pilot times
+PILOT_SECONDS = 1.0  # at most this much CPU time
+
+
+def pilot_cells(grid: Grid, count: int = PILOT_CELLS) -> list[tuple[int, int]]:
+    """``count`` cells spread evenly over the grid (the R2 low-discrepancy sequence): always
+    the same cells for the same grid."""
+    g = 1.324717957244746  # the plastic number
+    a0, a1 = 1 / g, 1 / g ** 2
+    n0, n1 = grid.shape
+    out = []
+    for k in range(1, 4 * count):
+        cell = (int(((0.5 + a0 * k) % 1.0) * n0), int(((0.5 + a1 * k) % 1.0) * n1))
+        if cell not in out:
+            out.append(cell)
+        if len(out) == min(count, n0 * n1):
+            break
+    return out
+
+
+def estimate_sweep(plan: SweepPlan, threads: int | None = None, *, workers: int | None = None,
+                   scheduler: str | None = None, cells: int | None = None,
+                   budget: float = PILOT_SECONDS) -> SweepEstimate:
+    """Estimate the wall time of computing ``cells`` cells of ``plan`` (default: all) on
+    ``threads`` threads (default one per core), ``workers`` local Dask workers, or a cluster
+    (``scheduler``: the estimate is then in CPU seconds). The pilot times the cells of
+    :func:`pilot_cells` (24, or a sixteenth of ``cells`` if fewer) one after another for at
+    most ``budget`` CPU seconds; a cell still running then is stopped, and the estimate is a
+    lower bound (``at_least``)."""
+    import threading
+
+    from .enums import Status
+    from .integrators.batch import new_control
+    from .io.runner import usable_cores
+
+    grid, spec = plan.grid, plan.spec
+    cells = grid.n_cells if cells is None else int(cells)
+    cores = usable_cores()
+    n = None if scheduler is not None else min(workers or threads or cores, cores)
+    _load_kernels(spec)
+    c0, c1 = grid.axes[0].coords, grid.axes[1].coords
+    base = np.asarray(grid.base_state, dtype=np.float64)
+    control = new_control()
+    timer = threading.Timer(budget, control.__setitem__, (0, 1))
+    timer.daemon = True
+    timer.start()
+    cpu, timed, at_least = 0.0, 0, False
+    try:
+        # a few dozen cells, but never more than a sixteenth of the sweep
+        for i, j in pilot_cells(grid, min(PILOT_CELLS, max(1, cells // 16))):
+            state = base.copy()
+            state[grid.axes[0].index] = c0[i]
+            state[grid.axes[1].index] = c1[j]
+            before = time.thread_time()
+            out = verified_labels(spec.params, spec.settings, spec.ladder, state[None, :],
+                                  control)
+            cpu += time.thread_time() - before
+            timed += 1
+            if out.status[0] == Status.INTERRUPTED:
+                at_least = True
+                break
+            if cpu >= budget:
+                break
+    finally:
+        timer.cancel()
+    per_cell = cpu / max(timed, 1)  # with a cell stopped short: a lower bound
+    return SweepEstimate(per_cell * cells / (n or 1), cells, per_cell, n, timed, at_least)
+
+
+def format_duration(seconds: float) -> str:
+    """'40 s', '12 min', '3.5 h', '9.3 days', '2.1 years'."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 90 * 60:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 48 * 3600:
+        return f"{seconds / 3600:.1f} h"
+    if seconds < 730 * 86400:
+        return f"{seconds / 86400:.1f} days"
+    return f"{seconds / (365.25 * 86400):.1f} years"
+
+
 def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
           threads: int | None = None, workers: int | None = None, scheduler: str | None = None,
-          progress: Callable[[SweepProgress], None] | None = None,
-          stop=None) -> SweepReport:
+          progress: Callable[[SweepProgress], None] | None = None, stop=None,
+          max_seconds: float | None = None,
+          on_start: Callable[[SweepStart], None] | None = None) -> SweepReport:
     """Compute the tiles of ``plan`` that ``store`` does not hold yet (creating it if needed),
     on ``threads`` threads (default: one per core) or on Dask (``workers`` local processes, or
-    the cluster at ``scheduler``). ``stop`` (anything with ``is_set()``, e.g. a
-    threading.Event) asks it to finish the tiles in flight and return; so does Ctrl-C. A store
-    with other parameters is refused (ParameterError naming them) unless ``overwrite``."""
+    the cluster at ``scheduler``).
+
+    Tiles already in the store are checked first: a damaged one (a chunk that does not read
+    back, or data that do not match the tile's digest) is recomputed like a missing one.
+    Several processes (here or on other machines sharing the store) may run the same sweep at
+    once: each claims a tile before computing it, and returns only once every tile is done,
+    whoever computed it. ``stop`` (anything with ``is_set()``, e.g. a threading.Event) asks it
+    to finish the tiles in flight and return; KeyboardInterrupt (Ctrl-C, a notebook's
+    interrupt) stops the tiles in flight at once, unwritten, and returns too (``interrupted``).
+
+    ``on_start`` receives a :class:`SweepStart` (damaged tiles, the estimate) before any work;
+    with ``max_seconds`` or ``on_start`` the sweep is first estimated (:func:`estimate_sweep`)
+    and, over ``max_seconds``, refused with :class:`SweepTooLong` before anything is created.
+    A store with other parameters is refused (ParameterError naming them) unless
+    ``overwrite``. OSErrors (a read-only or full disk) are raised as they come; a store or
+    output that cannot be written is found before any work."""
     from .io import store as store_io
-    from .io.runner import run_dask, run_threads, run_tile_task, usable_cores
+    from .io.claims import Claims, TileQueue
+    from .io.runner import hard_stop, run_dask, run_threads, run_tile_task, usable_cores
 
     check_where(threads, workers, scheduler)
     started = time.time()
     path = Path(store)
-    spec = plan.spec
-    grid = plan.grid
-    done = store_io.prepare(path, plan.attrs, spec, overwrite=overwrite)
-    tiles = [t for t in grid.tiles() if not done[t]]
+    spec, grid = plan.spec, plan.grid
+    store_io.check_store_writable(path)
+    dask = scheduler is not None or workers is not None
+    where = dict(threads=threads, workers=workers, scheduler=scheduler)
+    want_estimate = max_seconds is not None or on_start is not None
+    fresh = overwrite or not store_io.is_store(path)
+    estimate = None
+    if fresh and want_estimate:  # refuse before creating anything
+        estimate = estimate_sweep(plan, **where)
+        if max_seconds is not None and estimate.seconds > max_seconds:
+            raise SweepTooLong(estimate, max_seconds)
+    state = store_io.prepare(path, plan.attrs, spec, overwrite=overwrite)
+    todo = [t for t in grid.tiles() if not state.done[t]]
     total = len(grid.tiles())
-    before = total - len(tiles)
-    if scheduler is not None or workers is not None:
+    before = total - len(todo)
+    cells_todo = sum(grid.tile_cells(t) for t in todo)
+    if not fresh and want_estimate and todo:
+        estimate = estimate_sweep(plan, **where, cells=cells_todo)
+        if max_seconds is not None and estimate.seconds > max_seconds:
+            raise SweepTooLong(estimate, max_seconds)
+    damaged = tuple(sorted(state.damaged))
+    if on_start is not None:
+        on_start(SweepStart(str(path), total, before, damaged, tuple(state.repaired),
+                            cells_todo, estimate if todo else None))
+    if dask:
         mode, n_workers = "dask", workers or 0
-        # workers open the store by this path: make it absolute (same path on every machine)
-        runner = run_dask(str(path.resolve()), spec, tiles, scheduler=scheduler, workers=workers)
     else:
         mode, n_workers = "threads", threads or usable_cores()
-        runner = run_threads(partial(run_tile_task, str(path), spec), tiles, n_workers)
-    cells_todo = sum(grid.tile_cells(t) for t in tiles)
-    if tiles and mode == "threads":
+    if not todo:
+        return SweepReport(str(path), total, total, total, 0, 0.0, mode, n_workers, False,
+                           damaged=damaged, estimate=estimate)
+    def is_done(tile) -> bool:  # by another process, since the check above
+        if tile in state.damaged:  # its old digest is there: check the data
+            return store_io.tile_done(path, tile, grid)
+        return store_io.has_digest(path, tile)
+
+    claims = Claims(store_io.claims_dir(path))
+    queue = TileQueue(todo, claims, is_done=is_done)
+    if dask:
+        # workers open the store by this path: make it absolute (same path on every machine)
+        runner = run_dask(str(path.resolve()), spec, queue, scheduler=scheduler,
+                          workers=workers, stop=stop)
+    else:
         _load_kernels(spec)
+        runner = run_threads(partial(run_tile_task, str(path), spec), queue, n_workers, stop)
     wall0 = time.perf_counter()
     interrupted = False
-    finished = cells = 0
+    computed = cells = 0
     try:
-        if tiles:
-            for _tile, tile_cells, _cpu in runner:
-                finished += 1
-                cells += tile_cells
-                if progress is not None:
-                    progress(SweepProgress(before + finished, total, cells, cells_todo,
-                                           time.perf_counter() - wall0))
-                if stop is not None and stop.is_set():
-                    interrupted = True
-                    break
-        runner.close()  # cancel what is queued, wait for the tiles in flight
+        for done in runner:
+            if done.written:
+                computed += 1
+                cells += done.cells
+            if progress is not None:
+                progress(SweepProgress(before + computed + len(queue.done_elsewhere), total,
+                                       cells, cells_todo, time.perf_counter() - wall0))
     except KeyboardInterrupt:
         interrupted = True
-        runner.close()
+        hard_stop(runner)  # the tiles in flight stop now, unwritten
+    finally:
+        claims.close()
+    interrupted = interrupted or not queue.finished or (stop is not None and stop.is_set())
     wall = time.perf_counter() - wall0
-    done_now = store_io.read_done(path)
-    n_done = int(done_now.sum())
-    cells = sum(grid.tile_cells(t) for t in tiles if done_now[t])  # tiles in flight included
-    if tiles:
-        store_io.record_run(path, store_io.run_record(started, wall, n_done - before, cells,
-                                                      mode, n_workers, interrupted))
+    elsewhere = len(queue.done_elsewhere)
+    n_done = total if not interrupted else before + computed + elsewhere
+    with contextlib.suppress(OSError):  # a cost record lost is no reason to fail a sweep
+        store_io.record_run(path, store_io.run_record(started, wall, computed, cells, mode,
+                                                      n_workers, interrupted))
     return SweepReport(str(path), total, n_done, before, cells, wall, mode, n_workers,
-                       interrupted)
+                       interrupted, computed, elsewhere, damaged, estimate)
 
 
 def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os.PathLike |
@@ -203,8 +366,9 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
     ``store`` it is computed into (or resumed from) that Zarr store, the same store
     ``coin basin`` writes, and the store is returned opened. Every label is verified (see
     coincli.integrators.ladder) unless the scene's integration says ``verify=False``
-    (``scene.with_overrides(verify=False)``). Interrupted (``stop`` set, or
-    Ctrl-C), it raises KeyboardInterrupt; a store keeps every finished tile for a resume."""
+    (``scene.with_overrides(verify=False)``). Interrupted (``stop`` set, or Ctrl-C, which stops
+    the tiles in flight at once), it raises KeyboardInterrupt; a store keeps every finished
+    tile for a resume."""
     plan = plan_sweep(scene, res=res, chunk=chunk, force=force, x0=x0, y0=y0,
                       phi0=phi0, vx=vx, vy=vy, vphi=vphi)
     if store is not None:
@@ -220,8 +384,9 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
 
 
 def _basin_in_memory(plan: SweepPlan, threads, progress, stop):
+    from .io.claims import TileQueue
     from .io.dataset import Basin, to_dataset
-    from .io.runner import run_threads, usable_cores
+    from .io.runner import hard_stop, run_threads, usable_cores
     from .io.schema import FILLS, VARIABLES
 
     check_where(threads, None, None)
@@ -234,7 +399,8 @@ def _basin_in_memory(plan: SweepPlan, threads, progress, stop):
     _load_kernels(spec)
     wall0 = time.perf_counter()
     cells = 0
-    runner = run_threads(partial(compute_tile, spec), tiles, threads or usable_cores())
+    runner = run_threads(partial(compute_tile, spec), TileQueue(tiles),
+                         threads or usable_cores(), stop)
     try:
         for result in runner:
             s0, s1 = grid.tile_slices(result.tile)
@@ -246,10 +412,11 @@ def _basin_in_memory(plan: SweepPlan, threads, progress, stop):
             if progress is not None:
                 progress(SweepProgress(int(done.sum()), len(tiles), cells, grid.n_cells,
                                        time.perf_counter() - wall0))
-            if stop is not None and stop.is_set():
-                raise KeyboardInterrupt("sweep interrupted")
-    finally:
-        runner.close()
+    except KeyboardInterrupt:
+        hard_stop(runner)
+        raise
+    if not done.all():
+        raise KeyboardInterrupt("sweep interrupted")
     run = {"wall_seconds": round(time.perf_counter() - wall0, 3), "tiles": len(tiles),
            "cells": cells, "mode": "threads", "workers": threads or usable_cores(),
            "interrupted": False}
@@ -278,12 +445,22 @@ def check_where(threads, workers, scheduler) -> None:
 
 
 def open_basin(store: str | os.PathLike):
-    """A basin store as an xarray Dataset (in memory; cells of unfinished tiles read as not
-    computed, status NOT_COMPUTED)."""
+    """A basin store as an xarray Dataset (in memory; every tile checked: cells of unfinished
+    or damaged tiles read as not computed, status NOT_COMPUTED; the damaged tiles are listed in
+    the attribute ``damaged_tiles``)."""
     from .io.dataset import to_dataset
     from .io.store import read_basin
 
     return to_dataset(read_basin(store))
+
+
+def verify_basin(store: str | os.PathLike):
+    """Check a store without computing anything: every tile's chunks (checksums) against its
+    digest, and every metadata file (a :class:`coincli.io.store.StoreCheck`: ``intact``,
+    ``damaged`` tiles with the reason, ``done`` tiles)."""
+    from .io.store import check
+
+    return check(store)
 
 
 def _as_basin(basin):
@@ -298,19 +475,53 @@ def _as_basin(basin):
     return from_dataset(basin)
 
 
+def _tiles(done: np.ndarray, damaged) -> dict:
+    return {"tiles_total": int(done.size), "tiles_done": int(np.count_nonzero(done)),
+            "tiles_damaged": [list(map(int, t)) for t in sorted(damaged)]}
+
+
 def basin_stats(basin) -> dict:
     """Outcome counts and fractions, P(standing) with its 95 % Wilson interval, the cells
     without a label, the certain and uncertain cells of a verified sweep with the outcome
-    probabilities over the certain ones, and the cost, of a Dataset or a store path (plain
-    values: ``coin basin stats --json`` prints this)."""
+    probabilities over the certain ones, the tiles (done, damaged) and the cost, of a Dataset or
+    a store path (plain values: ``coin basin stats --json`` prints this). A store is read one
+    tile at a time, each checked, so memory stays flat at any resolution; damaged tiles count
+    as not computed."""
     from .stats import BasinCounts, cost_summary
 
+    if isinstance(basin, str | os.PathLike):
+        return _store_stats(basin)
     view = _as_basin(basin)
     a = view.arrays
     counts = BasinCounts()
     counts.add(a["quarter_turns"], a["status"], a["certainty"])
     out = counts.summary()
+    out.update(_tiles(view.done, view.damaged))
     out["cost"] = cost_summary(out["computed"], view.tile_seconds, view.done, view.runs)
+    return out
+
+
+def _store_stats(path) -> dict:
+    from .io.store import Tile, open_view, read_costs, scan
+    from .stats import BasinCounts, cost_summary
+
+    view = open_view(path)
+    grid = view.grid
+    counts = BasinCounts()
+    done = np.zeros(grid.tile_grid, np.uint8)
+    damaged = []
+    for tile, state, data, _ in scan(view, with_data=True):
+        if state is Tile.DONE:
+            counts.add(data["quarter_turns"], data["status"], data["certainty"])
+            done[tile] = 1
+        else:
+            counts.add_not_computed(grid.tile_cells(tile))
+            if state is Tile.DAMAGED:
+                damaged.append(tile)
+    out = counts.summary()
+    out.update(_tiles(done, damaged))
+    seconds, runs = read_costs(view.path, grid.tile_grid)
+    out["cost"] = cost_summary(out["computed"], seconds, done, runs)
     return out
 
 
@@ -328,6 +539,7 @@ def render_basin(basin, out: str | os.PathLike, *, field: str = "n", title: str 
         raise ParameterError(str(exc)) from None
 
 
-__all__ = ["Method", "Outcome", "Status", "SweepPlan", "SweepProgress", "SweepReport", "Trajectory",
-           "basin", "basin_stats", "classify", "load_preset", "open_basin", "plan_sweep",
-           "render_basin", "simulate", "stability", "sweep"]
+__all__ = ["Method", "Outcome", "Status", "SweepEstimate", "SweepPlan", "SweepProgress",
+           "SweepReport", "SweepStart", "SweepTooLong", "Trajectory", "basin", "basin_stats",
+           "classify", "estimate_sweep", "load_preset", "open_basin", "plan_sweep",
+           "render_basin", "simulate", "stability", "sweep", "verify_basin"]

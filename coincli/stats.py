@@ -16,6 +16,7 @@ from collections import Counter
 import numpy as np
 
 from .enums import Certainty, Status
+from .integrators import NO_LABEL
 
 
 def wilson(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
@@ -68,7 +69,8 @@ class BasinCounts:
         st = np.asarray(status).ravel()
         self.cells += q.size
         self.status.update(dict(zip(*np.unique(st, return_counts=True), strict=True)))
-        labelled = (st == Status.SETTLED) | (st == Status.UNSETTLED)
+        # a label needs both a labelled status and a count (never the fill value)
+        labelled = ((st == Status.SETTLED) | (st == Status.UNSETTLED)) & (q != NO_LABEL)
         self.outcomes.update(dict(zip(*np.unique(q[labelled], return_counts=True), strict=True)))
         if certainty is None:
             certainty = np.where(st == Status.NOT_COMPUTED, Certainty.NOT_COMPUTED,
@@ -79,6 +81,12 @@ class BasinCounts:
                               (Certainty.UNCERTAIN, self.uncertain_outcomes)):
             sel = labelled & (cert == flag)
             counter.update(dict(zip(*np.unique(q[sel], return_counts=True), strict=True)))
+
+    def add_not_computed(self, cells: int) -> None:
+        """Count ``cells`` cells without a result (a tile not done, or damaged)."""
+        self.cells += int(cells)
+        self.status[int(Status.NOT_COMPUTED)] += int(cells)
+        self.certainty[int(Certainty.NOT_COMPUTED)] += int(cells)
 
     def summary(self) -> dict:
         """Everything `coin basin stats` reports, as plain values."""

@@ -26,6 +26,7 @@ from .common import (
     build_scene,
     console,
     err_console,
+    fail,
     print_json,
     user_errors,
 )
@@ -81,6 +82,7 @@ def accuracy_command(
     Trajectory error: the state of five throws ~0.06 s after their first impact against the event method at rtol 1e-12. Label error: the fraction of robust cells of a basin grid whose n differs from that reference; robust cells are those where it agrees with RK4 at h = 2.5e-7.
     """  # noqa: E501
     from .. import accuracy as acc
+    from ..io.paths import check_writable, describe
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
@@ -98,6 +100,9 @@ def accuracy_command(
         table = table or out.with_suffix(".json")
         if table.suffix not in (".json", ".csv"):
             raise ParameterError(f"--table must end in .json or .csv, got {table}")
+        # both outputs writable before minutes of computing
+        check_writable(out, what="chart", create_parents=True)
+        check_writable(table, what="table", create_parents=True)
     settings = acc.ladder_settings(names)
     if quick:
         settings = [s for s in settings
@@ -108,13 +113,18 @@ def accuracy_command(
                               progress=lambda text: status.update(f"accuracy: {text}"))
     from ..io.charts import plot_study, write_table
 
-    out.parent.mkdir(parents=True, exist_ok=True)
-    plot_study(study, out, title=f"coin {scene.coin.diameter * 1e3:g} x "
-                                 f"{scene.coin.thickness * 1e3:g} mm, k = {scene.foundation.k:g} "
-                                 f"N/m, c = {scene.foundation.c:g} N s/m; grid "
-                                 f"{grid.shape[0]} x {grid.shape[1]} over vy0 {vy_range}, "
-                                 f"vphi0 {vphi_range}")
-    write_table(study, table, scene)
+    try:
+        plot_study(study, out, title=f"coin {scene.coin.diameter * 1e3:g} x "
+                                     f"{scene.coin.thickness * 1e3:g} mm, k = "
+                                     f"{scene.foundation.k:g} N/m, c = {scene.foundation.c:g} "
+                                     f"N s/m; grid {grid.shape[0]} x {grid.shape[1]} over vy0 "
+                                     f"{vy_range}, vphi0 {vphi_range}")
+    except OSError as exc:
+        raise fail(describe(exc, f"cannot write {out}")) from None
+    try:
+        write_table(study, table, scene)
+    except OSError as exc:
+        raise fail(describe(exc, f"cannot write {table}")) from None
     if json_out:
         print_json(__import__("json").loads(table.read_text()) if table.suffix == ".json"
                    else {"table": str(table)})

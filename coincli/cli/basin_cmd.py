@@ -77,7 +77,8 @@ basin_app = typer.Typer(
     help="Map the final number n of quarter turns over two initial conditions.\n\n"
          "coin basin OUT.zarr [OPTIONS] runs (or resumes) a sweep: it is short for "
          "`coin basin sweep OUT.zarr`, whose --help lists the options. Then "
-         "`coin basin render OUT.zarr -o basin.png` and `coin basin stats OUT.zarr`.",
+         "`coin basin render OUT.zarr -o basin.png`, `coin basin stats OUT.zarr`, and "
+         "`coin basin verify OUT.zarr` to check a store.",
 )
 app.add_typer(basin_app, name="basin")
 
@@ -176,6 +177,9 @@ def sweep_command(
                                                   rich_help_panel=RUN)] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.",
                                         rich_help_panel=RUN)] = False,
+    yes: Annotated[bool, typer.Option("--yes", "-y", help="Start a sweep estimated to take "
+                                      "more than 12 hours anyway.",
+                                      rich_help_panel=RUN)] = False,
     preset: PresetOpt = "paper",
     diameter: DiameterOpt = None, thickness: ThicknessOpt = None, mass: MassOpt = None,
     inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, g: GOpt = None,
@@ -185,11 +189,13 @@ def sweep_command(
 ) -> None:
     """Sweep two initial conditions over a grid and store n for every cell (resumable).
 
-    Defaults: the paper's setting (x0 = 0, y0 = r, phi0 = 0, vx0 = 0) over vy0 in 0.05:2 m/s and vphi0 in -20:20 rad/s, 512 x 512 cells. Running the same command again resumes the sweep; Ctrl-C stops after the tiles in flight.
+    Defaults: the paper's setting (x0 = 0, y0 = r, phi0 = 0, vx0 = 0) over vy0 in 0.05:2 m/s and vphi0 in -20:20 rad/s, 512 x 512 cells. Running the same command again resumes the sweep (and recomputes any damaged tile); several processes or machines may run it on one store at once. Ctrl-C stops after the tiles in flight, a second Ctrl-C at once. A sweep estimated at over 12 hours is refused without --yes.
 
     Example: coin basin out.zarr --vy 0:2 --vphi -20:20 --res 512
     """  # noqa: E501
     from .. import api
+    from ..io import store as store_io
+    from ..io.paths import DISK_ERRORS, NotWritable, describe
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
@@ -215,31 +221,160 @@ def sweep_command(
                                      ntiles=update.tiles_total)
         progress.update(task, completed=update.cells_done, tiles=update.tiles_done)
 
-    announce_compilation()
+    def started(start) -> None:
+        if start.repaired:
+            err_console.print(f"[yellow]repaired:[/] {path}: {len(start.repaired)} metadata "
+                              f"file(s) differed from the sweep's and were rewritten: "
+                              f"{', '.join(start.repaired[:6])}", highlight=False,
+                              soft_wrap=True)
+        if start.damaged:
+            err_console.print(f"[yellow]damaged:[/] {len(start.damaged)} tile(s) of {path} "
+                              f"failed their check and are recomputed: "
+                              f"{_tile_list(start.damaged)}", highlight=False,
+                              soft_wrap=True)
+        est = start.estimate
+        if est is not None and est.seconds > 60:
+            err_console.print(f"estimate: {_estimate_text(est, scheduler)}", highlight=False,
+                              soft_wrap=True)
+        if start.cells_todo:
+            announce_compilation()
+            if not quiet:
+                progress.start()
+
     try:
-        with user_errors(), _Stop() as stop, progress:
-            report = api.sweep(plan, path, overwrite=overwrite, threads=threads,
-                               workers=workers, scheduler=scheduler, progress=show,
-                               stop=stop.event)
-    except OSError as exc:  # e.g. no scheduler at that address
-        raise fail(f"cannot run the sweep: {exc}") from None
+        with _Stop() as stop:
+            try:
+                report = api.sweep(plan, path, overwrite=overwrite, threads=threads,
+                                   workers=workers, scheduler=scheduler, progress=show,
+                                   stop=stop.event, on_start=started,
+                                   max_seconds=None if yes else MAX_SECONDS)
+            finally:
+                progress.stop()
+    except api.SweepTooLong as exc:
+        raise fail(_too_long(exc.estimate, plan, scheduler)) from None
+    except ParameterError as exc:
+        raise fail(str(exc)) from None
+    except OSError as exc:  # a read-only or full disk; no scheduler at that address
+        disk = exc.errno in DISK_ERRORS or isinstance(exc, NotWritable)
+        raise fail(describe(exc, f"cannot write {path}" if disk else "cannot run the sweep")
+                   + ("; the tiles written so far are kept: rerun the command to resume"
+                      if disk and store_io.is_store(path) else "")) from None
     total = report.tiles_total
     if report.tiles_before == total:
         console.print(f"{path}: all {total} tiles are done already ({grid.n_cells:,} cells). "
-                      f"Next: coin basin render {path}; coin basin stats {path}")
+                      f"Next: coin basin render {path}; coin basin stats {path}",
+                      highlight=False, soft_wrap=True)
         return
     rate = report.cells / report.wall_seconds if report.wall_seconds > 0 else math.nan
     where = (f"{report.workers} threads" if report.mode == "threads"
              else f"Dask ({scheduler or f'{report.workers} local workers'})")
+    others = (f"; {report.tiles_elsewhere} tiles by other processes"
+              if report.tiles_elsewhere else "")
     console.print(f"{path}: {report.tiles_done}/{total} tiles done; this run computed "
                   f"{report.tiles_computed} tiles ({report.cells:,} cells) in "
                   f"{report.wall_seconds:.1f} s wall, {rate:,.0f} "
-                  f"cells/s on {where}.")
-    if not report.complete:
+                  f"cells/s on {where}{others}.", highlight=False, soft_wrap=True)
+    if report.interrupted or not report.complete:
         err_console.print(f"[yellow]stopped:[/] {total - report.tiles_done} tiles left; run the "
                           "same command again to resume.")
         raise typer.Exit(code=130)
     console.print(f"Next: coin basin render {path} -o basin.png; coin basin stats {path}")
+
+
+MAX_SECONDS = 12 * 3600.0  # a sweep estimated longer is refused without --yes
+
+
+def _tile_list(tiles, most: int = 8) -> str:
+    text = ", ".join(f"({i}, {j})" for i, j in list(tiles)[:most])
+    return text + (f" and {len(tiles) - most} more" if len(tiles) > most else "")
+
+
+def _estimate_text(est, scheduler) -> str:
+    from ..api import format_duration
+
+    bound = "at least" if est.at_least else "about"
+    on = (f"on {est.workers} {'core' if est.workers == 1 else 'cores'}" if est.workers
+          else f"of CPU time over the cluster at {scheduler}")
+    return (f"{bound} {format_duration(est.seconds)} {on} for {est.cells:,} cells "
+            f"({est.cpu_per_cell * 1e3:.3g} ms a cell, from a pilot of {est.pilot_cells} "
+            f"cells)")
+
+
+def _too_long(est, plan, scheduler) -> str:
+    """One line: how long, and how to split the sweep."""
+    from ..api import format_duration
+
+    n0, n1 = plan.grid.shape
+    scale = math.sqrt(MAX_SECONDS / est.seconds) if est.seconds > 0 else 1.0
+    r0, r1 = (max(2, int(n * scale) // 64 * 64 or int(n * scale)) for n in (n0, n1))
+    smaller = f"--res {r0}" if (n0 == n1 and r0 == r1) else f"--res {r0}x{r1}"
+    machines = math.ceil(est.seconds / MAX_SECONDS)
+    return (f"this sweep would take {_estimate_text(est, scheduler)}. Give --yes to start it "
+            f"anyway, or split it: a smaller {smaller} (about "
+            f"{format_duration(MAX_SECONDS)} here), narrower ranges, or this same command on "
+            f"{machines} machines sharing the store (each claims its own tiles)")
+
+
+@basin_app.command("verify")
+def verify_command(
+    path: Annotated[Path, typer.Argument(help="A basin store (complete or partial).",
+                                         metavar="STORE")],
+    json_out: JsonOpt = False,
+) -> None:
+    """Check a store without computing anything: every chunk's checksum, every tile's data
+    against its digest, every metadata file.
+
+    Exit code 0 if the store is intact (complete or not), 1 if anything is damaged (listed:
+    rerunning the sweep command recomputes those tiles), 2 if it is no basin store.
+    """
+    from .. import api
+    from ..io.store import StoreDamaged
+
+    damage = None
+    with user_errors():
+        try:
+            found = api.verify_basin(path)
+        except StoreDamaged as exc:  # its metadata: no tile can be checked
+            damage = exc
+    if damage is not None:
+        exc = damage
+        if json_out:
+            print_json({"path": str(path), "intact": False, "error": str(exc)})
+        else:
+            err_console.print(f"[bold red]damaged:[/] {exc}", highlight=False, soft_wrap=True)
+        raise typer.Exit(code=1) from None
+    total = int(found.done.size)
+    unrepaired = [k for k in found.metadata if k not in found.repaired]
+    if json_out:
+        print_json({"path": str(path), "intact": found.intact, "tiles": total,
+                    "tiles_done": found.tiles_done, "not_computed": total - found.tiles_done
+                    - len(found.damaged),
+                    "damaged": [{"tile": list(t), "reason": why}
+                                for t, why in sorted(found.damaged.items())],
+                    "metadata": unrepaired, "leftover_temporary_files": found.leftovers,
+                    "seconds": found.seconds})
+    elif found.intact:
+        missing = total - found.tiles_done
+        console.print(f"{path}: intact: {found.tiles_done} of {total} tiles done and verified"
+                      + (f", {missing} not computed yet" if missing else "")
+                      + f" ({found.seconds:.2f} s)", highlight=False, soft_wrap=True)
+    else:
+        console.print(f"{path}: DAMAGED: {len(found.damaged)} tile(s)"
+                      + (f" and {len(unrepaired)} metadata file(s)" if unrepaired else "")
+                      + f"; {found.tiles_done} of {total} tiles intact ({found.seconds:.2f} s). "
+                      "Rerun the sweep command to recompute the damaged tiles.",
+                      highlight=False, soft_wrap=True)
+        for tile, why in sorted(found.damaged.items()):
+            console.print(f"  tile {tile}: {why}", highlight=False, soft_wrap=True)
+        for key in unrepaired:
+            console.print(f"  metadata {key}: differs from what the store's parameters give",
+                          highlight=False, soft_wrap=True)
+    if found.leftovers and not json_out:
+        err_console.print(f"note: {found.leftovers} temporary file(s) of interrupted writes "
+                          "(*.partial); the next sweep removes them", highlight=False,
+                          soft_wrap=True)
+    if not found.intact:
+        raise typer.Exit(code=1)
 
 
 @basin_app.command("render")
@@ -267,7 +402,7 @@ def render_command(
     """  # noqa: E501
     from .. import api
     from ..io.basin_render import log_rerun
-    from ..io.paths import check_rrd_path
+    from ..io.paths import check_rrd_path, check_writable, describe
     from ..io.store import read_basin
 
     with user_errors():
@@ -275,20 +410,34 @@ def render_command(
             raise ParameterError(f"--dpi must be between 10 and 1200, got {dpi}")
         if rrd is not None and rrd.suffix != ".rrd":
             raise ParameterError(f"--rrd {rrd}: the file name must end in .rrd")
-        basin = read_basin(path)
         target = out if out is not None else path.with_suffix(".png")
         if target.suffix.lower() not in (".png", ".svg", ".pdf"):
             raise ParameterError(f"-o {target}: the file name must end in .png, .svg or .pdf")
         if n_max is not None and n_max < 1:
             raise ParameterError(f"--n-max must be at least 1, got {n_max}")
-        check_rrd_path(target)  # a writable file path
+        basin = read_basin(path)
+        check_writable(target, what="picture")  # before drawing
         if rrd is not None:
             check_rrd_path(rrd)
-        api.render_basin(basin, target, title=title, dpi=dpi, n_max=n_max, field=field)
+        try:
+            api.render_basin(basin, target, title=title, dpi=dpi, n_max=n_max, field=field)
+        except OSError as exc:
+            raise fail(describe(exc, f"cannot write {target}")) from None
         console.print(f"wrote {target}")
+        _damaged_note(path, basin.damaged, "drawn as not computed")
         if rrd is not None:
-            log_rerun(basin, rrd)
+            try:
+                log_rerun(basin, rrd)
+            except OSError as exc:
+                raise fail(describe(exc, f"cannot write {rrd}")) from None
             console.print(f"wrote {rrd} (open with: rerun {rrd})")
+
+
+def _damaged_note(path, damaged, treated: str) -> None:
+    if damaged:
+        err_console.print(f"[yellow]damaged:[/] {len(damaged)} tile(s) of {path} failed their "
+                          f"check and are {treated}: {_tile_list(damaged)}; rerun the sweep "
+                          "command to recompute them", highlight=False, soft_wrap=True)
 
 
 def _pct(x) -> str:
@@ -319,20 +468,26 @@ def stats_command(
     non-finite, over budget or not computed; the CPU and wall time of the sweep.
     """
     from .. import api
-    from ..io.store import read_basin
+    from ..io.paths import check_writable, describe
+    from ..io.store import open_view
 
     with user_errors():
-        basin = read_basin(path)
-        stats = api.basin_stats(basin)
+        view = open_view(path)
         if csv_out is not None:
-            _write_csv(stats, csv_out)
-    attrs = basin.attrs
+            check_writable(csv_out, what="CSV file")  # before reading the whole store
+        stats = api.basin_stats(path)
+        if csv_out is not None:
+            try:
+                _write_csv(stats, csv_out)
+            except OSError as exc:
+                raise fail(describe(exc, f"cannot write {csv_out}")) from None
+    attrs = view.attrs
     if json_out:
         print_json({"path": str(path), "version": __version__, "store_version": attrs["version"],
                     "sweep": attrs["sweep"], "method": attrs["method"],
-                    "tiles_done": int(basin.done.sum()), "tiles": int(basin.done.size), **stats})
+                    "tiles": stats["tiles_total"], **stats})
         return
-    ax0, ax1 = basin.axes
+    ax0, ax1 = attrs["sweep"]["axes"]
     console.print(f"[bold]coin basin stats[/] {path}", highlight=False)
     console.print(f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
                   f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells, "
@@ -360,8 +515,13 @@ def stats_command(
     summary.add_column(style="bold", no_wrap=True)
     summary.add_column()
     summary.add_row("cells", f"{stats['cells']:,}: {stats['computed']:,} computed "
-                             f"({int(basin.done.sum())}/{basin.done.size} tiles), "
+                             f"({stats['tiles_done']}/{stats['tiles_total']} tiles), "
                              f"{stats['not_computed']:,} not computed")
+    if stats["tiles_damaged"]:
+        damaged = stats["tiles_damaged"]
+        summary.add_row("damaged", f"{len(damaged)} tile(s) failed their check and count as "
+                                   f"not computed: {_tile_list(damaged)}; rerun the sweep "
+                                   "command to recompute them")
     counts = ", ".join(f"{count:,} {name}" for name, count in stats["status"].items()
                        if count and name != "not computed")
     summary.add_row("status", counts or "-")
@@ -395,11 +555,10 @@ def stats_command(
 def _write_csv(stats: dict, target: Path) -> None:
     import csv
 
-    from ..io.paths import check_rrd_path
+    from ..io.paths import atomic_output
 
-    check_rrd_path(target)  # a writable file path
     certain = {r["n"]: r for r in stats.get("outcomes_certain", [])}
-    with open(target, "w", newline="") as fh:
+    with atomic_output(target) as tmp, open(tmp, "w", newline="") as fh:
         writer = csv.writer(fh)
         header = ["n", "pose", "direction", "cells", "fraction", "low", "high"]
         if stats["verified"]:

@@ -115,9 +115,10 @@ def user_errors():
         yield
     except ParameterError as exc:
         raise fail(str(exc)) from None
-    except (FileExistsError, FileNotFoundError, PermissionError, IsADirectoryError,
-            NotADirectoryError) as exc:
-        raise fail(str(exc)) from None
+    except OSError as exc:  # a read-only or full disk, a missing folder, no permission
+        from ..io.paths import describe
+
+        raise fail(describe(exc)) from None
 
 
 def build_scene(preset: str, **overrides) -> Scene:

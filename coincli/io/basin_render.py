@@ -20,7 +20,9 @@ import numpy as np
 
 from ..enums import Certainty, Status
 from ..grid import AXIS_INFO
+from ..integrators import NO_LABEL
 from .dataset import Basin
+from .paths import atomic_output
 
 WHITE = (1.0, 1.0, 1.0, 1.0)
 STANDING = (0.0, 0.0, 0.0, 1.0)
@@ -54,7 +56,9 @@ def _ramp_colours(n_max_even: int):
 
 def _labelled_mask(basin: Basin) -> np.ndarray:
     st = basin.arrays["status"]
-    return (st == Status.SETTLED) | (st == Status.UNSETTLED)
+    # a label needs a labelled status and a count: never draw the fill value as an n
+    return (((st == Status.SETTLED) | (st == Status.UNSETTLED))
+            & (basin.arrays["quarter_turns"] != NO_LABEL))
 
 
 def n_range(basin: Basin, n_max: int | None = None) -> int:
@@ -181,14 +185,19 @@ def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
         what = ("Final number n of quarter turns" if field == "n"
                 else "When the outcome was decided (energy below E_crit)")
         title = (f"{what}, {x.size} x {y.size} cells"
-                 + (f" (partial: {done} of {total} tiles)" if done < total else ""))
+                 + (f" (partial: {done} of {total} tiles" if done < total else "")
+                 + (f", {len(basin.damaged)} damaged" if basin.damaged else "")
+                 + (")" if done < total else ""))
     fig.suptitle(title, fontsize=11)
     params = attrs["parameters"]
     ax.set_title(f"{_fixed_text(basin)}; k = {params['foundation']['k']:g} N/m, "
                  f"c = {params['foundation']['c']:g} N s/m; {method['name']} {setting}, "
                  f"$t_{{end}}$ = {method['t_end']:g} s", fontsize=8, color="#444444")
-    fig.savefig(out, dpi=dpi)
-    plt.close(fig)
+    try:
+        with atomic_output(out) as tmp:  # complete or absent, never truncated
+            fig.savefig(tmp, dpi=dpi, format="png")
+    finally:
+        plt.close(fig)
     return out
 
 

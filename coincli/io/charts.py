@@ -9,6 +9,7 @@ from pathlib import Path
 
 from ..enums import Method
 from ..version import __version__
+from .paths import atomic_output
 
 COLOURS = {Method.SYMPLECTIC_EULER: "#d62728", Method.VERLET: "#ff7f0e", Method.RK4: "#2ca02c",
            Method.DOPRI5: "#1f77b4", Method.EVENT: "#9467bd"}
@@ -33,7 +34,7 @@ def study_rows(study) -> list[dict]:
 def write_table(study, path: Path, scene) -> None:
     rows = study_rows(study)
     if path.suffix == ".csv":
-        with open(path, "w", newline="") as fh:
+        with atomic_output(path) as tmp, open(tmp, "w", newline="") as fh:
             writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
             writer.writeheader()
             writer.writerows(rows)
@@ -61,7 +62,8 @@ def write_table(study, path: Path, scene) -> None:
             "uncertain_robust": study.verified_point.uncertain,
             "trajectory_error": study.verified_point.trajectory_error},
     }
-    path.write_text(json.dumps(data, indent=2) + "\n")
+    with atomic_output(path) as tmp:
+        tmp.write_text(json.dumps(data, indent=2) + "\n")
 
 
 def _knob_text(point) -> str:
@@ -128,5 +130,8 @@ def plot_study(study, path: Path, title: str = "") -> None:
     ax_traj.legend(loc="upper right", fontsize=7)
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    try:
+        with atomic_output(path) as tmp:
+            fig.savefig(tmp, dpi=130, format="png")
+    finally:
+        plt.close(fig)

@@ -8,7 +8,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .schema import DONE_ATTRS, FILLS, VARIABLES
+from .schema import FILLS, VARIABLES
+
+DONE_VAR_ATTRS = {"long_name": "1 = tile complete (its data checked against its digest)"}
 
 
 @dataclass
@@ -18,10 +20,11 @@ class Basin:
 
     attrs: dict  # the schema's attributes: parameters, sweep, method, version
     arrays: dict[str, np.ndarray]  # the schema's variables (coincli.io.schema.VARIABLES)
-    done: np.ndarray  # per tile, 1 = complete
+    done: np.ndarray  # per tile, 1 = complete (and, read from a store, verified)
     tile_seconds: np.ndarray  # CPU seconds of each tile, NaN where unknown
     runs: list = field(default_factory=list)  # one record per invocation (wall time, mode)
     path: str | None = None  # the store it was read from
+    damaged: list = field(default_factory=list)  # tiles whose data failed their check
 
     @property
     def dims(self) -> tuple[str, str]:
@@ -66,14 +69,15 @@ def to_dataset(basin: Basin):
     data_vars = {name: ((d0, d1), arr, dict(VARIABLES[name][2]))
                  for name, arr in basin.arrays.items()}
     tdims = (f"tile_{d0}", f"tile_{d1}")
-    data_vars["done"] = (tdims, basin.done, dict(DONE_ATTRS))
+    data_vars["done"] = (tdims, basin.done.astype(np.uint8), dict(DONE_VAR_ATTRS))
     data_vars["tile_cpu_seconds"] = (tdims, basin.tile_seconds,
                                      {"long_name": "CPU time of each tile", "units": "s"})
     coords = {}
     for axis, values in zip(basin.axes, basin.coords, strict=True):
         coords[axis["name"]] = (axis["name"], values, {"units": axis["units"],
                                                        "long_name": axis["long_name"]})
-    attrs = {**basin.attrs, "runs": list(basin.runs)}
+    attrs = {**basin.attrs, "runs": list(basin.runs),
+             "damaged_tiles": [list(map(int, t)) for t in basin.damaged]}
     if basin.path is not None:
         attrs["store"] = basin.path
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
@@ -92,14 +96,15 @@ def from_dataset(ds) -> Basin:
             if values.dtype != dtype:
                 values = np.where(np.isnan(values), FILLS[name], values).astype(dtype)
             arrays[name] = values
-    done = np.asarray(ds["done"].values).astype(np.uint8)
+    done = (np.asarray(ds["done"].values) != 0).astype(np.uint8)  # a store's: digests
     if "tile_cpu_seconds" in ds.data_vars:
         seconds = np.asarray(ds["tile_cpu_seconds"].values, dtype=float)
     else:
         seconds = np.full(done.shape, np.nan)
-    attrs = {k: v for k, v in ds.attrs.items() if k not in ("runs", "store")}
+    attrs = {k: v for k, v in ds.attrs.items() if k not in ("runs", "store", "damaged_tiles")}
     basin = Basin(attrs=attrs, arrays=arrays, done=done, tile_seconds=seconds,
-                  runs=list(ds.attrs.get("runs", [])), path=ds.attrs.get("store"))
+                  runs=list(ds.attrs.get("runs", [])), path=ds.attrs.get("store"),
+                  damaged=[tuple(t) for t in ds.attrs.get("damaged_tiles", [])])
     basin.mask_not_done()
     return basin
 

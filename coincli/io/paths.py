@@ -1,26 +1,137 @@
-"""Checks made before long work starts: is an output path writable, is a viewer reachable."""
+"""Checks made before long work starts (is an output writable, is a viewer reachable), writing
+an output so that a failure leaves nothing behind, and one-line descriptions of OS errors."""
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
+import socket
+from collections.abc import Iterator
 from pathlib import Path
 
 DEFAULT_CONNECT_URL = "rerun+http://127.0.0.1:9876/proxy"
 
+# what a user should read for the errors a file system gives
+REASONS = {
+    errno.EROFS: "read-only file system",
+    errno.ENOSPC: "no space left on device",
+    errno.EDQUOT: "disk quota exceeded",
+    errno.EACCES: "permission denied",
+    errno.EPERM: "operation not permitted",
+    errno.ENOENT: "no such file or directory",
+    errno.ENOTDIR: "not a directory",
+    errno.EISDIR: "is a directory",
+    errno.EIO: "input/output error",
+}
 
-def check_rrd_path(path: str | os.PathLike) -> Path:
-    """Raise the OSError a user should see (one line) if ``path`` cannot be written as a file."""
+
+DISK_ERRORS = {errno.EROFS, errno.ENOSPC, errno.EDQUOT, errno.EACCES, errno.EPERM, errno.EIO}
+
+
+class NotWritable(OSError):
+    """An output that cannot be written; ``str()`` is the whole one-line message."""
+
+    def __init__(self, code: int | None, message: str):
+        super().__init__(code, message)
+        self.message = message
+
+    def __str__(self) -> str:
+        return self.message
+
+
+def describe(exc: OSError, doing: str | None = None) -> str:
+    """One line for any OSError: 'cannot write out.zarr: read-only file system'."""
+    if isinstance(exc, NotWritable):
+        return str(exc)  # says what could not be written already
+    if not exc.errno:
+        return f"{doing}: {exc}" if doing else str(exc)
+    reason = REASONS.get(exc.errno) or (exc.strerror or str(exc)).lower()
+    text = f"{reason} ({errno.errorcode.get(exc.errno, exc.errno)})"
+    if doing:
+        return f"{doing}: {text}"
+    return f"'{exc.filename}': {text}" if exc.filename is not None else text
+
+
+def probe_name() -> str:
+    """Name of the empty file a writability probe creates for an instant."""
+    return f".coin-probe-{socket.gethostname()}-{os.getpid()}"
+
+
+def _probe(folder: Path, target: Path) -> None:
+    """Create and remove an empty file in ``folder``: what the file system says, not what the
+    permission bits say (root passes os.access on a read-only mount's folders, and a full disk
+    passes every permission check)."""
+    probe = folder / probe_name()
+    try:
+        fd = os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600)
+    except FileExistsError:
+        fd = os.open(probe, os.O_WRONLY)
+    except OSError as exc:
+        raise NotWritable(exc.errno, f"cannot write '{target}': "
+                                     f"{REASONS.get(exc.errno, exc.strerror)}") from None
+    try:
+        os.write(fd, b"\0")
+    except OSError as exc:
+        raise NotWritable(exc.errno, f"cannot write '{target}': "
+                                     f"{REASONS.get(exc.errno, exc.strerror)}") from None
+    finally:
+        os.close(fd)
+        with contextlib.suppress(OSError):
+            os.unlink(probe)
+
+
+def check_writable(path: str | os.PathLike, *, what: str = "output",
+                   directory: bool = False, create_parents: bool = False) -> Path:
+    """Raise the OSError a user should see (one line) unless ``path`` can be written: a file
+    (default) or a directory such as a Zarr store (``directory``: it, or the folder it would be
+    created in, must accept new files). The folder is tried by creating and removing an empty
+    file, so a read-only mount, a full disk or a missing permission is found before any work.
+    ``create_parents`` creates missing folders first."""
     p = Path(path)
-    if p.is_dir():
-        raise IsADirectoryError(f"recording path '{path}' is a directory")
+    if not directory and p.is_dir():
+        raise IsADirectoryError(f"{what} '{path}' is a directory")
     if str(path) == "" or p.name == "":
-        raise FileNotFoundError(f"invalid recording path '{path}'")
+        raise FileNotFoundError(f"invalid {what} '{path}'")
+    if directory and p.exists() and not p.is_dir():
+        raise NotADirectoryError(f"{what} '{path}' exists and is not a directory")
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
-        raise FileNotFoundError(f"cannot write '{p}': folder '{parent}' does not exist")
-    if not os.access(parent, os.W_OK) or (p.exists() and not os.access(p, os.W_OK)):
+        if create_parents:
+            try:
+                parent.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise NotWritable(exc.errno, f"cannot create folder '{parent}': "
+                                             f"{REASONS.get(exc.errno, exc.strerror)}") from None
+        else:
+            raise FileNotFoundError(f"cannot write '{p}': folder '{parent}' does not exist")
+    if not directory and p.exists() and not os.access(p, os.W_OK):
         raise PermissionError(f"cannot write '{p}': permission denied")
+    if not os.access(parent, os.W_OK) and not (directory and p.is_dir()):
+        raise PermissionError(f"cannot write '{p}': permission denied")
+    _probe(p if directory and p.is_dir() else parent, p)
     return p
+
+
+def check_rrd_path(path: str | os.PathLike) -> Path:
+    """:func:`check_writable` for a recording."""
+    return check_writable(path, what="recording path")
+
+
+@contextlib.contextmanager
+def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
+    """Write ``path`` through a temporary file beside it (same suffix, so that writers that go
+    by the suffix still do), renamed into place on success and removed on any failure: an
+    output is complete or absent, never a truncated file or a leftover temporary one."""
+    target = Path(path)
+    tmp = target.with_name(f".{target.stem}.tmp-{os.getpid()}{target.suffix}")
+    try:
+        yield tmp
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
 
 
 def check_connect_url(url: str) -> str:
@@ -34,7 +145,6 @@ def check_connect_url(url: str) -> str:
 def probe_viewer(url: str, timeout: float = 2.0) -> None:
     """Raise ConnectionError (one line) unless something accepts TCP connections at ``url``'s
     host and port: streaming to nobody would otherwise only fail after seconds of retries."""
-    import socket
     from urllib.parse import urlsplit
 
     parts = urlsplit(check_connect_url(url))
@@ -48,4 +158,6 @@ def probe_viewer(url: str, timeout: float = 2.0) -> None:
                               "start one with `rerun` or use --spawn") from None
 
 
-__all__ = ["DEFAULT_CONNECT_URL", "check_connect_url", "check_rrd_path", "probe_viewer"]
+__all__ = ["DEFAULT_CONNECT_URL", "DISK_ERRORS", "NotWritable", "atomic_output",
+           "check_connect_url", "check_rrd_path", "check_writable", "describe", "probe_name",
+           "probe_viewer"]

@@ -5,6 +5,13 @@ the store itself (the idiomatic pattern of ``dask.array.to_zarr``): no data trav
 client, only the tile's index and cost. It lives in the package so that the scheduler and every
 worker can import it (install coincli on each machine of the cluster, and give every worker the
 same path to the store, e.g. a shared file system). Dask is imported only when it is used.
+
+Tiles come from a :class:`~coincli.io.claims.TileQueue`, which claims each one before it is
+handed out, so several processes can work on one store. Stopping is in two steps, as Ctrl-C
+does it: ``stop`` set finishes the tiles in flight and hands out no more; an exception in the
+runner (a second Ctrl-C, a KeyboardInterrupt thrown in with ``runner.throw``, an error) stops
+the tiles in flight at once through their control flags (:func:`coincli.integrators.batch.
+new_control`), and an interrupted tile is never written.
 """
 
 from __future__ import annotations
@@ -12,19 +19,41 @@ from __future__ import annotations
 import os
 import signal
 import uuid
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from typing import NamedTuple
 
+import numpy as np
+
+from ..enums import Status
 from ..grid import SweepSpec, compute_tile
+from ..integrators.batch import new_control
+from .claims import TileQueue
+
+POLL = 0.2  # s between looks at the stop flag while tiles run
 
 
-def run_tile_task(path: str, spec: SweepSpec, tile: tuple[int, int]) -> tuple:
-    """Compute one tile and write it to the store at ``path``; return (tile, cells, cpu s)."""
+class TileDone(NamedTuple):
+    """What a tile task reports back: no data, only what it cost and whether it was written."""
+
+    tile: tuple[int, int]
+    cells: int  # cells written (0 if interrupted)
+    cpu_seconds: float
+    written: bool  # False: stopped through its control flag, nothing written
+
+
+def run_tile_task(path: str, spec: SweepSpec, tile: tuple[int, int],
+                  control: np.ndarray | None = None) -> TileDone:
+    """Compute one tile and write it to the store at ``path``. ``control[0]`` set (from another
+    thread) stops the computation; a tile so stopped is not written at all."""
     from .store import write_tile
 
-    result = compute_tile(spec, tuple(tile))
+    control = new_control() if control is None else control
+    result = compute_tile(spec, tuple(tile), control)
+    if control[0] or (result.arrays["status"] == Status.INTERRUPTED).any():
+        return TileDone(tuple(tile), 0, result.cpu_seconds, False)
     write_tile(path, spec, result)
-    return tuple(tile), result.cells, result.cpu_seconds
+    return TileDone(tuple(tile), result.cells, result.cpu_seconds, True)
 
 
 def usable_cores() -> int:
@@ -34,42 +63,84 @@ def usable_cores() -> int:
         return os.cpu_count() or 1
 
 
-def run_threads(task: Callable, tiles: Iterable[tuple[int, int]],
-                threads: int) -> Iterator:
-    """Yield ``task(tile)`` for each tile as it finishes, ``threads`` tiles at a time (the
-    kernels release the GIL). Closing the iterator (or Ctrl-C while it waits) cancels the tiles
-    not started and waits for those in flight, which finish completely."""
-    pool = ThreadPoolExecutor(max_workers=max(1, threads), thread_name_prefix="coin-tile")
+def run_threads(task: Callable, queue: TileQueue, threads: int, stop=None) -> Iterator:
+    """Yield ``task(tile, control)`` for each tile of ``queue`` as it finishes, ``threads``
+    tiles at a time (the kernels release the GIL); each tile is taken from the queue (claimed)
+    only when a thread is free for it. ``stop`` set: the tiles in flight finish, no more start.
+    An exception in here (KeyboardInterrupt) sets the control flag of every tile in flight,
+    which stops within microseconds, unwritten."""
+    threads = max(1, threads)
+    pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="coin-tile")
+    running: dict = {}  # future -> (tile, control)
+    hard = False
     try:
-        # keep a bounded window in flight so an interrupt leaves few tiles to finish
-        pending = set()
-        queue = iter(tiles)
-        for tile in queue:
-            pending.add(pool.submit(task, tile))
-            if len(pending) >= 2 * threads:
-                break
-        while pending:
-            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+        while True:
+            stopping = stop is not None and stop.is_set()
+            if not stopping:
+                while len(running) < threads:
+                    tile = queue.take()
+                    if tile is None:
+                        break
+                    control = new_control()
+                    running[pool.submit(task, tile, control)] = (tile, control)
+            if not running:
+                if stopping or queue.finished:
+                    return
+                queue.pause()  # the tiles left are other processes': wait for them
+                continue
+            finished, _ = wait(list(running), timeout=POLL, return_when=FIRST_COMPLETED)
+            results = []
             for future in finished:
-                for tile in queue:
-                    pending.add(pool.submit(task, tile))
-                    break
-                yield future.result()
+                tile, _ = running.pop(future)
+                try:
+                    results.append(future.result())
+                finally:
+                    queue.settle(tile)
+            yield from results
+    except BaseException as exc:
+        hard = not isinstance(exc, GeneratorExit)
+        raise
     finally:
+        _shut_down(pool, running, queue, hard)
+
+
+def _shut_down(pool: ThreadPoolExecutor, running: dict, queue: TileQueue, hard: bool) -> None:
+    def stop_all():
+        for _, control in running.values():
+            control[0] = 1
+
+    if hard:
+        stop_all()
+    try:
         pool.shutdown(wait=True, cancel_futures=True)
+    except KeyboardInterrupt:  # Ctrl-C while waiting for the tiles in flight
+        stop_all()
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    finally:
+        for tile, _ in running.values():
+            queue.drop(tile)
 
 
-def run_dask(path: str, spec: SweepSpec, tiles: Iterable[tuple[int, int]],
-             scheduler: str | None = None, workers: int | None = None) -> Iterator[tuple]:
-    """Yield each tile's (tile, cells, cpu s) as its Dask task finishes: on the cluster at
+def hard_stop(runner: Iterator) -> None:
+    """Stop a runner at once (its tiles in flight unwritten), as a second Ctrl-C does."""
+    try:
+        runner.throw(KeyboardInterrupt())
+    except (KeyboardInterrupt, StopIteration, ValueError):
+        pass  # ValueError: the generator is running (cannot happen from its consumer)
+
+
+def run_dask(path: str, spec: SweepSpec, queue: TileQueue, scheduler: str | None = None,
+             workers: int | None = None, stop=None) -> Iterator[TileDone]:
+    """Yield each tile's :class:`TileDone` as its Dask task finishes: on the cluster at
     ``scheduler`` (tcp://host:port), or on a LocalCluster of ``workers`` processes with one
-    thread each.
+    thread each. This process (the client) claims each tile before submitting it.
 
     Tasks are submitted in a window of twice the cluster's threads (re-read as workers come and
-    go), so that stopping is clean: closing the iterator cancels the tasks no worker has taken
-    and waits for those being computed, which write their tiles completely. (A tile cut off
-    anyway, say by a worker dying, has no ``done`` flag and is recomputed on resume.)"""
-    from distributed import Client, LocalCluster, as_completed
+    go), so that stopping is clean: ``stop`` set cancels the tasks no worker has taken and waits
+    for those being computed, which write their tiles completely. (A tile cut off anyway, say
+    by a worker dying or a second Ctrl-C, has no ``done`` digest and is recomputed on resume.)"""
+    from distributed import Client, LocalCluster
     from distributed import wait as dask_wait
 
     cluster = None
@@ -85,53 +156,72 @@ def run_dask(path: str, spec: SweepSpec, tiles: Iterable[tuple[int, int]],
             _restore_sigint(previous)
         client = Client(cluster)
     run_id = uuid.uuid4().hex[:12]
-    queue = iter(tiles)
-    submitted = []
-    completed = as_completed()
-    hard_stop = False
-
-    def submit(count: int) -> None:
-        for _ in range(count):
-            tile = next(queue, None)
-            if tile is None:
-                return
-            future = client.submit(run_tile_task, path, spec, tuple(tile), pure=False,
-                                   key=f"coin-basin-tile-{tile[0]}-{tile[1]}-{run_id}")
-            submitted.append(future)
-            completed.add(future)
+    running: dict = {}  # future -> tile
+    hard = False
+    cancelled_queued = False
 
     def window() -> int:
         return max(2, 2 * sum(client.nthreads().values()))
 
+    def processing() -> set:
+        try:
+            return {k for keys in client.processing().values() for k in keys}
+        except Exception:  # noqa: BLE001 - the scheduler may be gone already
+            return set()
+
+    def cancel_queued() -> None:
+        busy = processing()
+        queued = [f for f in running if f.key not in busy and not f.done()]
+        client.cancel(queued)
+        for future in queued:
+            queue.drop(running.pop(future))
+
     try:
-        submit(window())
-        in_flight = len(submitted)
-        for future in completed:
-            in_flight -= 1
-            yield future.result()
-            more = max(0, window() - in_flight)
-            before = len(submitted)
-            submit(more)
-            in_flight += len(submitted) - before
-    except KeyboardInterrupt:
-        hard_stop = True
+        while True:
+            stopping = stop is not None and stop.is_set()
+            if stopping and not cancelled_queued:
+                cancel_queued()
+                cancelled_queued = True
+            if not stopping:
+                limit = window()
+                while len(running) < limit:
+                    tile = queue.take()
+                    if tile is None:
+                        break
+                    future = client.submit(run_tile_task, path, spec, tuple(tile), pure=False,
+                                           key=f"coin-basin-tile-{tile[0]}-{tile[1]}-{run_id}")
+                    running[future] = tuple(tile)
+            if not running:
+                if stopping or queue.finished:
+                    return
+                queue.pause()
+                continue
+            try:
+                dask_wait(list(running), timeout=POLL, return_when="FIRST_COMPLETED")
+            except TimeoutError:
+                continue
+            for future in [f for f in running if f.done()]:
+                tile = running.pop(future)
+                try:
+                    result = future.result()
+                finally:
+                    queue.settle(tile)
+                yield result
+    except BaseException as exc:
+        hard = not isinstance(exc, GeneratorExit)
         raise
     finally:
-        unfinished = [f for f in submitted if not f.done()]
-        if unfinished:
-            processing = set()
-            if not hard_stop:
-                try:
-                    processing = {k for keys in client.processing().values() for k in keys}
-                except Exception:  # noqa: BLE001 - the scheduler may be gone already
-                    processing = set()
-            running = [f for f in unfinished if f.key in processing]
-            client.cancel([f for f in unfinished if f.key not in processing])
-            if running and not hard_stop:
-                dask_wait(running, timeout=600)
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        try:
+            if running:
+                cancel_queued()
+                if running and not hard:
+                    dask_wait(list(running), timeout=600)
+        finally:
+            for tile in running.values():
+                queue.drop(tile)
+            client.close()
+            if cluster is not None:
+                cluster.close()
 
 
 def _ignore_sigint():
@@ -146,4 +236,4 @@ def _restore_sigint(previous) -> None:
         signal.signal(signal.SIGINT, previous)
 
 
-__all__ = ["run_dask", "run_threads", "run_tile_task", "usable_cores"]
+__all__ = ["TileDone", "hard_stop", "run_dask", "run_threads", "run_tile_task", "usable_cores"]

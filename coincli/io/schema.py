@@ -13,7 +13,7 @@ from ..integrators.registry import MethodInfo
 from ..params import Scene
 from ..version import __version__
 
-FORMAT = 2
+FORMAT = 3  # 3: checksummed chunks, done = a digest of each tile
 COMPARED_ATTRS = ("version", "parameters", "sweep", "method")
 
 # name -> (dtype, fill value, attributes)
@@ -42,7 +42,10 @@ VARIABLES = {
 }
 DTYPES = {name: spec[0] for name, spec in VARIABLES.items()}
 FILLS = {name: spec[1] for name, spec in VARIABLES.items()}
-DONE_ATTRS = {"long_name": "1 = tile complete (written after its data)"}
+DONE_ATTRS = {"long_name": "digest of the tile, 0 = not done (written after its data)",
+              "description": "32-bit BLAKE2b (person 'coin-tile') of the tile index (two int64) "
+                             "and, for each of " + ", ".join(VARIABLES) + ", its shape (two "
+                             "int64) and its values, all little-endian; never 0"}
 COORD_NOTE = "linspace(lo, hi, n), ends included"
 
 

@@ -1,52 +1,74 @@
-"""The Zarr v3 store of a basin sweep: create or resume it, write one tile, read it back.
+"""The Zarr v3 store of a basin sweep: create or resume it, write one tile, check it, read it back.
 
 Layout (dims named after the two swept initial conditions, e.g. ``vy`` and ``vphi``)::
 
-    out.zarr/                       group; attributes: coin_basin, version, parameters, sweep,
-                                    method, certify
+    out.zarr/                       group; attributes: coin_basin (format 3), version,
+                                    parameters, sweep, method (with its verification ladder)
       vy, vphi                      float64 cell centres, linspace(LO, HI, n)
       quarter_turns  (vy, vphi)     int16, fill -32768 = no label (not computed or non-finite)
       status         (vy, vphi)     uint8, 0 settled, 1 unsettled at t_end, 2 non-finite,
-                                    255 not computed
+                                    3 over budget, 255 not computed
       settle_time    (vy, vphi)     float32 [s], NaN fill (also NaN when never settled)
       steps          (vy, vphi)     int64 integrator steps (cost), fill -1
-      uncertain      (vy, vphi)     uint8, only with --certify: 0 certain, 1 uncertain,
-                                    255 not computed
-      done           (tile_vy, tile_vphi)  uint8, 1 = the tile is complete; chunked (1, 1)
-    out.zarr.cost/                  what the sweep cost, kept beside the store so that the store
-      tile_I_J.json                 itself is bit-identical however it was computed: each tile's
-      runs.jsonl                    CPU seconds (written by whoever computed it, before its
-                                    ``done`` flag) and one line per invocation (wall time, mode)
+      certainty      (vy, vphi)     uint8, 0 uncertain, 1 certain, 2 unverified, 255 not computed
+      rung           (vy, vphi)     int8, last rung of the ladder run, fill -1
+      done           (tile_vy, tile_vphi)  uint32 digest of the tile, 0 = not done; chunks (1, 1)
+    out.zarr.cost/                  beside the store, so that the store itself is bit-identical
+      tile_I_J.json                 however it was computed: each tile's CPU seconds and who
+      runs.jsonl                    computed it, one line per invocation (wall time, tiles,
+      claims/tile_I_J               mode), and the claims of the tiles being computed
+                                    (:mod:`coincli.io.claims`)
 
 Every data array is chunked exactly like the tiles, so one tile is one chunk in every array and
-concurrent writers (threads, Dask workers) never touch the same file. A tile's ``done`` flag is
-written after all its data, so a tile is either complete and flagged, or recomputed on resume
-(recomputing gives the same bytes). Chunks are written through Zarr's LocalStore (plain paths:
-write to a temporary file, then rename), with ``write_empty_chunks`` on so that a tile equal to
-the fill value is still written. The store is created in a temporary directory and renamed into
-place, and its metadata consolidated once at creation: nothing in the store's metadata changes
-afterwards, so ``xarray.open_zarr(path)`` opens it directly. ``quarter_turns`` carries
-``missing_value`` so xarray masks cells without a label to NaN (``mask_and_scale=False`` keeps
-the int16 values).
+concurrent writers (threads, Dask workers, other processes) never touch the same file. Every
+chunk ends with a CRC-32C of its compressed bytes (Zarr v3's ``crc32c`` codec, after ``zstd``),
+so a chunk damaged on disk (random bytes, truncated, a bit flipped, emptied) fails to read
+instead of decoding to garbage. A tile's ``done`` entry, written after all its data, is
+:func:`tile_digest`: a 32-bit BLAKE2b of its data *and its tile index*, so that a chunk copied
+from another tile (a valid chunk, at the wrong place) or a missing chunk (read back as fill
+values) is caught too. A tile is done only if its ``done`` digest equals the digest of the data
+its chunks read back as (:func:`scan`); otherwise it is recomputed on resume (recomputing gives
+the same bytes), counted as not computed by ``stats`` and ``render``, and listed by
+``coin basin verify``.
+
+Chunks are written through Zarr's LocalStore (write to ``CHUNK.UUID.partial``, then rename),
+with ``write_empty_chunks`` on so that a tile equal to the fill value is still written. A
+``.partial`` file left by a killed writer is removed by the next writer of that tile. The store
+is created from a template built in memory (:func:`template`: every metadata file and the
+coordinate chunks), in ``.NAME.creating-HOST-PID`` beside it, renamed into place under a lock
+(``.NAME.lock``, ``flock``), so that processes racing to create one store all end up in the
+winner's. Metadata is consolidated once at creation and never changes afterwards, so
+``xarray.open_zarr(path)`` opens it directly; a metadata file or coordinate chunk that differs
+from the template is rewritten on resume. ``quarter_turns`` carries ``missing_value`` so xarray
+masks cells without a label to NaN (``mask_and_scale=False`` keeps the int16 values).
 """
 
 from __future__ import annotations
 
+import contextlib
+import enum
+import hashlib
 import json
 import math
 import os
 import shutil
+import socket
 import threading
 import time
 import warnings
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..grid import SweepSpec, TileResult
+from ..grid import Axis, Grid, SweepSpec, TileResult
 from ..params import ParameterError
 from .dataset import Basin
-from .schema import COMPARED_ATTRS, COORD_NOTE, DONE_ATTRS, VARIABLES, tile_dims
+from .schema import COMPARED_ATTRS, COORD_NOTE, DONE_ATTRS, FILLS, VARIABLES, tile_dims
+
+ARRAY_NAMES = SweepSpec.array_names  # the data arrays, in the order of the digest
+BATCH_CELLS = 1 << 20  # cells read at once when checking tiles (a row of tiles at most)
 
 
 def _zarr():
@@ -55,10 +77,20 @@ def _zarr():
     return zarr
 
 
-def _is_store(path: Path) -> bool:
-    return (path / "zarr.json").is_file()
+def _compressors():
+    from zarr.codecs import Crc32cCodec, ZstdCodec
+
+    return [ZstdCodec(level=0, checksum=False), Crc32cCodec()]
 
 
+def is_store(path: str | os.PathLike) -> bool:
+    return (Path(path) / "zarr.json").is_file()
+
+
+_is_store = is_store
+
+
+# -- comparing parameters ------------------------------------------------------------------------
 def _flatten(value, prefix: str = "") -> dict:
     """Nested attribute dicts -> {'parameters.foundation.k': 1e4, 'sweep.axes.vy.lo': 0.05}."""
     if isinstance(value, dict):
@@ -114,39 +146,242 @@ def differences(stored: dict, wanted: dict) -> list[str]:
     return out
 
 
-def _create(path: Path, attrs: dict, spec: SweepSpec) -> None:
-    """Build the empty store in a temporary directory and rename it into place."""
+# -- the digest of a tile ------------------------------------------------------------------------
+def tile_digest(tile: tuple[int, int], arrays: dict[str, np.ndarray]) -> int:
+    """32-bit BLAKE2b of a tile's index and data (every array of the schema, in a fixed order,
+    as little-endian bytes of its stored dtype): never 0, which means "not done"."""
+    h = hashlib.blake2b(digest_size=4, person=b"coin-tile")
+    h.update(np.asarray(tile, dtype="<i8").tobytes())
+    for name in ARRAY_NAMES:
+        block = np.ascontiguousarray(arrays[name],
+                                     dtype=np.dtype(VARIABLES[name][0]).newbyteorder("<"))
+        h.update(np.asarray(block.shape, dtype="<i8").tobytes())
+        h.update(block.tobytes())
+    return int.from_bytes(h.digest(), "little") or 1
+
+
+# -- creating ------------------------------------------------------------------------------------
+def grid_of(attrs: dict) -> Grid:
+    """The grid a store's attributes describe (the fixed values do not matter for reading)."""
+    sweep = attrs["sweep"]
+    axes = tuple(Axis(a["name"], float(a["lo"]), float(a["hi"]), int(a["n"]))
+                 for a in sweep["axes"])
+    return Grid(axes=axes, base_state=(0.0,) * 6, chunk=tuple(int(c) for c in sweep["chunk"]))
+
+
+def template(attrs: dict, grid: Grid) -> dict[str, bytes]:
+    """Every file of an empty store, by key ('zarr.json', 'vy/c/0', ...): the metadata of the
+    group and its arrays (consolidated) and the coordinate chunks. Built in memory, so that
+    creating a store is writing these files, and checking one is comparing with them."""
     zarr = _zarr()
-    grid = spec.grid
-    tmp = path.with_name(f".{path.name}.creating-{os.getpid()}")
-    if tmp.exists():
-        shutil.rmtree(tmp)
-    group = zarr.open_group(str(tmp), mode="w-", zarr_format=3, attributes=attrs)
+    from zarr.storage import MemoryStore
+
+    mem = MemoryStore()
+    group = zarr.open_group(mem, mode="w-", zarr_format=3, attributes=attrs)
     d0, d1 = grid.dims
     for axis in grid.axes:
         arr = group.create_array(axis.name, shape=(axis.n,), chunks=(axis.n,), dtype="float64",
                                  fill_value=0.0, dimension_names=(axis.name,),
+                                 compressors=_compressors(),
                                  attributes={"units": axis.units, "long_name": axis.long_name,
                                              "cell_centres": COORD_NOTE})
         arr[:] = axis.coords
-    for name in spec.array_names:
+    for name in ARRAY_NAMES:
         dtype, fill, array_attrs = VARIABLES[name]
         group.create_array(name, shape=grid.shape, chunks=grid.chunk, dtype=dtype,
                            fill_value=fill, dimension_names=(d0, d1), attributes=array_attrs,
-                           config={"write_empty_chunks": True})
-    group.create_array("done", shape=grid.tile_grid, chunks=(1, 1), dtype="uint8", fill_value=0,
-                       dimension_names=tile_dims(grid), attributes=DONE_ATTRS)
+                           compressors=_compressors(), config={"write_empty_chunks": True})
+    group.create_array("done", shape=grid.tile_grid, chunks=(1, 1), dtype="uint32",
+                       fill_value=0, dimension_names=tile_dims(grid), attributes=DONE_ATTRS,
+                       compressors=_compressors())
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # "consolidated metadata is not part of the v3 spec"
-        zarr.consolidate_metadata(str(tmp))
-    os.rename(tmp, path)
-    shutil.rmtree(cost_dir(path), ignore_errors=True)
-    cost_dir(path).mkdir()
+        zarr.consolidate_metadata(mem)
+    return {key: buf.to_bytes() for key, buf in mem._store_dict.items()}
 
 
-def _check_layout(group, spec: SweepSpec, path: Path) -> None:
-    grid = spec.grid
-    expected = {**{name: (grid.shape, grid.chunk) for name in spec.array_names},
+def _write_files(root: Path, files: dict[str, bytes]) -> None:
+    for key, data in files.items():
+        target = root / key
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_bytes(data)
+
+
+@contextlib.contextmanager
+def _creation_lock(path: Path, blocking: bool = True):
+    """Hold ``.NAME.lock`` beside the store (flock; the kernel drops it when its holder dies).
+    Yields False if not ``blocking`` and someone else holds it."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock
+        yield True
+        return
+    lock = path.with_name(f".{path.name}.lock")
+    while True:
+        fd = os.open(lock, os.O_CREAT | os.O_RDWR, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | (0 if blocking else fcntl.LOCK_NB))
+        except BlockingIOError:
+            os.close(fd)
+            yield False
+            return
+        except BaseException:
+            os.close(fd)
+            raise
+        try:  # the file we locked must still be the lock (its holder may have removed it)
+            same = os.stat(lock).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    try:
+        yield True
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(lock)
+        os.close(fd)
+
+
+def _creating_name(path: Path) -> str:
+    return f".{path.name}.creating-{socket.gethostname()}-{os.getpid()}"
+
+
+def _remove_orphans(path: Path) -> None:
+    """Temporary stores of creations that died (call with the creation lock held)."""
+    for leftover in path.parent.glob(f".{path.name}.creating-*"):
+        shutil.rmtree(leftover, ignore_errors=True)
+
+
+def tidy(path: str | os.PathLike) -> None:
+    """Remove what a creation killed midway left beside an existing store (its temporary
+    directory, its lock file), unless a creation is running now, and the writability probes
+    (``.coin-probe-HOST-PID``) of dead processes of this host inside it."""
+    from .claims import HOST, pid_alive
+
+    path = Path(path)
+    if not path.parent.is_dir():
+        return
+    for probe in path.glob(".coin-probe-*"):
+        host, _, pid = probe.name.removeprefix(".coin-probe-").rpartition("-")
+        if host == HOST and pid.isdigit() and not pid_alive(int(pid)):
+            with contextlib.suppress(OSError):
+                probe.unlink()
+    if not any(path.parent.glob(f".{path.name}.creating-*")) and \
+            not path.with_name(f".{path.name}.lock").exists():
+        return
+    with contextlib.suppress(OSError), _creation_lock(path, blocking=False) as held:
+        if held:
+            _remove_orphans(path)
+
+
+def _create(path: Path, attrs: dict, spec: SweepSpec, overwrite: bool) -> None:
+    """Create the store (under the creation lock), unless another process did meanwhile."""
+    with _creation_lock(path):
+        if is_store(path) and not overwrite:
+            return  # another process won the race: open its store
+        _remove_orphans(path)
+        if is_store(path):  # overwrite
+            shutil.rmtree(path)
+        elif path.is_dir() and not any(path.iterdir()):
+            path.rmdir()
+        tmp = path.with_name(_creating_name(path))
+        try:
+            _write_files(tmp, template(attrs, spec.grid))
+            shutil.rmtree(cost_dir(path), ignore_errors=True)  # the records of an older store
+            os.rename(tmp, path)
+            cost_dir(path).mkdir(exist_ok=True)
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+
+
+# -- opening and checking ------------------------------------------------------------------------
+class StoreDamaged(ParameterError):
+    """A store whose metadata cannot be read, or that lacks an array."""
+
+
+class Tile(enum.Enum):
+    DONE = "done"  # digest matches the data
+    MISSING = "missing"  # not done (never computed, or cut off before its digest)
+    DAMAGED = "damaged"  # a digest, but data that do not read back or do not match it
+
+
+@dataclass
+class StoreCheck:
+    """What checking a store found."""
+
+    path: str
+    attrs: dict
+    grid: Grid
+    done: np.ndarray  # bool per tile: complete and verified
+    damaged: dict[tuple[int, int], str] = field(default_factory=dict)  # tile -> why
+    metadata: list[str] = field(default_factory=list)  # metadata/coordinate files that differ
+    repaired: list[str] = field(default_factory=list)  # ... and were rewritten
+    leftovers: int = 0  # temporary files (*.partial) of writers that died
+    seconds: float = 0.0  # time the check took
+
+    @property
+    def intact(self) -> bool:
+        return not self.damaged and not (set(self.metadata) - set(self.repaired))
+
+    @property
+    def tiles_done(self) -> int:
+        return int(self.done.sum())
+
+
+@dataclass
+class StoreView:
+    """An opened store: its group, attributes and grid."""
+
+    path: Path
+    group: object
+    attrs: dict
+    grid: Grid
+
+
+def open_view(path: str | os.PathLike, grid: Grid | None = None) -> StoreView:
+    """Open a basin store for reading; ParameterError (one line) if it is none, or if its
+    metadata cannot be read. ``grid``: the sweep's grid when known (else from the attributes)."""
+    zarr = _zarr()
+    p = Path(path)
+    if not is_store(p):
+        raise ParameterError(f"{path} is not a Zarr store (no zarr.json)")
+    try:
+        group = zarr.open_group(str(p), mode="r")
+        attrs = dict(group.attrs)
+    except Exception as exc:  # noqa: BLE001 - any failure to parse is damage
+        raise StoreDamaged(f"{path}: its metadata cannot be read ({_short(exc)}): the store is "
+                           "damaged; --overwrite starts the sweep again") from None
+    if "coin_basin" not in attrs:
+        raise ParameterError(f"{path} is not a coin basin store")
+    fmt = attrs["coin_basin"].get("format") if isinstance(attrs["coin_basin"], dict) else None
+    from .schema import FORMAT
+
+    if fmt is not None and fmt != FORMAT:
+        raise ParameterError(f"{path} is a coin basin store of format {fmt}, this version "
+                             f"reads format {FORMAT}: recompute it (--overwrite)")
+    try:
+        grid = grid or grid_of(attrs)
+        missing = [n for n in (*ARRAY_NAMES, "done") if n not in set(group.array_keys())]
+    except Exception as exc:  # noqa: BLE001
+        raise StoreDamaged(f"{path}: its metadata cannot be read ({_short(exc)}): the store is "
+                           "damaged; --overwrite starts the sweep again") from None
+    if missing:
+        raise StoreDamaged(f"{path} is damaged: array '{missing[0]}' is missing; "
+                           "--overwrite starts it again")
+    return StoreView(p, group, attrs, grid)
+
+
+def _short(exc: BaseException) -> str:
+    text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    if "checksum" in text.lower():
+        return "checksum mismatch"
+    return text if len(text) <= 100 else text[:97] + "..."
+
+
+def _check_layout(group, grid: Grid, path: Path) -> None:
+    expected = {**{name: (grid.shape, grid.chunk) for name in ARRAY_NAMES},
                 "done": (grid.tile_grid, (1, 1))}
     present = set(group.array_keys())
     for name, (shape, chunks) in expected.items():
@@ -160,75 +395,262 @@ def _check_layout(group, spec: SweepSpec, path: Path) -> None:
                                  "--overwrite starts it again")
 
 
+def _compare_metadata(path: Path, files: dict[str, bytes]) -> list[str]:
+    """Keys of the template whose file is missing or differs."""
+    bad = []
+    for key, data in files.items():
+        try:
+            if (path / key).read_bytes() != data:
+                bad.append(key)
+        except OSError:
+            bad.append(key)
+    return bad
+
+
+def _rewrite(path: Path, key: str, data: bytes) -> None:
+    target = path / key
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = target.with_name(f"{target.name}.{socket.gethostname()}-{os.getpid()}.partial")
+    try:
+        tmp.write_bytes(data)
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
+def _chunk_file(root: Path, name: str, tile: tuple[int, int]) -> Path:
+    return root / name / "c" / str(tile[0]) / str(tile[1])
+
+
+def _done_flags(group, tile_grid, tiles=None) -> tuple[np.ndarray, set]:
+    """The ``done`` digests (of ``tiles`` only, if given), and the tiles whose digest cannot
+    be read."""
+    arr = group["done"]
+    flags = np.zeros(tile_grid, dtype=np.uint32)
+    if tiles is None:
+        try:
+            return np.asarray(arr[:], dtype=np.uint32), set()
+        except Exception:  # noqa: BLE001 - a damaged chunk: read them one by one
+            tiles = [(i, j) for i in range(tile_grid[0]) for j in range(tile_grid[1])]
+    unreadable = set()
+    for i, j in tiles:
+        try:
+            flags[i, j] = np.asarray(arr[i:i + 1, j:j + 1])[0, 0]
+        except Exception:  # noqa: BLE001
+            unreadable.add((i, j))
+    return flags, unreadable
+
+
+def _read_tile(view: StoreView, tile: tuple[int, int]) -> tuple[dict | None, str | None]:
+    """One tile's arrays, or why they cannot be read."""
+    s0, s1 = view.grid.tile_slices(tile)
+    out = {}
+    for name in ARRAY_NAMES:
+        if not _chunk_file(view.path, name, tile).is_file():
+            return None, f"chunk {name}/c/{tile[0]}/{tile[1]} is missing"
+        try:
+            out[name] = np.asarray(view.group[name][s0, s1])
+        except Exception as exc:  # noqa: BLE001 - any failure to read is damage
+            return None, f"chunk {name}/c/{tile[0]}/{tile[1]} cannot be read ({_short(exc)})"
+    return out, None
+
+
+def _judge(view: StoreView, tile, flag: int, data: dict | None, why: str | None):
+    if data is None:
+        return Tile.DAMAGED, None, why
+    if tile_digest(tile, data) != flag:
+        return Tile.DAMAGED, None, ("its data do not match its digest (a chunk from another "
+                                    "tile, or changed on disk)")
+    return Tile.DONE, data, None
+
+
+def scan(view: StoreView, *, with_data: bool = False,
+         tiles: Iterable[tuple[int, int]] | None = None) -> Iterator[tuple]:
+    """Check every tile (or ``tiles``): yield (tile, Tile state, arrays or None, why damaged).
+    Arrays are given for DONE tiles when ``with_data``. Tiles are read a row of tiles at a time
+    (at most BATCH_CELLS cells), one by one where a read fails, so memory stays flat."""
+    grid = view.grid
+    wanted = None if tiles is None else {tuple(t) for t in tiles}
+    flags, unreadable = _done_flags(view.group, grid.tile_grid, wanted)
+    c0, c1 = grid.chunk
+    t0, t1 = grid.tile_grid
+    batch = max(1, BATCH_CELLS // (c0 * c1))
+    for i in range(t0):
+        for j0 in range(0, t1, batch):
+            row = [(i, j) for j in range(j0, min(j0 + batch, t1))
+                   if wanted is None or (i, j) in wanted]
+            flagged = [t for t in row if flags[t] and t not in unreadable]
+            blocks = None
+            if len(flagged) > 1:
+                lo, hi = flagged[0][1], flagged[-1][1]
+                rows = grid.tile_slices((i, lo))[0]
+                cols = slice(lo * c1, min((hi + 1) * c1, grid.shape[1]))
+                try:
+                    blocks = {name: np.asarray(view.group[name][rows, cols])
+                              for name in ARRAY_NAMES}
+                except Exception:  # noqa: BLE001 - a damaged chunk: tile by tile below
+                    blocks = None
+            for tile in row:
+                if tile in unreadable:
+                    yield tile, Tile.DAMAGED, None, "its done digest cannot be read"
+                    continue
+                if not flags[tile]:
+                    yield tile, Tile.MISSING, None, None
+                    continue
+                missing = next((name for name in ARRAY_NAMES
+                                if not _chunk_file(view.path, name, tile).is_file()), None)
+                if missing is not None:
+                    yield (tile, Tile.DAMAGED, None,
+                           f"chunk {missing}/c/{tile[0]}/{tile[1]} is missing")
+                    continue
+                if blocks is not None:
+                    s1 = grid.tile_slices(tile)[1]
+                    off = lo * c1
+                    data = {name: b[:, s1.start - off:s1.stop - off]
+                            for name, b in blocks.items()}
+                    why = None
+                else:
+                    data, why = _read_tile(view, tile)
+                state, data, why = _judge(view, tile, int(flags[tile]), data, why)
+                yield tile, state, (data if with_data else None), why
+
+
+def _leftovers(path: Path) -> int:
+    return sum(1 for _ in path.glob("*/c/**/*.partial"))
+
+
+def check(path: str | os.PathLike, *, repair_with: dict | None = None,
+          view: StoreView | None = None) -> StoreCheck:
+    """Check every tile and every metadata file of a store (read only, unless
+    ``repair_with`` gives the attributes to rewrite differing metadata from)."""
+    t0 = time.perf_counter()
+    view = view or open_view(path)
+    attrs = repair_with if repair_with is not None else view.attrs
+    files = template(attrs, view.grid)
+    metadata = _compare_metadata(view.path, files)
+    repaired = []
+    if repair_with is not None:
+        for key in metadata:
+            _rewrite(view.path, key, files[key])
+            repaired.append(key)
+    done = np.zeros(view.grid.tile_grid, dtype=bool)
+    damaged = {}
+    for tile, state, _, why in scan(view):
+        if state is Tile.DONE:
+            done[tile] = True
+        elif state is Tile.DAMAGED:
+            damaged[tile] = why
+    return StoreCheck(str(path), view.attrs, view.grid, done, damaged, metadata, repaired,
+                      _leftovers(view.path), time.perf_counter() - t0)
+
+
 def prepare(path: str | os.PathLike, attrs: dict, spec: SweepSpec,
-            overwrite: bool = False) -> np.ndarray:
-    """Create the store, or open an existing one with the same parameters, and return its
-    ``done`` flags (tile grid, 1 = complete). A store with other parameters is refused with a
-    message naming them unless ``overwrite``."""
-    zarr = _zarr()
+            overwrite: bool = False) -> StoreCheck:
+    """Create the store, or open an existing one with the same parameters, and check it: which
+    tiles are done (verified), which damaged. A store with other parameters is refused with a
+    message naming them unless ``overwrite``. Metadata files that differ from those of the
+    parameters are rewritten. Several processes may call this at once on one path: one creates
+    the store, the others open it."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise ParameterError(f"{path} exists and is not a directory")
-    if path.is_dir() and not _is_store(path):
-        if any(path.iterdir()):
-            raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
-        path.rmdir()
-    if _is_store(path):
-        if overwrite:
-            shutil.rmtree(path)
-            shutil.rmtree(cost_dir(path), ignore_errors=True)
-        else:
-            group = zarr.open_group(str(path), mode="r")
-            stored = dict(group.attrs)
-            if "coin_basin" not in stored:
-                raise ParameterError(f"{path} is a Zarr store but not a coin basin sweep; "
-                                     "--overwrite replaces it")
-            diff = differences(stored, attrs)
-            if diff:
-                raise ParameterError(f"{path} holds a different sweep: {'; '.join(diff[:4])}"
-                                     f"{' ...' if len(diff) > 4 else ''}. Rerun with the "
-                                     "store's parameters to resume it, or --overwrite to "
-                                     "replace it")
-            _check_layout(group, spec, path)
-            return np.asarray(group["done"][:])
-    path.parent.mkdir(parents=True, exist_ok=True)
-    _create(path, attrs, spec)
-    return np.zeros(spec.grid.tile_grid, dtype=np.uint8)
+    if path.is_dir() and not is_store(path) and any(path.iterdir()):
+        raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
+    if overwrite or not is_store(path):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        _create(path, attrs, spec, overwrite)
+    else:
+        tidy(path)
+    view = open_view(path, spec.grid)
+    diff = differences(view.attrs, attrs)
+    if diff:
+        raise ParameterError(f"{path} holds a different sweep: {'; '.join(diff[:4])}"
+                             f"{' ...' if len(diff) > 4 else ''}. Rerun with the "
+                             "store's parameters to resume it, or --overwrite to "
+                             "replace it")
+    _check_layout(view.group, spec.grid, path)
+    cost_dir(path).mkdir(exist_ok=True)
+    return check(path, repair_with=attrs, view=view)
+
+
+def has_digest(path: str | os.PathLike, tile: tuple[int, int]) -> bool:
+    """Whether a tile's ``done`` chunk exists (one stat). Written last, after all its data, so a
+    digest that appears while a sweep runs means another process finished the tile."""
+    return _chunk_file(Path(path), "done", tile).is_file()
+
+
+def tile_done(path: str | os.PathLike, tile: tuple[int, int],
+              grid: Grid | None = None) -> bool:
+    """Whether one tile is done and verified (read now, from disk; without a ``done`` chunk
+    file it is not, which takes one stat to know)."""
+    if not _chunk_file(Path(path), "done", tile).is_file():
+        return False
+    view = open_view(path, grid)
+    return any(state is Tile.DONE for _, state, _, _ in scan(view, tiles=[tuple(tile)]))
+
+
+# -- writing -------------------------------------------------------------------------------------
+def _remove_partials(path: Path, tile: tuple[int, int]) -> None:
+    """Temporary chunk files of this tile's chunks left by a writer that died (only the owner
+    of a tile's claim writes it, so any such file is an orphan)."""
+    for name in (*ARRAY_NAMES, "done"):
+        folder = path / name / "c" / str(tile[0])
+        if folder.is_dir():
+            for leftover in folder.glob(f"{tile[1]}.*.partial"):
+                with contextlib.suppress(OSError):
+                    leftover.unlink()
 
 
 def write_tile(path: str | os.PathLike, spec: SweepSpec, result: TileResult) -> None:
-    """Write one tile's arrays, its cost, and last its ``done`` flag."""
+    """Write one tile's arrays, its cost, and last its ``done`` digest."""
     zarr = _zarr()
+    path = Path(path)
     group = zarr.open_group(str(path), mode="r+")
     s0, s1 = spec.grid.tile_slices(result.tile)
     i, j = result.tile
-    for name in spec.array_names:
+    _remove_partials(path, (i, j))
+    for name in ARRAY_NAMES:
         arr = group[name].with_config({"write_empty_chunks": True})
         arr[s0, s1] = result.arrays[name]
     _write_atomically(cost_dir(path) / f"tile_{i}_{j}.json",
-                      json.dumps({"cpu_seconds": result.cpu_seconds}))
-    group["done"].with_config({"write_empty_chunks": True})[i:i + 1, j:j + 1] = 1
+                      json.dumps({"cpu_seconds": result.cpu_seconds,
+                                  "host": socket.gethostname(), "pid": os.getpid()}))
+    digest = tile_digest((i, j), result.arrays)
+    group["done"].with_config({"write_empty_chunks": True})[i:i + 1, j:j + 1] = digest
 
 
 def read_done(path: str | os.PathLike) -> np.ndarray:
-    return np.asarray(_zarr().open_group(str(path), mode="r")["done"][:])
+    """Per tile, 1 if done and verified."""
+    return check(path).done.astype(np.uint8)
 
 
 def cost_dir(path: str | os.PathLike) -> Path:
-    """Where a store's cost records live: beside it, ``out.zarr.cost/``."""
+    """Where a store's cost records and claims live: beside it, ``out.zarr.cost/``."""
     return Path(f"{os.fspath(path).rstrip(os.sep)}.cost")
+
+
+def claims_dir(path: str | os.PathLike) -> Path:
+    return cost_dir(path) / "claims"
 
 
 def _write_atomically(target: Path, text: str) -> None:
     target.parent.mkdir(parents=True, exist_ok=True)
     tmp = target.with_name(f".{target.name}.{os.getpid()}.{threading.get_ident()}")
-    tmp.write_text(text)
-    os.replace(tmp, target)
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
 
 
 def record_run(path: str | os.PathLike, run: dict) -> None:
     """Append one invocation's record (wall time, tiles, mode) to ``out.zarr.cost/runs.jsonl``
-    (only the coordinating process writes it)."""
+    (only the coordinating process writes it; one write of one line, so that the records of
+    processes sharing a store do not interleave)."""
     target = cost_dir(path) / "runs.jsonl"
     target.parent.mkdir(parents=True, exist_ok=True)
     with open(target, "a") as fh:
@@ -239,14 +661,14 @@ def read_costs(path: str | os.PathLike, tile_grid: tuple[int, int]) -> tuple[np.
     """Per-tile CPU seconds (NaN where unknown) and the run records of a store."""
     seconds = np.full(tile_grid, math.nan)
     folder = cost_dir(path)
-    for i in range(tile_grid[0]):
-        for j in range(tile_grid[1]):
-            f = folder / f"tile_{i}_{j}.json"
-            if f.is_file():
-                try:
+    if folder.is_dir():
+        for f in folder.glob("tile_*.json"):
+            try:
+                i, j = (int(x) for x in f.stem.split("_")[1:3])
+                if i < tile_grid[0] and j < tile_grid[1]:
                     seconds[i, j] = json.loads(f.read_text())["cpu_seconds"]
-                except (ValueError, KeyError):
-                    pass  # a damaged cost record loses the cost, never the results
+            except (ValueError, KeyError, TypeError, OSError):
+                pass  # a damaged cost record loses the cost, never the results
     runs = []
     log = folder / "runs.jsonl"
     if log.is_file():
@@ -258,32 +680,52 @@ def read_costs(path: str | os.PathLike, tile_grid: tuple[int, int]) -> tuple[np.
     return seconds, runs
 
 
+# -- reading -------------------------------------------------------------------------------------
 def read_basin(path: str | os.PathLike) -> Basin:
-    """Read a store back (cells of tiles not flagged done read as not computed)."""
-    zarr = _zarr()
-    p = Path(path)
-    if not _is_store(p):
-        raise ParameterError(f"{path} is not a Zarr store (no zarr.json)")
-    group = zarr.open_group(str(p), mode="r")
-    attrs = dict(group.attrs)
-    if "coin_basin" not in attrs:
-        raise ParameterError(f"{path} is not a coin basin store")
-    present = set(group.array_keys())
-    arrays = {name: np.asarray(group[name][:]) for name in VARIABLES if name in present}
-    done = np.asarray(group["done"][:])
-    tile_seconds, runs = read_costs(p, done.shape)
-    basin = Basin(attrs=attrs, arrays=arrays, done=done, tile_seconds=tile_seconds, runs=runs,
-                  path=str(path))
-    basin.mask_not_done()
-    return basin
+    """Read a store back, every tile checked: cells of tiles not done, or damaged, read as not
+    computed (their tiles are listed in ``Basin.damaged``)."""
+    view = open_view(path)
+    grid = view.grid
+    arrays = {name: np.full(grid.shape, FILLS[name], dtype=VARIABLES[name][0])
+              for name in ARRAY_NAMES}
+    done = np.zeros(grid.tile_grid, dtype=np.uint8)
+    damaged = []
+    for tile, state, data, _ in scan(view, with_data=True):
+        if state is Tile.DONE:
+            s0, s1 = grid.tile_slices(tile)
+            for name in ARRAY_NAMES:
+                arrays[name][s0, s1] = data[name]
+            done[tile] = 1
+        elif state is Tile.DAMAGED:
+            damaged.append(tile)
+    tile_seconds, runs = read_costs(view.path, grid.tile_grid)
+    return Basin(attrs=view.attrs, arrays=arrays, done=done, tile_seconds=tile_seconds,
+                 runs=runs, path=str(path), damaged=damaged)
 
 
 def run_record(started: float, wall: float, tiles: int, cells: int, mode: str, workers: int,
                interrupted: bool) -> dict:
     return {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z", time.localtime(started)),
             "wall_seconds": round(wall, 3), "tiles": tiles, "cells": cells, "mode": mode,
-            "workers": workers, "interrupted": interrupted}
+            "workers": workers, "interrupted": interrupted, "host": socket.gethostname(),
+            "pid": os.getpid()}
 
 
-__all__ = ["differences", "prepare", "read_basin", "read_done",
-           "read_costs", "record_run", "run_record", "write_tile", "cost_dir"]
+def check_store_writable(path: str | os.PathLike) -> None:
+    """Raise NotWritable (one line) unless the store (or the folder it will be created in) and
+    its side folder accept new files: a read-only mount or a full disk is found before any
+    work."""
+    from .paths import check_writable
+
+    path = Path(path)
+    check_writable(path, what="store", directory=True, create_parents=True)
+    side = cost_dir(path)
+    if side.is_dir():
+        check_writable(side, what="store", directory=True)
+
+
+__all__ = ["ARRAY_NAMES", "StoreCheck", "StoreDamaged", "StoreView", "Tile", "check",
+           "check_store_writable", "claims_dir", "cost_dir", "differences", "grid_of",
+           "has_digest", "is_store", "open_view", "prepare", "read_basin", "read_costs",
+           "read_done", "record_run", "run_record", "scan", "template", "tidy", "tile_digest",
+           "tile_done", "write_tile"]
