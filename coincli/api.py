@@ -163,6 +163,8 @@ class SweepReport:
     tiles_elsewhere: int = 0  # tiles other processes finished while this one ran
     damaged: tuple = ()  # tiles found damaged at the start (recomputed if not interrupted)
     estimate: SweepEstimate | None = None
+    kernel_seconds: float = 0.0  # wall time of the tiles in the kernels, summed over threads
+    store_seconds: float = 0.0  # wall time of the tiles' writes, summed over threads
 
     @property
     def complete(self) -> bool:
@@ -329,8 +331,11 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
     wall0 = time.perf_counter()
     interrupted = False
     computed = cells = 0
+    kernel_seconds = store_seconds = 0.0
     try:
         for done in runner:
+            kernel_seconds += done.compute_seconds
+            store_seconds += done.write_seconds
             if done.written:
                 computed += 1
                 cells += done.cells
@@ -347,10 +352,12 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
     elsewhere = len(queue.done_elsewhere)
     n_done = total if not interrupted else before + computed + elsewhere
     with contextlib.suppress(OSError):  # a cost record lost is no reason to fail a sweep
-        store_io.record_run(path, store_io.run_record(started, wall, computed, cells, mode,
-                                                      n_workers, interrupted))
+        store_io.record_run(path, store_io.run_record(
+            started, wall, computed, cells, mode, n_workers, interrupted,
+            kernel_seconds=kernel_seconds, store_seconds=store_seconds))
     return SweepReport(str(path), total, n_done, before, cells, wall, mode, n_workers,
-                       interrupted, computed, elsewhere, damaged, estimate)
+                       interrupted, computed, elsewhere, damaged, estimate, kernel_seconds,
+                       store_seconds)
 
 
 def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os.PathLike |

@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import json
 import os
 import resource
 import shutil
+import statistics
+import subprocess
+import sys
 import tempfile
+import time
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -60,7 +66,8 @@ def bench_command(
         say = lambda text: status.update(f"bench: {text}")  # noqa: E731
         rows = bench.side_by_side(scene, cost_grid, repeats, say)
         check = bench.label_check(scene, label_grid, rows, threads, say)
-        basin = time_basin(scene, basin_res, say) if basin_res else None
+        startup = time_startup(say)
+        basin = time_basin_command(basin_res, say) if basin_res else None
     from ..integrators.registry import setting_text
 
     paper = next(r for r in rows if r.full_run)
@@ -70,12 +77,14 @@ def bench_command(
         "reference_agreement": check.agreement_ab,
         "rows": [{"name": r.name, "method": r.setting.method.label,
                   "setting": setting_text(r.setting.method, r.setting.dt, r.setting.rtol),
-                  "dt": r.setting.dt,
+                  "verified": r.setting.verify, "dt": r.setting.dt,
                   "rtol": r.setting.rtol, "full_run": r.full_run,
                   "ms_per_trajectory": r.seconds_per_trajectory * 1e3,
                   "rounds_ms": [t * 1e3 for t in r.repeats],
                   "speedup_vs_paper": paper.seconds_per_trajectory / r.seconds_per_trajectory,
-                  "label_agreement_robust": r.label_agreement} for r in rows],
+                  "label_agreement_robust": r.label_agreement,
+                  "uncertain_robust": r.uncertain} for r in rows],
+        "startup": startup,
         "basin": basin,
     }
     if json_out:
@@ -83,38 +92,82 @@ def bench_command(
         return
     table = Table(title=f"Cost per trajectory, one thread, median of {repeats} interleaved "
                         f"rounds over the same {result['cost_cells']} cells", title_justify="left")
-    for col in ("setting", "ms / trajectory", "x faster than paper",
-                f"label agreement ({result['robust_cells']} robust cells)"):
-        table.add_column(col, justify="left" if col == "setting" else "right")
+    for col in ("setting", "ms", "x paper", "right", "uncertain"):
+        table.add_column(col, justify="left" if col == "setting" else "right", no_wrap=True)
     for r in result["rows"]:
-        name = r["name"] if r["full_run"] else (
-            f"{r['method']} {r['setting']}, stop when settled")
-        table.add_row(name, f"{r['ms_per_trajectory']:.4g}", f"{r['speedup_vs_paper']:.0f}",
-                      f"{r['label_agreement_robust']:.2%}")
+        right = f"{r['label_agreement_robust']:.2%}"
+        uncertain = f"{r['uncertain_robust']:.1%}" if r["verified"] else "-"
+        table.add_row(r["name"], f"{r['ms_per_trajectory']:.3g}",
+                      f"{r['speedup_vs_paper']:,.0f}", right, uncertain)
     console.print(table)
     console.print(f"Label grid {label_grid.shape[0]} x {label_grid.shape[1]}: references (event "
                   f"rtol=1e-12, rk4 h=2.5e-7) agree on {check.agreement_ab:.1%} of cells; "
-                  f"{result['robust_cells']} robust cells.")
+                  f"{result['robust_cells']} robust cells: right and uncertain are fractions of "
+                  "those (a verified setting's right cells are the certain ones with the "
+                  "reference's label).", highlight=False)
+    console.print(f"Start-up, median of {STARTUP_RUNS} runs: coin --help "
+                  f"{startup['help_seconds']:.2f} s, coin simulate (fig. 2, warm, --no-rrd) "
+                  f"{startup['simulate_seconds']:.2f} s.", highlight=False)
     if basin:
-        console.print(f"Full default basin {basin_res} x {basin_res} ({basin['cells']:,} "
-                      f"trajectories): {basin['wall_seconds']:.1f} s wall, "
-                      f"{basin['trajectories_per_second']:,.0f} trajectories/s on "
-                      f"{os.cpu_count()} cores, peak memory {basin['peak_rss_mb']:.0f} MB.")
+        console.print(
+            f"Default basin {basin_res} x {basin_res} ({basin['cells']:,} cells, verified), "
+            f"the whole command: {basin['wall_seconds']:.2f} s wall on {basin['threads']} "
+            f"threads: start-up {basin['startup_seconds']:.2f} s, kernels "
+            f"{basin['kernel_seconds']:.2f} s, tiles and store {basin['store_seconds']:.2f} s, "
+            f"other {basin['other_seconds']:.2f} s; {basin['outside_kernels']:.0%} outside "
+            f"the kernels; peak memory {basin['peak_rss_mb']:.0f} MB.", highlight=False)
 
 
-def time_basin(scene, res: int, say) -> dict:
-    """Sweep the default basin at ``res`` x ``res`` into a scratch store through the API (what
-    `coin basin` runs) and time it."""
-    from .. import api
+STARTUP_RUNS = 5
 
-    say(f"full default basin {res} x {res}")
+
+def _wall(args: list[str], cwd: str) -> float:
+    start = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "coincli", *args], cwd=cwd,
+                          capture_output=True, text=True)
+    wall = time.perf_counter() - start
+    if proc.returncode != 0:
+        raise RuntimeError(f"coin {' '.join(args)} failed: {proc.stderr.strip()[-300:]}")
+    return wall
+
+
+def time_startup(say) -> dict:
+    """Wall time of `coin --help` and of a warm `coin simulate` (median of STARTUP_RUNS each,
+    the two interleaved)."""
     scratch = tempfile.mkdtemp(prefix="coin-bench-")
+    help_times, simulate_times = [], []
+    simulate = ["simulate", "--vy", "1.197", "--vphi", "3.508", "--no-rrd"]
     try:
-        plan = api.plan_sweep(scene, res=res)
-        report = api.sweep(plan, os.path.join(scratch, "basin.zarr"))
-        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+        _wall(simulate, scratch)  # warm: caches loaded once
+        for k in range(STARTUP_RUNS):
+            say(f"start-up {k + 1}/{STARTUP_RUNS}")
+            help_times.append(_wall(["--help"], scratch))
+            simulate_times.append(_wall(simulate, scratch))
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
-    return {"res": res, "cells": report.cells, "wall_seconds": report.wall_seconds,
-            "trajectories_per_second": report.cells / report.wall_seconds,
-            "peak_rss_mb": peak}
+    return {"help_seconds": statistics.median(help_times), "help_runs": help_times,
+            "simulate_seconds": statistics.median(simulate_times),
+            "simulate_runs": simulate_times}
+
+
+def time_basin_command(res: int, say) -> dict:
+    """Run the real `coin basin STORE --res RES` into a scratch store and time it: the whole
+    command, and from its run record the tiles' time in the kernels and in the store."""
+    say(f"default basin {res} x {res}, the whole command")
+    scratch = tempfile.mkdtemp(prefix="coin-bench-")
+    store = os.path.join(scratch, "basin.zarr")
+    try:
+        wall = _wall(["basin", store, "--res", str(res), "--quiet"], scratch)
+        record = json.loads((Path(f"{store}.cost") / "runs.jsonl").read_text().splitlines()[-1])
+        peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+    threads = max(1, record["workers"])
+    kernels = record["kernel_seconds"] / threads  # wall: the threads run side by side
+    store_time = record["store_seconds"] / threads
+    sweep = record["wall_seconds"]
+    return {"res": res, "cells": record["cells"], "threads": threads, "wall_seconds": wall,
+            "startup_seconds": wall - sweep, "kernel_seconds": kernels,
+            "store_seconds": store_time, "other_seconds": max(0.0, sweep - kernels - store_time),
+            "outside_kernels": (wall - kernels) / wall, "peak_rss_mb": peak,
+            "cells_per_second": record["cells"] / wall}

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 import signal
+import time
 import uuid
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
@@ -40,6 +41,8 @@ class TileDone(NamedTuple):
     cells: int  # cells written (0 if interrupted)
     cpu_seconds: float
     written: bool  # False: stopped through its control flag, nothing written
+    compute_seconds: float = 0.0  # wall time in the kernels
+    write_seconds: float = 0.0  # wall time writing the tile and its cost record
 
 
 def run_tile_task(path: str, spec: SweepSpec, tile: tuple[int, int],
@@ -51,9 +54,11 @@ def run_tile_task(path: str, spec: SweepSpec, tile: tuple[int, int],
     control = new_control() if control is None else control
     result = compute_tile(spec, tuple(tile), control)
     if control[0] or (result.arrays["status"] == Status.INTERRUPTED).any():
-        return TileDone(tuple(tile), 0, result.cpu_seconds, False)
+        return TileDone(tuple(tile), 0, result.cpu_seconds, False, result.wall_seconds)
+    start = time.perf_counter()
     write_tile(path, spec, result)
-    return TileDone(tuple(tile), result.cells, result.cpu_seconds, True)
+    return TileDone(tuple(tile), result.cells, result.cpu_seconds, True, result.wall_seconds,
+                    time.perf_counter() - start)
 
 
 def usable_cores() -> int:

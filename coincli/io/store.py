@@ -704,11 +704,15 @@ def read_basin(path: str | os.PathLike) -> Basin:
 
 
 def run_record(started: float, wall: float, tiles: int, cells: int, mode: str, workers: int,
-               interrupted: bool) -> dict:
+               interrupted: bool, kernel_seconds: float = 0.0,
+               store_seconds: float = 0.0) -> dict:
+    """One invocation's record: when, how long, what it computed, and where the time went (the
+    tiles' wall time in the kernels and in writing, summed over threads)."""
     return {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z", time.localtime(started)),
             "wall_seconds": round(wall, 3), "tiles": tiles, "cells": cells, "mode": mode,
             "workers": workers, "interrupted": interrupted, "host": socket.gethostname(),
-            "pid": os.getpid()}
+            "pid": os.getpid(), "kernel_seconds": round(kernel_seconds, 3),
+            "store_seconds": round(store_seconds, 3)}
 
 
 def check_store_writable(path: str | os.PathLike) -> None:
