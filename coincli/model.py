@@ -188,6 +188,25 @@ def well_index(p, phi):
     return j + 1 if offset > 0 else j - 1
 
 
+@kernel(inline=True)
+def last_boundary(p, phi_a, phi_b):
+    """The last well boundary passed going monotonically from phi_a to phi_b (NaN if none):
+    the boundaries between wells are the angles k pi +- phi_cr."""
+    if phi_b == phi_a:
+        return math.nan
+    best = math.nan
+    for c in (p.phi_cr, math.pi - p.phi_cr):
+        if phi_b > phi_a:
+            value = math.floor((phi_b - c) / math.pi) * math.pi + c
+            if value > phi_a and not value <= best:
+                best = value
+        else:
+            value = math.ceil((phi_b - c) / math.pi) * math.pi + c
+            if value < phi_a and not value >= best:
+                best = value
+    return best
+
+
 def stiffest_frequency(p) -> tuple[float, float]:
     """(omega, zeta) of the stiffest contact mode: rocking on the two corners of a lying coin,
     omega = sqrt(2 k r_d^2 / I), with damping ratio zeta = c r_d^2 / (I omega)."""

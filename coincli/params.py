@@ -303,8 +303,6 @@ class RunSettings(NamedTuple):
     stop_on_settle: bool  # stop as soon as the outcome is certain
     max_steps: int  # the step budget (closed-form flights count their iterations)
     sample_dt: float  # s between recorded samples (0: record none)
-    t_min: float = 0.0  # s, run at least this long, settled or not
-    probe_time: float = -1.0  # s, keep the state at this time (RunResult.probe); < 0: none
 
 
 ADAPTIVE_MAX_STEPS = 1_000_000

@@ -41,6 +41,7 @@ class Rung(NamedTuple):
     status: Status
     settle_time: float
     steps: int
+    last_change: float  # s, when the coin passed into its final well (NaN: it never moved)
 
 
 @dataclass
@@ -156,27 +157,24 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     rungs: list[Rung] = []
     certainty = Certainty.UNVERIFIED if not ladder.verified else Certainty.UNCERTAIN
     wall = 0.0
-    previous = None  # (label, status, end time, end state) of the last rung
+    previous = None  # the last rung's RunResult and label
     for k in range(len(ladder)):
-        # each rung runs at least as long as the one before and keeps its state at that
-        # rung's end, where the two are compared (coincli.integrators.batch.run_ladder)
-        meet = previous[2] if previous is not None else 0.0
-        settings = base._replace(rtol=ladder.rtols[k], dt=ladder.dts[k], t_min=meet,
-                                 probe_time=meet if previous is not None else -1.0)
+        settings = base._replace(rtol=ladder.rtols[k], dt=ladder.dts[k])
         result, seconds, engine = _run(p, settings, state0, samples, events, final, control,
                                        engine)
         wall += seconds
         label = outcome_label(result.status, result.n_well, final[2])
         rungs.append(Rung(ladder.rung_text(k), None if label == NO_LABEL else int(label),
-                          Status(result.status), float(result.settle_time), int(result.steps)))
+                          Status(result.status), float(result.settle_time), int(result.steps),
+                          float(result.last_change)))
         if result.status in (Status.BUDGET, Status.INTERRUPTED):
             break  # a tighter rung would need more steps still, or was told to stop
-        if previous is not None and rungs_agree(p, previous[0], previous[1], previous[3],
-                                                label, result.status, result.probe,
-                                                ladder.state_tolerance):
+        if previous is not None and rungs_agree(previous[1], previous[0].status,
+                                                previous[0].last_change, label, result.status,
+                                                result.last_change, ladder.change_tolerance):
             certainty = Certainty.CERTAIN
             break
-        previous = (label, result.status, result.t, tuple(final))
+        previous = (result, label)
     return _trajectory(scene, p, state0, final, result, samples, events, sample_dt,
                        record_events, wall, certainty, rungs)
 

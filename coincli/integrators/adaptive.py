@@ -29,8 +29,15 @@ import math
 
 from ..enums import Method, Status
 from ..jit import kernel
-from ..model import below, corner_heights, energy_with_heights, rotate, well_index
-from .common import NAN6, NO_WELL, RunResult, is_finite_state, record_events, record_sample
+from ..model import (
+    below,
+    corner_heights,
+    energy_with_heights,
+    last_boundary,
+    rotate,
+    well_index,
+)
+from .common import NO_WELL, RunResult, is_finite_state, record_events, record_sample
 from .dopri import (
     ORDER,
     dense_coefficients,
@@ -190,18 +197,14 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
     t = 0.0
     steps = 0
     work = 0  # steps tried (accepted and rejected) and flight iterations: the budget's count
-    t_min = settings.t_min
-    probe_time = settings.probe_time
-    probe = NAN6
-    if probe_time == 0.0:
-        probe = st
+    last_change = math.nan
     h = settings.dt if mode == 0 else min(settings.dt, first_step)
     k1 = derivative(p, mode, st, c, s)
     if energy_with_heights(p, st[1], st[3], st[4], st[5], heights) < p.e_crit:
         status = Status.SETTLED
         settle_time = 0.0
         n_well = well_index(p, st[2])
-    while t < t_end and not (status == Status.SETTLED and stop_on_settle and t >= t_min):
+    while t < t_end and not (status == Status.SETTLED and stop_on_settle):
         if work >= budget:
             status = Status.BUDGET
             break
@@ -214,14 +217,15 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             if touching == 0 and tau < t_end - t:
                 status = Status.BUDGET
                 break
-            if t < probe_time <= t + tau:
-                probe = flight_state(p, st, probe_time - t)
             if record:
                 while next_sample <= t + tau and n_samples < samples.shape[0]:
                     at = flight_state(p, st, next_sample - t)
                     n_samples = record_sample(samples, n_samples, next_sample, at[0], at[1],
                                               at[2], at[3], at[4], at[5])
                     next_sample += sample_dt
+            crossed = last_boundary(p, st[2], st[2] + st[5] * tau)
+            if crossed == crossed:  # not NaN: exact, the flight turns uniformly
+                last_change = t + (crossed - st[2]) / st[5]
             st = flight_state(p, st, tau)
             c = math.cos(st[2])
             s = math.sin(st[2])
@@ -258,8 +262,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
         pieces = scan_pieces(st, end)
         theta = NO_EVENT
         event_mask = 0
-        dense = (pieces > 1 or may_cross(mode, heights_end) or (record and next_sample <= t + h)
-                 or t < probe_time <= t + h)
+        dense = pieces > 1 or may_cross(mode, heights_end) or (record and next_sample <= t + h)
         if dense:
             rc = dense_coefficients(st, end, h, stages)
             theta, event_mask = find_event(p, rc, h, mode, pieces, heights, heights_end, c, s)
@@ -270,8 +273,6 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
                     n_samples = record_sample(samples, n_samples, next_sample, at[0], at[1],
                                               at[2], at[3], at[4], at[5])
                     next_sample += sample_dt
-            if t < probe_time <= t_new:
-                probe = dense_point(rc, (probe_time - t) / h)
             if event_mask != 0:
                 end = dense_point(rc, theta)
                 c7 = math.cos(end[2])
@@ -279,6 +280,9 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
                 heights_end = corner_heights(p, end[1], c7, s7)
         else:
             t_new = t + h
+        crossed = last_boundary(p, st[2], end[2])
+        if crossed == crossed:  # within the step: phi is nearly linear over it
+            last_change = t + (t_new - t) * (crossed - st[2]) / (end[2] - st[2])
         t = t_new
         st = end
         c = c7
@@ -315,7 +319,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
         settle_time = math.nan
     for j in range(6):
         final[j] = st[j]
-    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events, probe)
+    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events, last_change)
 
 
 __all__ = ["EVENT_BAND", "MAX_TURN", "integrate_adaptive"]

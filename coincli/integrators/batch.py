@@ -7,7 +7,6 @@ serves them all; their names, orders and properties live in :mod:`.registry`.
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -63,41 +62,31 @@ def run_batch(p, settings, states, quarter_turns, status, settle_time, steps, co
 
 
 @kernel(inline=True)
-def rung_settings(settings, rtols, dts, k, t_min):
-    """The settings of rung k of a ladder: the base settings with that rung's rtol and dt; it
-    runs at least until t_min (the previous rung's end) and keeps its state there."""
+def rung_settings(settings, rtols, dts, k):
+    """The settings of rung k of a ladder: the base settings with that rung's rtol and dt."""
     return RunSettings(settings.method, dts[k], rtols[k], settings.t_end,
-                       settings.stop_on_settle, settings.max_steps, settings.sample_dt,
-                       t_min, t_min if k > 0 else -1.0)
+                       settings.stop_on_settle, settings.max_steps, settings.sample_dt)
 
 
 @kernel
-def state_distance(p, a, b):
-    """The largest difference of two states in the coin's natural units: its half diagonal r
-    for positions, 1 rad, the speed sqrt(2 g r) of a fall by r, and that speed over r."""
-    v_ref = math.sqrt(2.0 * p.g * p.r)
-    scales = (p.r, p.r, 1.0, v_ref, v_ref, v_ref / p.r)
-    largest = 0.0
-    for j in range(6):
-        d = abs(a[j] - b[j]) / scales[j]
-        if not d <= largest:  # NaN (a run that did not get there) wins too
-            largest = d
-    return largest
-
-
-@kernel
-def rungs_agree(p, label_a, status_a, end_a, label_b, status_b, probe_b, state_tolerance):
+def rungs_agree(label_a, status_a, change_a, label_b, status_b, change_b, change_tolerance):
     """The ladder's rule: two runs agree when both settled with the same count of quarter
-    turns, and their states at the end of the coarser run (``end_a``; ``probe_b``: the finer
-    run's state at that time) differ by at most ``state_tolerance`` in natural units: the two
-    followed the same trajectory. Labels alone are weak evidence where outcomes are nearly
-    random among a few wells: two unconverged runs often land in the same well by chance."""
-    return (status_a == Status.SETTLED and status_b == Status.SETTLED and label_a == label_b
-            and state_distance(p, end_a, probe_b) <= state_tolerance)
+    turns, and passed into their final well at the same moment, within ``change_tolerance``
+    seconds (their last change of well; NaN, never changed, matches NaN). The label is decided
+    there; afterwards the coin only rocks inside its well, and that rocking is chaotic, so
+    neither the final states nor the settle times of two converged runs need agree. Labels
+    alone are weak evidence where outcomes are nearly random among a few wells: two runs that
+    took different paths often end in the same well by chance, and pass into it at clearly
+    different times."""
+    if not (status_a == Status.SETTLED and status_b == Status.SETTLED and label_a == label_b):
+        return False
+    if change_a != change_a or change_b != change_b:  # NaN: no change of well at all
+        return change_a != change_a and change_b != change_b
+    return abs(change_a - change_b) <= change_tolerance
 
 
 @kernel
-def run_ladder(p, settings, rtols, dts, state_tolerance, states, quarter_turns, status,
+def run_ladder(p, settings, rtols, dts, change_tolerance, states, quarter_turns, status,
                settle_time, steps, certainty, rung, control):
     """Verified labels: each row of ``states`` is run at rung 0, 1, ... of the ladder (rtols,
     dts: the rungs' settings, coarse to fine) until two successive rungs agree
@@ -109,26 +98,24 @@ def run_ladder(p, settings, rtols, dts, state_tolerance, states, quarter_turns, 
     final = np.empty(6)
     n_rungs = rtols.shape[0]
     for row in range(states.shape[0]):
-        result = integrate(p, rung_settings(settings, rtols, dts, 0, 0.0), states[row],
-                           no_samples, no_events, final, control)
+        result = integrate(p, rung_settings(settings, rtols, dts, 0), states[row], no_samples,
+                           no_events, final, control)
         label = outcome_label(result.status, result.n_well, final[2])
-        end = (final[0], final[1], final[2], final[3], final[4], final[5])
         total = result.steps
         verdict = Certainty.UNVERIFIED if n_rungs == 1 else Certainty.UNCERTAIN
         last = 0
         for k in range(1, n_rungs):
             if result.status == Status.BUDGET or result.status == Status.INTERRUPTED:
                 break  # a tighter rung would need more steps still, or was told to stop
-            finer = integrate(p, rung_settings(settings, rtols, dts, k, result.t), states[row],
-                              no_samples, no_events, final, control)
+            finer = integrate(p, rung_settings(settings, rtols, dts, k), states[row], no_samples,
+                              no_events, final, control)
             finer_label = outcome_label(finer.status, finer.n_well, final[2])
             total += finer.steps
             last = k
-            agree = rungs_agree(p, label, result.status, end, finer_label, finer.status,
-                                finer.probe, state_tolerance)
+            agree = rungs_agree(label, result.status, result.last_change, finer_label,
+                                finer.status, finer.last_change, change_tolerance)
             result = finer
             label = finer_label
-            end = (final[0], final[1], final[2], final[3], final[4], final[5])
             if agree:
                 verdict = Certainty.CERTAIN
                 break
@@ -167,7 +154,7 @@ def verified_labels(p, settings, ladder, states, control=None) -> VerifiedLabels
                          np.empty(n, np.int64), np.empty(n, np.uint8), np.empty(n, np.int8))
     compiled(run_ladder)(p, settings, np.asarray(ladder.rtols, dtype=np.float64),
                          np.asarray(ladder.dts, dtype=np.float64),
-                         float(ladder.state_tolerance),
+                         float(ladder.change_tolerance),
                          np.ascontiguousarray(states, dtype=np.float64), *out,
                          new_control() if control is None else control)
     return out
@@ -212,4 +199,4 @@ def warm_up(p, settings, state) -> None:
 
 __all__ = ["Labels", "NO_LABEL", "VerifiedLabels", "final_state", "integrate", "label_states",
            "new_control", "outcome_label", "run_batch", "run_ladder", "rungs_agree",
-           "state_distance", "verified_labels", "warm_up"]
+           "verified_labels", "warm_up"]

@@ -3,13 +3,11 @@ contact events and final state (kernels on plain floats and arrays)."""
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 from ..enums import Status
 from ..jit import kernel
 
-NAN6 = (math.nan, math.nan, math.nan, math.nan, math.nan, math.nan)
 NO_WELL = -32768  # n_well of a run that has not settled (the int16 fill of the stores)
 
 # Event kinds recorded in the events buffer.
@@ -28,7 +26,7 @@ class RunResult(NamedTuple):
     n_well: int  # the well holding the coin once settled (NO_WELL otherwise)
     n_samples: int  # rows written to the samples buffer
     n_events: int  # rows written to the events buffer
-    probe: tuple  # the state at settings.probe_time (NaN if the run did not reach it)
+    last_change: float  # s, when the coin last passed from one well to another (NaN: never)
 
 
 @kernel
@@ -86,5 +84,5 @@ def record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi):
     return n_samples
 
 
-__all__ = ["EVENT_COLUMNS", "LIFTOFF", "NAN6", "NO_WELL", "ONSET", "RunResult", "SAMPLE_COLUMNS",
+__all__ = ["EVENT_COLUMNS", "LIFTOFF", "NO_WELL", "ONSET", "RunResult", "SAMPLE_COLUMNS",
            "is_finite_state", "record_events", "record_sample", "store_state"]

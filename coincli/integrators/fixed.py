@@ -17,12 +17,12 @@ from ..model import (
     accelerations_auto,
     contact_mask,
     corner_offset,
+    last_boundary,
     total_energy,
     total_energy_at,
     well_index,
 )
 from .common import (
-    NAN6,
     NO_WELL,
     RunResult,
     is_finite_state,
@@ -182,24 +182,23 @@ def integrate_fixed(p, settings, state, samples, events, final, control):
     n_well = NO_WELL
     steps = 0
     t = 0.0
-    t_min = settings.t_min
-    probe_time = settings.probe_time
-    probe = (x, y, phi, vx, vy, vphi) if probe_time == 0.0 else NAN6
+    last_change = math.nan
     if total_energy(p, state) < e_crit:
         status = Status.SETTLED
         settle_time = 0.0
         n_well = well_index(p, phi)
-    if not (status == Status.SETTLED and stop_on_settle and t_min <= 0.0):
+    if not (status == Status.SETTLED and stop_on_settle):
         for steps in range(1, n_run + 1):
             if steps % CONTROL_EVERY == 0 and control[0] != 0:
                 status = Status.INTERRUPTED
                 steps -= 1
                 break
+            phi_old = phi
             x, y, phi, vx, vy, vphi = fixed_step(method, p, dt, x, y, phi, vx, vy, vphi)
-            t_old = t
+            crossed = last_boundary(p, phi_old, phi)
+            if crossed == crossed:  # not NaN: interpolated within the step
+                last_change = t + dt * (crossed - phi_old) / (phi - phi_old)
             t = steps * dt
-            if t_old < probe_time <= t:  # the step end at or just after it (error O(dt))
-                probe = (x, y, phi, vx, vy, vphi)
             if not is_finite_state(x, y, phi, vx, vy, vphi):
                 status = Status.NONFINITE
                 break
@@ -216,7 +215,7 @@ def integrate_fixed(p, settings, state, samples, events, final, control):
                     status = Status.SETTLED
                     settle_time = t
                     n_well = well_index(p, phi)
-            if status == Status.SETTLED and stop_on_settle and t >= t_min:
+            if status == Status.SETTLED and stop_on_settle:
                 break
         if status == Status.UNSETTLED and steps == n_run < n_total:
             status = Status.BUDGET
@@ -229,4 +228,4 @@ def integrate_fixed(p, settings, state, samples, events, final, control):
         n_well = NO_WELL
         settle_time = math.nan
     store_state(final, x, y, phi, vx, vy, vphi)
-    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events, probe)
+    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events, last_change)

@@ -1,9 +1,11 @@
 """The ladder of settings behind a verified label.
 
-Every initial condition is computed at rung 0, 1, ... until two successive rungs agree (the
-same count of quarter turns, both runs settled): the label is then *certain*, converged at that
-rung. A cell whose label has not converged by the last rung is *uncertain*. Cells that agree at
-once cost two runs; only the disagreeing ones climb.
+Every initial condition is computed at rung 0, 1, ... until two successive rungs agree (both
+runs settled, with the same count of quarter turns, having entered that final well at the same
+moment to within CHANGE_TOLERANCE, see :func:`coincli.integrators.batch.rungs_agree`): the
+label is then *certain*, converged at that rung. A cell whose label has not converged by the
+last rung is *uncertain*. Cells that agree at once cost two runs; only the disagreeing ones
+climb.
 
 Adaptive methods climb in tolerance, rtol, rtol / 10, ... down to the floor; fixed-step methods
 in step, dt / 10^(1/p) (a tenfold smaller error for a method of order p) for FIXED_RUNGS rungs.
@@ -19,7 +21,7 @@ from .registry import info, setting_text
 
 RTOL_FLOOR = 1e-10  # the tightest tolerance a ladder climbs to (see README: the ladder)
 FIXED_RUNGS = 3
-STATE_TOLERANCE = 1e-3  # natural units: two agreeing runs are this close where they meet
+CHANGE_TOLERANCE = 1e-3  # s: two agreeing runs enter their final well this close in time
 
 
 @dataclass(frozen=True)
@@ -29,7 +31,7 @@ class Ladder:
     rtols: tuple[float, ...]
     dts: tuple[float, ...]
     adaptive: bool
-    state_tolerance: float = STATE_TOLERANCE
+    change_tolerance: float = CHANGE_TOLERANCE
 
     @property
     def verified(self) -> bool:
@@ -46,11 +48,11 @@ class Ladder:
         knob = "rtol" if self.adaptive else "dt"
         return {"rungs": [{knob: (self.rtols if self.adaptive else self.dts)[k]}
                           for k in range(len(self))],
-                "state_tolerance": self.state_tolerance,
+                "change_tolerance": self.change_tolerance,
                 "rule": "a label is certain when two successive rungs both settle with the "
-                        "same count of quarter turns and, at the end of the coarser run, their "
-                        "states differ by at most state_tolerance (natural units: r, 1 rad, "
-                        "sqrt(2 g r), sqrt(2 g r) / r); uncertain if no two do"}
+                        "same count of quarter turns, having passed into that final well "
+                        "within change_tolerance seconds of each other; uncertain if no two "
+                        "do"}
 
 
 def ladder_of(integration: Integration) -> Ladder:
