@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from ..params import Integration
 from .registry import info, setting_text
 
-RTOL_FLOOR = 1e-10  # the tightest tolerance a ladder climbs to (see README: the ladder)
+RTOL_FLOOR = 1e-12  # the tightest tolerance a ladder climbs to (README: "Verified labels")
 FIXED_RUNGS = 3
 CHANGE_TOLERANCE = 1e-3  # s: two agreeing runs enter their final well this close in time
 
