@@ -13,8 +13,9 @@ Names load on first use, so ``import coincli`` (and ``coin --help``) stays cheap
 from .version import __version__
 
 _API = ("Method", "Outcome", "Scene", "Status", "SweepPlan", "SweepProgress", "SweepReport",
-        "Trajectory", "basin", "basin_stats", "classify", "load_preset", "open_basin",
-        "plan_sweep", "render_basin", "simulate", "stability", "sweep")
+        "Trajectory", "analyze", "basin", "basin_stats", "classify", "load_preset",
+        "open_basin", "plan_sweep", "render_analysis", "render_basin", "simulate", "stability",
+        "sweep")
 
 __all__ = ["__version__", *_API]
 
