@@ -56,7 +56,7 @@ from .integrators.batch import new_control, verified_labels, warm_up
 from .integrators.ladder import ladder_of
 from .params import ParameterError, model_params, run_settings, scene_from_dict
 
-DEFAULT_POINTS = 100_000  # about a minute for the default 512 x 512 basin on 2 cores
+DEFAULT_POINTS = 150_000  # about a minute for the default 512 x 512 basin on 2 cores
 # eps relative to each axis's range, one value per decade. The default grid spacing is 1/511 ~
 # 2e-3; at 1e-3 the uncertain fraction of the highest band nears 0.9 (no longer a power law),
 # so the window stops 20 times below the spacing.

@@ -336,7 +336,7 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
     S_b and boundary basin entropy S_bb with the log-2 criterion, the ball test for fractal
     boundaries (balls of ``radius`` cells, ``balls`` of them), box-counting alpha, the Wada
     merging test (up to ``max_dilation`` cells). With the simulator: the uncertainty exponent
-    alpha by the perturbation method from ``points`` random initial conditions (default 100,000;
+    alpha by the perturbation method from ``points`` random initial conditions (default 150,000;
     0 skips it) perturbed by each of ``eps`` (relative to each axis's range; default 6 values,
     1e-9 to 1e-4), classified with verified labels on ``threads`` threads (default: one per
     core); D = 2 - alpha. ``seed`` makes it reproducible. ``progress(stage, done, total)``;

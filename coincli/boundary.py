@@ -437,7 +437,7 @@ def basins_fractal_test(labels, *, radius=5.0, balls=1000, valid=None, rng=0,
     zero); ``rng`` makes it reproducible.
 
     Invalid cells (``valid=False``): a ball containing one is skipped (``excluded_balls``).
-    At most ``max_tries`` balls are drawn (default 2000 * balls); with fewer than ``balls``
+    At most ``max_tries`` balls are drawn (default 200 * balls); with fewer than ``balls``
     boundary balls the verdict uses those found (``note`` says so), with fewer than 2 it is
     "undetermined". Raises ValueError when the map is not wider than 2 * radius + 1 cells along
     some axis, or for balls < 100 (too few for the statistics, as in Attractors.jl).
@@ -455,7 +455,15 @@ def basins_fractal_test(labels, *, radius=5.0, balls=1000, valid=None, rng=0,
         raise ValueError(f"map {lab.shape} too small for balls of radius {radius} cells "
                          "(each axis needs more than 2 * radius + 1 cells)")
     rng = np.random.default_rng(rng)
-    max_tries = 2000 * balls if max_tries is None else int(max_tries)
+    max_tries = 200 * balls if max_tries is None else int(max_tries)
+    s0 = smooth_ball_sbb(dim)
+    bias = 0.224 * radius ** -1.006
+    if _classes(lab, val).size < 2:
+        return FractalTest(verdict="undetermined", fractal=False,
+                           boundary_basin_entropy=math.nan, stderr=math.nan, smooth_value=s0,
+                           bias=bias, low=math.nan, high=math.nan, radius=radius, balls=0,
+                           requested=balls, tries=0, excluded_balls=0,
+                           note="a single outcome class: no boundary")
     _, inv = np.unique(lab, return_inverse=True)
     inv = inv.reshape(lab.shape)
     k = int(inv.max()) + 1
@@ -484,8 +492,6 @@ def basins_fractal_test(labels, *, radius=5.0, balls=1000, valid=None, rng=0,
         found.append(ent[boundary])
         n_found += int(boundary.sum())
     ent = np.concatenate(found)[:balls] if found else np.zeros(0)
-    s0 = smooth_ball_sbb(dim)
-    bias = 0.224 * radius ** -1.006
     notes = []
     if float(shape.min()) / radius < 50:
         notes.append(f"coarse grid for this radius: min(shape) / radius = "

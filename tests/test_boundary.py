@@ -550,9 +550,12 @@ def test_fractal_test_invalid_cells_and_edge_cases():
     valid[:, :150] = False  # half the map: balls there are skipped, the rest still decides
     r = basins_fractal_test(lab, radius=5, valid=valid)
     assert r.verdict == "smooth" and r.excluded_balls > 0
-    one = basins_fractal_test(np.zeros((60, 60), dtype=int), radius=3, max_tries=5000)
-    assert one.verdict == "undetermined" and not one.fractal and one.note
-    assert "coarse grid" in one.note  # 60 / 3 < 50
+    one = basins_fractal_test(np.zeros((60, 60), dtype=int), radius=3)
+    assert one.verdict == "undetermined" and not one.fractal and one.tries == 0
+    assert "single outcome class" in one.note
+    halves = np.repeat([[0], [1]], 30, axis=0) * np.ones((1, 60), dtype=int)
+    coarse = basins_fractal_test(halves, radius=3)
+    assert coarse.verdict == "smooth" and "coarse grid" in coarse.note  # 60 / 3 < 50
     with pytest.raises(ValueError, match="too small"):
         basins_fractal_test(np.zeros((10, 40), dtype=int), radius=5)
     with pytest.raises(ValueError, match="at least 100"):

@@ -444,7 +444,7 @@ def analyze_command(
                                        "axis (vy0 by default) measured one by one.")] = 4,
     points: Annotated[int | None, typer.Option("--points", metavar="N", help="Random initial "
                                                "conditions of the perturbation method; 0 "
-                                               "skips it. [dim]\\[100,000: about a minute on "
+                                               "skips it. [dim]\\[150,000: about a minute on "
                                                "2 cores][/dim]")] = None,
     eps: Annotated[str, typer.Option("--eps", metavar="LO:HI", help="Perturbation sizes, "
                                      "relative to each swept axis's range (log-spaced).")]
@@ -550,8 +550,8 @@ def _print_analysis(path: Path, result, data: dict) -> None:
         e, ft = r.entropy, r.fractal_test
         ent.add_row("whole map" if r is w else _span(r), _num(e.basin_entropy),
                     _num(e.boundary_basin_entropy), "yes" if e.fractal_boundary else "no",
-                    "-" if ft is None else f"{_num(ft.boundary_basin_entropy, '.3f')}"
-                                           f"±{_num(ft.stderr, '.3f')}",
+                    "-" if ft is None or not ft.balls
+                    else f"{_num(ft.boundary_basin_entropy, '.3f')}±{_num(ft.stderr, '.3f')}",
                     "-" if ft is None else ft.verdict, style="bold" if r is w else None)
     console.print(ent)
     ft = w.fractal_test
@@ -596,7 +596,8 @@ def _print_analysis(path: Path, result, data: dict) -> None:
     console.print(f"Wada (merging method, up to {opts.max_dilation} cells; {w.wada.n_classes} "
                   f"classes on the whole map): {wada}", highlight=False)
     s, c = result.seconds, result.cpu_seconds
+    sim = (f", perturbation method {s['perturbation']:.1f} s ({result.trajectories:,} labels "
+           f"on {opts.threads} thread{'s' if opts.threads != 1 else ''})" if p is not None
+           else " (no perturbation method: --points 0)")
     console.print(f"took {s['total']:.1f} s wall, {c['total']:.1f} CPU s: map measures "
-                  f"{s['map']:.1f} s, perturbation method {s['perturbation']:.1f} s "
-                  f"({result.trajectories:,} labels on {opts.threads} thread"
-                  f"{'s' if opts.threads != 1 else ''})", highlight=False)
+                  f"{s['map']:.1f} s{sim}", highlight=False)
