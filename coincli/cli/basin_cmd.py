@@ -457,10 +457,11 @@ def analyze_command(
                                        "fractal test.")] = 1000,
     max_dilation: Annotated[int, typer.Option("--max-dilation", metavar="CELLS", help="Largest "
                                               "dilation of the Wada merging test.")] = 6,
-    seed: Annotated[int, typer.Option("--seed", help="Seed of the random points, "
+    seed: Annotated[int, typer.Option("--seed", metavar="N", help="Seed of the random points, "
                                       "perturbations and balls.")] = 0,
-    threads: Annotated[int | None, typer.Option("--threads", help="Threads running the "
-                                                "simulator (default: one per core).")] = None,
+    threads: Annotated[int | None, typer.Option("--threads", metavar="N", help="Threads "
+                                                "running the simulator (default: one per "
+                                                "core).")] = None,
     figure: Annotated[Path | None, typer.Option("--figure", "-o", metavar="FILE", help="Also "
                                                 "draw f(eps) and the measures by band to this "
                                                 ".png or .svg.")] = None,
@@ -506,11 +507,11 @@ def analyze_command(
     n_points = DEFAULT_POINTS if points is None else points
     if n_points:
         announce_compilation()
-    try:
-        with user_errors(), _Stop() as stop, progress:
+    try:  # Ctrl-C: the simulator's threads stop within a chunk of points, nothing is written
+        with user_errors(), progress:
             result = api.analyze(basin, box=box, bands=bands, points=n_points, eps=eps_list,
                                  seed=seed, threads=threads, radius=radius, balls=balls,
-                                 max_dilation=max_dilation, progress=show, stop=stop.event)
+                                 max_dilation=max_dilation, progress=show)
     except KeyboardInterrupt:
         err_console.print("[yellow]interrupted:[/] no result")
         raise typer.Exit(code=130) from None
