@@ -40,6 +40,7 @@ docs: install
 	$(COIN) accuracy --res 32 -o docs/accuracy.png --table docs/accuracy.json
 	$(COIN) basin $(OUT)/docs-basin.zarr --overwrite
 	$(COIN) basin render $(OUT)/docs-basin.zarr -o docs/basin.png
+	$(COIN) basin analyze $(OUT)/docs-basin.zarr -o docs/basin-analysis.png
 	$(COIN) basin $(OUT)/docs-certified.zarr --certify --overwrite
 	$(COIN) basin render $(OUT)/docs-certified.zarr -o docs/basin-certified.png
 	$(COIN) simulate --vy 1.197 --vphi 3.508 --rrd $(OUT)/fig2.rrd

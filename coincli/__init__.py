@@ -13,9 +13,9 @@ Names load on first use, so ``import coincli`` (and ``coin --help``) stays cheap
 from .version import __version__
 
 _API = ("Method", "Outcome", "Scene", "Status", "SweepEstimate", "SweepPlan", "SweepProgress",
-        "SweepReport", "SweepStart", "SweepTooLong", "Trajectory", "basin", "basin_stats",
-        "classify", "estimate_sweep", "load_preset", "open_basin", "plan_sweep",
-        "render_basin", "simulate", "stability", "sweep", "verify_basin")
+        "SweepReport", "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin",
+        "basin_stats", "classify", "estimate_sweep", "load_preset", "open_basin", "plan_sweep",
+        "render_analysis", "render_basin", "simulate", "stability", "sweep", "verify_basin")
 
 __all__ = ["__version__", *_API]
 

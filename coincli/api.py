@@ -546,7 +546,52 @@ def render_basin(basin, out: str | os.PathLike, *, field: str = "n", title: str 
         raise ParameterError(str(exc)) from None
 
 
+# -- boundaries ---------------------------------------------------------------------------------
+def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
+            eps: tuple[float, ...] | None = None, seed: int = 0, threads: int | None = None,
+            radius: float = 5.0, balls: int = 1000, max_dilation: int = 6,
+            direction: str = "random", confidence: float = 0.95,
+            progress: Callable[[str, int, int], None] | None = None, stop=None):
+    """How fractal the boundaries of a basin (Dataset or store path) are, on the whole map and
+    per band of its first swept axis: a :class:`coincli.analysis.BasinAnalysis`
+    (``.whole``, ``.bands``; ``.to_dict()`` is what ``coin basin analyze --json`` prints).
+
+    On the map (``box`` cells per box, uncertain and not-computed cells left out): basin entropy
+    S_b and boundary basin entropy S_bb with the log-2 criterion, the ball test for fractal
+    boundaries (balls of ``radius`` cells, ``balls`` of them), box-counting alpha, the Wada
+    merging test (up to ``max_dilation`` cells). With the simulator: the uncertainty exponent
+    alpha by the perturbation method from ``points`` random initial conditions (default 150,000;
+    0 skips it) perturbed by each of ``eps`` (relative to each axis's range; default 6 values,
+    1e-9 to 1e-4), classified with verified labels on ``threads`` threads (default: one per
+    core); D = 2 - alpha. ``seed`` makes it reproducible. ``progress(stage, done, total)``;
+    ``stop`` (an Event) or Ctrl-C interrupts it (KeyboardInterrupt)."""
+    from .analysis import DEFAULT_POINTS, AnalysisOptions, analyze_basin
+    from .io.runner import usable_cores
+
+    view = _as_basin(basin)
+    opts = AnalysisOptions(box=int(box), bands=int(bands),
+                           points=DEFAULT_POINTS if points is None else int(points),
+                           seed=int(seed), threads=int(threads or usable_cores()),
+                           radius=float(radius), balls=int(balls),
+                           max_dilation=int(max_dilation), direction=direction,
+                           confidence=float(confidence),
+                           **({} if eps is None else {"eps": tuple(float(e) for e in eps)}))
+    a = view.arrays
+    return analyze_basin(a["quarter_turns"], a["status"], a["certainty"], view.attrs,
+                         options=opts, progress=progress, stop=stop)
+
+
+def render_analysis(analysis, out: str | os.PathLike, *, title: str | None = None,
+                    dpi: int = 150) -> Path:
+    """Draw an analysis (of :func:`analyze`): f(eps) on log-log axes with the fits, and S_b,
+    S_bb and alpha by band; PNG or SVG by the file's extension."""
+    from .io.analysis_charts import plot_analysis
+
+    return plot_analysis(analysis, Path(out), title=title, dpi=dpi)
+
+
 __all__ = ["Method", "Outcome", "Status", "SweepEstimate", "SweepPlan", "SweepProgress",
-           "SweepReport", "SweepStart", "SweepTooLong", "Trajectory", "basin", "basin_stats",
-           "classify", "estimate_sweep", "load_preset", "open_basin", "plan_sweep",
-           "render_basin", "simulate", "stability", "sweep", "verify_basin"]
+           "SweepReport", "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin",
+           "basin_stats", "classify", "estimate_sweep", "load_preset", "open_basin",
+           "plan_sweep", "render_analysis", "render_basin", "simulate", "stability", "sweep",
+           "verify_basin"]

@@ -19,7 +19,12 @@ Estimators
     ``basin_entropy`` (natural log, non-overlapping boxes, incomplete edge boxes ignored).
 ``boundary_by_band``
     The same, per band of rows along one axis.
-``uncertain_fraction`` / ``fit_uncertainty_exponent``
+``basins_fractal_test``
+    The ball test for fractal boundaries of Puy, Daza, Wagemakers and Sanjuan, "A test for fractal
+    boundaries based on the basin entropy", Commun. Nonlinear Sci. Numer. Simul. 95, 105588
+    (2021), as Attractors.jl's ``basins_fractal_test``: it also detects fractal boundaries with
+    S_bb <= log 2, which the log-2 criterion of ``basin_entropy`` (sufficient only) misses.
+``uncertain_fraction`` / ``fit_uncertainty_exponent`` / ``pool_uncertain_fractions``
     The uncertainty exponent alpha by the perturbation method of McDonald, Grebogi, Ott and Yorke,
     "Fractal basin boundaries", Physica D 17, 125 (1985) (and Grebogi, McDonald, Ott and Yorke,
     "Final state sensitivity: an obstruction to predictability", Phys. Lett. A 99, 415 (1983)):
@@ -48,13 +53,18 @@ LOG2 = math.log(2.0)
 __all__ = [
     "BandEntropy",
     "BasinEntropy",
+    "FractalTest",
     "GridUncertainty",
     "UncertainFraction",
     "UncertaintyExponent",
     "WadaResult",
     "basin_entropy",
+    "basins_fractal_test",
     "boundary_by_band",
     "fit_uncertainty_exponent",
+    "local_exponents",
+    "pool_uncertain_fractions",
+    "smooth_ball_sbb",
     "uncertain_fraction",
     "uncertainty_exponent_grid",
     "wada_merge",
@@ -329,6 +339,182 @@ def boundary_by_band(labels, *, axis=0, bands=4, box=5, valid=None) -> list[Band
 
 
 # --------------------------------------------------------------------------------------------
+# fractal test: boundary basin entropy in random balls (Puy et al. 2021)
+# --------------------------------------------------------------------------------------------
+
+# S_bb of a smooth boundary seen through a ball, for a space of 1 to 5 dimensions (Puy et al.
+# 2021; the table of Attractors.jl's basins_fractal_test). Beyond 5: 0.898 d**-0.4995.
+SMOOTH_BALL_SBB = (0.499999, 0.4395093, 0.39609176, 0.36319428, 0.33722572)
+
+
+def smooth_ball_sbb(dim: int) -> float:
+    """Boundary basin entropy of a smooth boundary sampled with balls in ``dim`` dimensions."""
+    if dim < 1:
+        raise ValueError(f"dim must be >= 1, got {dim}")
+    return SMOOTH_BALL_SBB[dim - 1] if dim <= len(SMOOTH_BALL_SBB) else 0.898 * dim ** -0.4995
+
+
+@dataclass(frozen=True)
+class FractalTest:
+    """Outcome of the ball test for fractal boundaries (Puy, Daza, Wagemakers and Sanjuan,
+    Commun. Nonlinear Sci. Numer. Simul. 95, 105588, 2021).
+
+    Attributes
+    ----------
+    verdict
+        "fractal", "smooth", or "undetermined" (no boundary ball found, or fewer than 2).
+    fractal
+        ``verdict == "fractal"``.
+    boundary_basin_entropy
+        The mean Gibbs entropy (natural log) over the boundary balls (balls holding more than
+        one class): the ball estimate of S_bb.
+    stderr
+        Standard error of that mean: std (ddof 1) / sqrt(balls).
+    smooth_value
+        S_bb of a smooth boundary in this dimension (``SMOOTH_BALL_SBB``).
+    bias
+        Upper allowance for the discretisation of a ball of ``radius`` cells, 0.224 radius**-1.006.
+    low, high
+        The smooth band: the verdict is "smooth" when smooth_value - stderr <= S_bb <=
+        smooth_value + stderr + bias, "fractal" outside it.
+    radius
+        Ball radius in cells (Euclidean, cell centres within the radius count).
+    balls
+        Boundary balls used.
+    requested
+        Boundary balls asked for.
+    tries
+        Balls drawn, boundary or not.
+    excluded_balls
+        Balls skipped because an invalid cell lies inside them.
+    note
+        A caution (the grid is coarse for this radius, fewer boundary balls than requested), or
+        None.
+    """
+
+    verdict: str
+    fractal: bool
+    boundary_basin_entropy: float
+    stderr: float
+    smooth_value: float
+    bias: float
+    low: float
+    high: float
+    radius: float
+    balls: int
+    requested: int
+    tries: int
+    excluded_balls: int
+    note: str | None = None
+
+
+def _ball_offsets(radius: float, dim: int) -> np.ndarray:
+    """Integer offsets from floor(centre) that can lie within `radius` of the centre."""
+    r = int(math.ceil(radius))
+    ax = np.arange(-r, r + 2)
+    return np.stack(np.meshgrid(*([ax] * dim), indexing="ij"), axis=-1).reshape(-1, dim)
+
+
+def basins_fractal_test(labels, *, radius=5.0, balls=1000, valid=None, rng=0,
+                        max_tries=None, batch=4096) -> FractalTest:
+    """Decide whether a basin boundary is fractal at the scale of ``radius`` cells.
+
+    Puy, Daza, Wagemakers and Sanjuan, "A test for fractal boundaries based on the basin
+    entropy", Commun. Nonlinear Sci. Numer. Simul. 95, 105588 (2021), as Attractors.jl's
+    ``basins_fractal_test(basins; ε, Ntotal)``: balls of ``radius`` cells are dropped at random
+    until ``balls`` of them hold more than one class; their mean Gibbs entropy S_bb is compared
+    with that of a smooth boundary (0.4395 in 2-D): the boundary is called smooth when
+    S_0 - sigma <= S_bb <= S_0 + sigma + delta (sigma the standard error of the mean, delta =
+    0.224 radius**-1.006 the discretisation bias of a pixel ball), fractal otherwise. Unlike the
+    log-2 criterion of ``basin_entropy`` (sufficient only), it detects fractal boundaries whose
+    S_bb is below log 2, e.g. the map of Grebogi et al. (S_bb ~ 0.60 in boxes of 6). The verdict
+    is at the scale of the ball: a coarse grid or a large radius can see structure in a smooth
+    boundary, and the test is statistical (its smooth band is one standard error wide below).
+
+    Differences from Attractors.jl (choices, same test): ball centres are uniform over the
+    positions where the whole ball lies inside the map (Attractors.jl lets balls hang over two
+    edges), and the mean is over the boundary balls only (Attractors.jl's includes one spurious
+    zero); ``rng`` makes it reproducible.
+
+    Invalid cells (``valid=False``): a ball containing one is skipped (``excluded_balls``).
+    At most ``max_tries`` balls are drawn (default 200 * balls); with fewer than ``balls``
+    boundary balls the verdict uses those found (``note`` says so), with fewer than 2 it is
+    "undetermined". Raises ValueError when the map is not wider than 2 * radius + 1 cells along
+    some axis, or for balls < 100 (too few for the statistics, as in Attractors.jl).
+    """
+    lab, val = _labels_and_valid(labels, valid)
+    radius = float(radius)
+    if not math.isfinite(radius) or radius < 1:
+        raise ValueError(f"radius must be >= 1 cell, got {radius}")
+    balls = int(balls)
+    if balls < 100:
+        raise ValueError(f"balls must be at least 100 for the statistics, got {balls}")
+    dim = lab.ndim
+    shape = np.array(lab.shape)
+    if np.any(shape - 1 <= 2 * radius):
+        raise ValueError(f"map {lab.shape} too small for balls of radius {radius} cells "
+                         "(each axis needs more than 2 * radius + 1 cells)")
+    rng = np.random.default_rng(rng)
+    max_tries = 200 * balls if max_tries is None else int(max_tries)
+    s0 = smooth_ball_sbb(dim)
+    bias = 0.224 * radius ** -1.006
+    if _classes(lab, val).size < 2:
+        return FractalTest(verdict="undetermined", fractal=False,
+                           boundary_basin_entropy=math.nan, stderr=math.nan, smooth_value=s0,
+                           bias=bias, low=math.nan, high=math.nan, radius=radius, balls=0,
+                           requested=balls, tries=0, excluded_balls=0,
+                           note="a single outcome class: no boundary")
+    _, inv = np.unique(lab, return_inverse=True)
+    inv = inv.reshape(lab.shape)
+    k = int(inv.max()) + 1
+    offsets = _ball_offsets(radius, dim)
+    found: list[np.ndarray] = []
+    n_found = tries = excluded = 0
+    while n_found < balls and tries < max_tries:
+        nb = min(int(batch), max_tries - tries)
+        tries += nb
+        centre = rng.uniform(radius, shape - 1 - radius, size=(nb, dim))
+        cells = np.floor(centre).astype(np.int64)[:, None, :] + offsets[None, :, :]
+        inside = ((cells - centre[:, None, :]) ** 2).sum(axis=2) <= radius * radius
+        idx = tuple(np.clip(cells[..., d], 0, shape[d] - 1) for d in range(dim))
+        if val is not None:
+            bad = (inside & ~val[idx]).any(axis=1)
+            excluded += int(bad.sum())
+            inside &= ~bad[:, None]
+        cls = inv[idx]
+        flat = (np.arange(nb)[:, None] * k + cls)[inside]
+        counts = np.bincount(flat, minlength=nb * k).reshape(nb, k)
+        total = counts.sum(axis=1, keepdims=True)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            p = counts / np.maximum(total, 1)
+            ent = -np.where(counts > 0, p * np.log(np.where(counts > 0, p, 1.0)), 0.0).sum(axis=1)
+        boundary = (counts > 0).sum(axis=1) > 1
+        found.append(ent[boundary])
+        n_found += int(boundary.sum())
+    ent = np.concatenate(found)[:balls] if found else np.zeros(0)
+    notes = []
+    if float(shape.min()) / radius < 50:
+        notes.append(f"coarse grid for this radius: min(shape) / radius = "
+                     f"{float(shape.min()) / radius:.3g} < 50 (Attractors.jl warns)")
+    if ent.size < balls:
+        notes.append(f"{ent.size} boundary balls found in {tries} tries, {balls} requested")
+    if ent.size < 2:
+        return FractalTest(verdict="undetermined", fractal=False, boundary_basin_entropy=(
+            float(ent.mean()) if ent.size else math.nan), stderr=math.nan, smooth_value=s0,
+            bias=bias, low=math.nan, high=math.nan, radius=radius, balls=int(ent.size),
+            requested=balls, tries=tries, excluded_balls=excluded,
+            note="; ".join(notes + ["too few boundary balls for a verdict"]))
+    sbb = float(ent.mean())
+    se = float(ent.std(ddof=1) / math.sqrt(ent.size))
+    low, high = s0 - se, s0 + se + bias
+    verdict = "smooth" if low <= sbb <= high else "fractal"
+    return FractalTest(verdict=verdict, fractal=verdict == "fractal", boundary_basin_entropy=sbb,
+                       stderr=se, smooth_value=s0, bias=bias, low=low, high=high, radius=radius,
+                       balls=int(ent.size), requested=balls, tries=tries,
+                       excluded_balls=excluded, note="; ".join(notes) or None)
+
+
+# --------------------------------------------------------------------------------------------
 # power-law fit shared by both uncertainty-exponent estimators
 # --------------------------------------------------------------------------------------------
 
@@ -569,8 +755,6 @@ def uncertain_fraction(classify: Callable, points, eps, *, rng, scale=None, dire
     Evidence: a point counts only when all three of its classifications are certain; the others
     are reported in ``excluded`` and are neither uncertain nor certain.
     """
-    from scipy import stats
-
     rng = np.random.default_rng(rng)
     eps = np.atleast_1d(np.asarray(eps, dtype=float))
     if eps.ndim != 1 or eps.size == 0:
@@ -618,19 +802,53 @@ def uncertain_fraction(classify: Callable, points, eps, *, rng, scale=None, dire
         k_unc[i] = int(np.count_nonzero(unc & ev))
         n_ev[i] = int(np.count_nonzero(ev))
 
-    lo = np.full(eps.size, math.nan)
-    hi = np.full(eps.size, math.nan)
-    frac = np.full(eps.size, math.nan)
-    for i in range(eps.size):
-        if n_ev[i] > 0:
-            frac[i] = k_unc[i] / n_ev[i]
-            ci = stats.binomtest(int(k_unc[i]), int(n_ev[i])).proportion_ci(
-                confidence_level=confidence, method="wilson")
-            lo[i], hi[i] = ci.low, ci.high
+    frac, lo, hi = _wilson(k_unc, n_ev, confidence)
     return UncertainFraction(
         eps=eps, fraction=frac, uncertain=k_unc, evidence=n_ev, excluded=n - n_ev, ci_low=lo,
         ci_high=hi, n_points=int(n), dim=int(dim), scale=sc, direction=direction,
         confidence=float(confidence))
+
+
+def _wilson(uncertain: np.ndarray, evidence: np.ndarray, confidence: float):
+    """Fractions k / n and their Wilson score intervals (NaN where n = 0)."""
+    from scipy import stats
+
+    frac = np.full(uncertain.size, math.nan)
+    lo = np.full(uncertain.size, math.nan)
+    hi = np.full(uncertain.size, math.nan)
+    for i in range(uncertain.size):
+        if evidence[i] > 0:
+            frac[i] = uncertain[i] / evidence[i]
+            ci = stats.binomtest(int(uncertain[i]), int(evidence[i])).proportion_ci(
+                confidence_level=confidence, method="wilson")
+            lo[i], hi[i] = ci.low, ci.high
+    return frac, lo, hi
+
+
+def pool_uncertain_fractions(parts) -> UncertainFraction:
+    """One ``UncertainFraction`` from several measured on disjoint sets of base points with the
+    same eps, dimension, scale and direction (e.g. one per band of a map): the counts are summed
+    and the fractions and Wilson intervals recomputed. If each part's points were drawn
+    uniformly over its region with a number of points proportional to the region's size, the
+    pooled f(eps) is that of points drawn uniformly over the union."""
+    parts = list(parts)
+    if not parts:
+        raise ValueError("nothing to pool")
+    first = parts[0]
+    for p in parts[1:]:
+        if (p.eps.shape != first.eps.shape or not np.allclose(p.eps, first.eps)
+                or p.dim != first.dim or not np.allclose(p.scale, first.scale)
+                or p.direction != first.direction or p.confidence != first.confidence):
+            raise ValueError("pooled fractions need the same eps, dim, scale, direction and "
+                             "confidence")
+    k = np.sum([p.uncertain for p in parts], axis=0).astype(np.int64)
+    n = np.sum([p.evidence for p in parts], axis=0).astype(np.int64)
+    ex = np.sum([p.excluded for p in parts], axis=0).astype(np.int64)
+    frac, lo, hi = _wilson(k, n, first.confidence)
+    return UncertainFraction(
+        eps=first.eps.copy(), fraction=frac, uncertain=k, evidence=n, excluded=ex, ci_low=lo,
+        ci_high=hi, n_points=int(sum(p.n_points for p in parts)), dim=first.dim,
+        scale=first.scale.copy(), direction=first.direction, confidence=first.confidence)
 
 
 def fit_uncertainty_exponent(eps, fraction=None, *, uncertain=None, evidence=None, dim=2,
@@ -688,6 +906,26 @@ def fit_uncertainty_exponent(eps, fraction=None, *, uncertain=None, evidence=Non
                              "no eps with an uncertain point: no boundary found at these scales "
                              "(a single outcome class?)", dropped)
     return out
+
+
+def local_exponents(eps, fraction=None) -> np.ndarray:
+    """Slopes of log f against log eps between successive eps: the local uncertainty exponent.
+
+    ``eps`` may be an ``UncertainFraction``. Returns len(eps) - 1 values, NaN where either f is
+    0 or undefined. A power law f ~ eps**alpha has every local exponent equal to alpha; a drift
+    with eps says the exponent depends on the scale (e.g. a boundary that looks fractal at
+    coarse scales and smooth, alpha -> 1, at fine ones)."""
+    if isinstance(eps, UncertainFraction):
+        eps, fraction = eps.eps, eps.fraction
+    if fraction is None:
+        raise TypeError("local_exponents needs the fractions (or an UncertainFraction)")
+    e = np.atleast_1d(np.asarray(eps, dtype=float))
+    f = np.atleast_1d(np.asarray(fraction, dtype=float))
+    if e.shape != f.shape or e.ndim != 1:
+        raise ValueError(f"eps {e.shape} and fraction {f.shape} must be 1-D of the same length")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lf = np.where(np.isfinite(f) & (f > 0), np.log(np.where(f > 0, f, 1.0)), np.nan)
+        return np.diff(lf) / np.diff(np.log(e))
 
 
 # --------------------------------------------------------------------------------------------
@@ -969,14 +1207,23 @@ def wada_merge(labels, *, valid=None, max_dilation=6, tolerance=0.0) -> WadaResu
     dists = [_l1_distance_to(b) for b in bnds]
     d_invalid = _l1_distance_to(~usable)
     pairs = [(a, b) for i, j in combinations(range(classes.size), 2) for a, b in ((i, j), (j, i))]
+    # Work on the boundary cells only (a small part of the map): for each class b the flat
+    # indices of its merged boundary and their distance to an invalid cell; for each pair the
+    # distances of b's boundary cells to a's boundary. Cost ~ classes x boundary cells, which
+    # keeps maps with dozens of classes fast.
+    cells_of = [np.flatnonzero(b.ravel()) for b in bnds]
+    dinv_of = [d_invalid.ravel()[c] for c in cells_of]
+    flat_dists = [d.ravel() for d in dists]
 
-    # Hausdorff distance over the cells whose distance cannot be shortened by a hidden boundary
-    hd = -math.inf
-    for a, b in pairs:
-        d = dists[a][bnds[b]]
-        exact = d_invalid[bnds[b]] > d + 1
+    hd = -math.inf  # Hausdorff distance over the cells a hidden boundary cannot bring closer
+    fails = np.zeros((len(pairs), max_dilation), dtype=np.int64)
+    for k, (a, b) in enumerate(pairs):
+        d = flat_dists[a][cells_of[b]]
+        exact = dinv_of[b] > d + 1
         if exact.any():
             hd = max(hd, float(d[exact].max()))
+        for ri, r in enumerate(dil):
+            fails[k, ri] = int(np.count_nonzero((dinv_of[b] > r + 1) & (d > r)))
     hd = math.nan if hd == -math.inf else hd
 
     fail_b = np.full(max_dilation, math.nan)
@@ -984,16 +1231,15 @@ def wada_merge(labels, *, valid=None, max_dilation=6, tolerance=0.0) -> WadaResu
     pair_at: list = [None] * max_dilation
     excl_at = [0] * max_dilation
     for ri, r in enumerate(dil):
-        testable = d_invalid > r + 1
-        tb = [b & testable for b in bnds]
-        excl_at[ri] = int(sum(int((b & ~testable).sum()) for b in bnds))
+        n_testable = [int(np.count_nonzero(dv > r + 1)) for dv in dinv_of]
+        excl_at[ri] = int(sum(c.size for c in cells_of) - sum(n_testable))
         worst, worst_count, worst_pair, tested = 0.0, 0, None, False
-        for a, b in pairs:  # boundary of merged basin b tested against that of merged basin a
-            nt = int(tb[b].sum())
+        for k, (a, b) in enumerate(pairs):  # merged boundary of b tested against that of a
+            nt = n_testable[b]
             if nt == 0:
                 continue
             tested = True
-            nf = int((tb[b] & (dists[a] > r)).sum())
+            nf = int(fails[k, ri])
             worst_count = max(worst_count, nf)
             if nf / nt > worst:
                 worst, worst_pair = nf / nt, (classes[a].item(), classes[b].item())

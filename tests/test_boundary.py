@@ -9,8 +9,10 @@ Test maps are computed here, vectorised in numpy:
 - the map of Grebogi, McDonald, Ott and Yorke (Phys. Lett. A 99, 415, 1983; Physica D 17, 125,
   1985) with a = 1.32, b = 0.9, J0 = 0.3 on [0, 2 pi] x [-0.5, 0.5]; Attractors.jl's tests use
   251 x 251 and range_eps = 3:15 (0.2 <= alpha <= 0.3), and 300 x 300 with boxes of 6
-  (0.40 <= S_b <= 0.42, 0.60 <= S_bb <= 0.61). Both grids include both ends of each axis
-  (Julia's range(0, 2pi, length=n)), as here.
+  (0.40 <= S_b <= 0.42, 0.60 <= S_bb <= 0.61; fractal by basins_fractal_test with balls of
+  radius 5). Both grids include both ends of each axis (Julia's range(0, 2pi, length=n)), as here;
+- the Henon map (a = 1.4, b = 0.3) on [-2, 2]^2, 300 x 300: bounded or escaping orbits, a smooth
+  boundary by Attractors.jl's basins_fractal_test (its own test).
 """
 
 from __future__ import annotations
@@ -24,8 +26,12 @@ from coincli.boundary import (
     BasinEntropy,
     UncertainFraction,
     basin_entropy,
+    basins_fractal_test,
     boundary_by_band,
     fit_uncertainty_exponent,
+    local_exponents,
+    pool_uncertain_fractions,
+    smooth_ball_sbb,
     uncertain_fraction,
     uncertainty_exponent_grid,
     wada_merge,
@@ -489,3 +495,91 @@ def test_invalid_arguments():
     valid[::2, ::2] = False
     r = basin_entropy(np.zeros((4, 4), dtype=int), box=2, valid=valid)
     assert r.boxes == 0 and r.excluded_boxes == 4 and math.isnan(r.basin_entropy) and r.reason
+
+
+# ------------------------------------------------------------------------------------------------
+# ball test for fractal boundaries (Puy et al. 2021), pooling, local exponents
+# ------------------------------------------------------------------------------------------------
+
+def henon_map(n=300):
+    """1 where the Henon orbit escapes (|x| > 1e3 within 200 steps), 0 where it stays bounded."""
+    x = np.linspace(-2, 2, n)
+    p = grid(x, x)
+    X, Y = p[:, 0].copy(), p[:, 1].copy()
+    esc = np.zeros(X.size, dtype=bool)
+    with np.errstate(all="ignore"):
+        for _ in range(200):
+            X, Y = 1 - 1.4 * X**2 + Y, 0.3 * X
+            esc |= ~(np.abs(X) < 1e3)
+            X[esc], Y[esc] = 0.0, 0.0
+    return esc.reshape(n, n).astype(np.int64)
+
+
+def test_fractal_test_gmoy_and_newton_are_fractal(gmoy300, newton300):
+    """Attractors.jl asserts :fractal for the GMOY map at 300 x 300 with balls of radius 5; the
+    log-2 criterion does not fire there (S_bb 0.603 in boxes of 6, test_gmoy_entropy)."""
+    for lab in (gmoy300[0], newton300[0]):
+        for seed in (0, 1):
+            r = basins_fractal_test(lab, radius=5, rng=seed)
+            assert r.verdict == "fractal" and r.fractal and r.balls == 1000
+            assert r.boundary_basin_entropy > r.high + 0.05  # ~0.59 (GMOY), ~0.69 (Newton)
+    r = basins_fractal_test(gmoy300[0], radius=5, rng=0)
+    assert r.boundary_basin_entropy < LOG2 and not basin_entropy(gmoy300[0], box=6).fractal_boundary
+    assert r.smooth_value == pytest.approx(0.4395093) and r.bias == pytest.approx(0.224 * 5**-1.006)
+    assert r.low == pytest.approx(r.smooth_value - r.stderr)
+    assert r.high == pytest.approx(r.smooth_value + r.stderr + r.bias)
+
+
+@pytest.mark.parametrize("name", ["line", "disc", "henon"])
+def test_fractal_test_smooth_boundaries_are_smooth(name):
+    lab = (henon_map() if name == "henon"
+           else SMOOTH[name](grid(X300, X300)).reshape(300, 300))
+    for seed in (0, 1, 2):
+        r = basins_fractal_test(lab, radius=5, rng=seed)
+        assert r.verdict == "smooth" and not r.fractal, (seed, r)
+        assert 0.44 < r.boundary_basin_entropy < 0.48
+
+
+def test_fractal_test_invalid_cells_and_edge_cases():
+    lab = disc_label(grid(X300, X300)).reshape(300, 300)
+    valid = np.ones(lab.shape, dtype=bool)
+    valid[::7, ::7] = False  # a ball of radius 5 always holds one: nothing is evidence
+    r = basins_fractal_test(lab, radius=5, valid=valid, max_tries=20000)
+    assert r.verdict == "undetermined" and r.balls == 0 and r.excluded_balls == r.tries == 20000
+    valid = np.ones(lab.shape, dtype=bool)
+    valid[:, :150] = False  # half the map: balls there are skipped, the rest still decides
+    r = basins_fractal_test(lab, radius=5, valid=valid)
+    assert r.verdict == "smooth" and r.excluded_balls > 0
+    one = basins_fractal_test(np.zeros((60, 60), dtype=int), radius=3)
+    assert one.verdict == "undetermined" and not one.fractal and one.tries == 0
+    assert "single outcome class" in one.note
+    halves = np.repeat([[0], [1]], 30, axis=0) * np.ones((1, 60), dtype=int)
+    coarse = basins_fractal_test(halves, radius=3)
+    assert coarse.verdict == "smooth" and "coarse grid" in coarse.note  # 60 / 3 < 50
+    with pytest.raises(ValueError, match="too small"):
+        basins_fractal_test(np.zeros((10, 40), dtype=int), radius=5)
+    with pytest.raises(ValueError, match="at least 100"):
+        basins_fractal_test(lab, balls=50)
+    assert smooth_ball_sbb(2) == pytest.approx(0.4395093)
+    assert smooth_ball_sbb(7) == pytest.approx(0.898 * 7**-0.4995)
+
+
+def test_pool_and_local_exponents():
+    rng = np.random.default_rng(3)
+    eps = np.logspace(-4, -1, 4)
+    parts = [uncertain_fraction(disc_label, rng.uniform(-1, 1, size=(n, 2)), eps, rng=rng,
+                                scale=2.0) for n in (3000, 5000)]
+    pooled = pool_uncertain_fractions(parts)
+    assert pooled.n_points == 8000
+    np.testing.assert_array_equal(pooled.uncertain, parts[0].uncertain + parts[1].uncertain)
+    np.testing.assert_array_equal(pooled.evidence, parts[0].evidence + parts[1].evidence)
+    np.testing.assert_allclose(pooled.fraction, pooled.uncertain / pooled.evidence)
+    assert np.all((pooled.ci_low <= pooled.fraction) & (pooled.fraction <= pooled.ci_high))
+    other = uncertain_fraction(disc_label, np.zeros((10, 2)), eps[:3], rng=0)
+    with pytest.raises(ValueError, match="same eps"):
+        pool_uncertain_fractions([parts[0], other])
+    loc = local_exponents(eps, 0.2 * eps**0.6)
+    np.testing.assert_allclose(loc, 0.6)
+    loc = local_exponents([1e-3, 1e-2, 1e-1], [0.0, 0.01, 0.1])
+    assert math.isnan(loc[0]) and loc[1] == pytest.approx(1.0)
+    assert local_exponents(pooled).shape == (3,)

@@ -14,7 +14,7 @@ LAYERS = [
     ("model", {"jit", "model", "statics"}),
     ("integrators", {"integrators"}),
     ("analysis", {"throw", "grid", "stats", "accuracy", "bench", "boundary", "fractions",
-                  "verify", "budget"}),
+                  "verify", "budget", "analysis"}),
     ("io", {"io"}),
     ("api", {"api", "__init__"}),
     ("cli", {"cli", "__main__"}),
