@@ -1,0 +1,130 @@
+"""How the verification ladder was chosen: certain-and-wrong and uncertain cells of candidate
+ladders, on the robust cells of a grid (where two independent converged references agree).
+
+For every cell of a (vy0, vphi0) grid it runs the event method once at each tolerance of a
+long ladder and keeps each run's label, status, steps and the time of its last change of well;
+then it replays candidate designs (first rung, floor, agreement rule) on those runs, so that
+every design is judged on the same trajectories. The references are the event method at rtol
+1e-12 and fixed-step RK4 at h = 2.5e-7 (no shared stepping code); "wrong" is judged against
+RK4. RK4 is slow (about a second a cell on the thick coin): its labels are saved beside the
+output and reused when the same grid is asked again.
+
+    python benchmarks/ladder_design.py --preset paper --res 64     # about 30 min on 2 cores
+    python benchmarks/ladder_design.py --preset thick --res 32     # about an hour
+
+Prints the table the README's "Verified labels" section quotes, and writes it to
+benchmarks/ladder-<preset>-<res>.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
+DESIGNS = [  # (first rung, floor, change tolerance in s; inf: labels alone)
+    (1e-6, 1e-10, np.inf), (1e-6, 1e-10, 1e-3), (1e-6, 1e-12, np.inf), (1e-6, 1e-12, 1e-2),
+    (1e-6, 1e-12, 1e-3), (1e-6, 1e-12, 1e-4), (1e-5, 1e-12, 1e-3)]
+
+
+def runs(scene, states):
+    """Per rung and cell: label, status, steps, last change of well (one compiled call each)."""
+    from coincli.integrators import integrate, new_control
+    from coincli.integrators.batch import outcome_label
+    from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
+    from coincli.jit import compiled
+    from coincli.params import model_params, run_settings
+
+    p, base = model_params(scene), run_settings(scene.integration)
+    kernel = compiled(integrate)
+    no_samples, no_events, control = (np.empty((0, SAMPLE_COLUMNS)),
+                                      np.empty((0, EVENT_COLUMNS)), new_control())
+    out = {name: np.empty((len(RTOLS), len(states))) for name in ("q", "st", "steps", "tc")}
+    final = np.empty(6)
+    for k, rtol in enumerate(RTOLS):
+        settings = base._replace(rtol=rtol)
+        for i, state in enumerate(states):
+            r = kernel(p, settings, state, no_samples, no_events, final, control)
+            out["q"][k, i] = outcome_label(r.status, r.n_well, final[2])
+            out["st"][k, i], out["steps"][k, i], out["tc"][k, i] = r.status, r.steps, r.last_change
+    return out
+
+
+def replay(data, robust, rk4, first, floor, tolerance):
+    """A design replayed on the saved runs: its verdicts and cost."""
+    q, st, tc, steps = data["q"], data["st"], data["tc"], data["steps"]
+    k0, k1 = RTOLS.index(first), RTOLS.index(floor)
+    n = q.shape[1]
+    certain, open_ = np.zeros(n, bool), np.ones(n, bool)
+    label, cost = q[k0].copy(), steps[k0].copy()
+    for k in range(k0 + 1, k1 + 1):
+        cost += np.where(open_, steps[k], 0)
+        gap = np.abs(tc[k] - tc[k - 1])
+        gap[np.isnan(tc[k]) & np.isnan(tc[k - 1])] = 0.0  # neither ever changed well
+        agree = (q[k] == q[k - 1]) & (st[k] == 0) & (st[k - 1] == 0) & (gap <= tolerance)
+        label = np.where(open_, q[k], label)
+        certain |= open_ & agree
+        open_ &= ~agree
+    return {"first": first, "floor": floor, "change_tolerance": tolerance,
+            "certain_and_wrong_robust": float((certain & (label != rk4) & robust).sum()
+                                              / robust.sum()),
+            "uncertain_robust": float((~certain & robust).sum() / robust.sum()),
+            "uncertain_all": float((~certain).mean()), "steps_per_cell": float(cost.mean()),
+            "single_pass_steps": float(steps[RTOLS.index(first)].mean())}
+
+
+def main() -> None:
+    import coincli
+    from coincli.accuracy import REFERENCE_B, run_grid, vy_vphi_grid
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--preset", default="paper")
+    parser.add_argument("--res", type=int, default=64)
+    parser.add_argument("--threads", type=int, default=2, help="for the RK4 reference")
+    args = parser.parse_args()
+    here = Path(__file__).resolve().parent
+    scene = coincli.load_preset(args.preset)
+    grid = vy_vphi_grid(scene, res=(args.res, args.res))
+    started = time.time()
+    data = runs(scene, grid.states())
+    cache = here / f"rk4-{args.preset}-{args.res}.npz"
+    if cache.exists():
+        saved = np.load(cache)
+        rk4_q, rk4_st = saved["q"], saved["st"]
+    else:
+        ref = run_grid(scene, REFERENCE_B, grid, args.threads)
+        rk4_q, rk4_st = ref.quarter_turns.ravel(), ref.status.ravel()
+        np.savez(cache, q=rk4_q, st=rk4_st)
+    tight = RTOLS.index(1e-12)
+    robust = ((data["st"][tight] == 0) & (rk4_st == 0) & (data["q"][tight] == rk4_q))
+    rows = [replay(data, robust, rk4_q, *design) for design in DESIGNS]
+    single = {f"{r:g}": float(((data["q"][k] != rk4_q) & robust).sum() / robust.sum())
+              for k, r in enumerate(RTOLS)}
+    result = {"preset": args.preset, "res": args.res, "robust_cells": int(robust.sum()),
+              "cells": int(robust.size), "single_pass_wrong_robust": single, "designs": rows,
+              "seconds": time.time() - started, "command": " ".join(sys.argv)}
+    (here / f"ladder-{args.preset}-{args.res}.json").write_text(json.dumps(result, indent=2))
+    print(f"{args.preset}, {args.res} x {args.res} over the default ranges: "
+          f"{robust.sum()} robust cells of {robust.size}")
+    print("single pass, wrong on robust cells: "
+          + ", ".join(f"rtol {k} {v:.2%}" for k, v in single.items()))
+    print("| first rung | floor | last change within | certain and wrong | uncertain (robust) "
+          "| uncertain (all) | steps a cell |")
+    print("|---|---|---|---|---|---|---|")
+    for r in rows:
+        tol = "labels only" if not np.isfinite(r["change_tolerance"]) else \
+            f"{r['change_tolerance'] * 1e3:g} ms"
+        print(f"| {r['first']:g} | {r['floor']:g} | {tol} | {r['certain_and_wrong_robust']:.2%} "
+              f"| {r['uncertain_robust']:.2%} | {r['uncertain_all']:.1%} "
+              f"| {r['steps_per_cell']:.0f} |")
+
+
+if __name__ == "__main__":
+    main()
