@@ -30,6 +30,7 @@ from .common import (
     print_json,
     user_errors,
 )
+from .text import say
 
 
 def parse_range(text: str, option: str) -> tuple[float, float]:
@@ -130,16 +131,16 @@ def accuracy_command(
                    else {"table": str(table)})
         return
     print_study(study)
-    console.print(f"chart: {out}   table: {table}")
+    say(console, f"chart: {out}   table: {table}")
 
 
 def print_study(study) -> None:
     cells = study.robust.size
-    console.print(f"References on {cells} cells: event rtol=1e-12 and rk4 h=2.5e-7 agree on "
-                  f"{study.reference_agreement:.1%}; the {study.robust_cells} cells where both "
-                  f"settle to the same n are the robust cells.")
-    console.print(f"Trajectory reference: event and dopri5 at rtol=1e-12 differ by "
-                  f"{study.trajectory_reference_gap:.1e} (median state error, natural units).")
+    say(console, f"References on {cells} cells: event rtol=1e-12 and rk4 h=2.5e-7 agree on "
+                 f"{study.reference_agreement:.1%}; the {study.robust_cells} cells where both "
+                 f"settle to the same n are the robust cells.")
+    say(console, f"Trajectory reference: event and dopri5 at rtol=1e-12 differ by "
+                 f"{study.trajectory_reference_gap:.1e} (median state error, natural units).")
     table = Table(title="Work and precision", title_justify="left")
     for col in ("method", "setting", "CPU / trajectory", "state error", "label error (robust)",
                 "non-finite", "unsettled"):
@@ -158,10 +159,10 @@ def print_study(study) -> None:
     console.print(table)
     vp = study.verified_point
     if vp is not None:
-        console.print(f"[bold]Default, verified[/] ({vp.setting.label}): "
-                      f"{vp.cpu_per_trajectory * 1e3:.3g} ms a cell; of the {study.robust_cells} "
-                      f"robust cells {vp.label_error:.2%} certain and wrong, "
-                      f"{vp.uncertain:.2%} uncertain.", highlight=False)
+        say(console, f"[bold]Default, verified[/] ({vp.setting.label}): "
+                     f"{vp.cpu_per_trajectory * 1e3:.3g} ms a cell; of the {study.robust_cells} "
+                     f"robust cells {vp.label_error:.2%} certain and wrong, "
+                     f"{vp.uncertain:.2%} uncertain.")
 
 
 def run_stability(scene, json_out: bool) -> None:
@@ -191,6 +192,6 @@ def run_stability(scene, json_out: bool) -> None:
         table.add_row(r["method"], f"{r['predicted_stable_step']:.3g} s",
                       f"{r['measured_failure_step']:.3g} s", f"{r['ratio']:.2f}")
     console.print(table)
-    err_console.print("predicted: spectral radius of the method's step on the damped rocking "
-                      "mode (coin methods); simulate and basin refuse a larger --dt without "
-                      "--force.")
+    say(err_console, "predicted: spectral radius of the method's step on the damped rocking "
+                     "mode (coin methods); simulate and basin refuse a larger --dt without "
+                     "--force.")

@@ -57,6 +57,7 @@ from .common import (
     print_json,
     user_errors,
 )
+from .text import command, print_rows, say
 
 SWEEP = "Sweep"
 RUN = "Where it runs"
@@ -223,19 +224,16 @@ def sweep_command(
 
     def started(start) -> None:
         if start.repaired:
-            err_console.print(f"[yellow]repaired:[/] {path}: {len(start.repaired)} metadata "
-                              f"file(s) differed from the sweep's and were rewritten: "
-                              f"{', '.join(start.repaired[:6])}", highlight=False,
-                              soft_wrap=True)
+            say(err_console, f"[yellow]repaired:[/] {path}: {len(start.repaired)} metadata "
+                             f"file(s) differed from the sweep's and were rewritten: "
+                             f"{', '.join(start.repaired[:6])}")
         if start.damaged:
-            err_console.print(f"[yellow]damaged:[/] {len(start.damaged)} tile(s) of {path} "
-                              f"failed their check and are recomputed: "
-                              f"{_tile_list(start.damaged)}", highlight=False,
-                              soft_wrap=True)
+            say(err_console, f"[yellow]damaged:[/] {len(start.damaged)} tile(s) of {path} "
+                             f"failed their check and are recomputed: "
+                             f"{_tile_list(start.damaged)}")
         est = start.estimate
         if est is not None and est.seconds > 60:
-            err_console.print(f"estimate: {_estimate_text(est, scheduler)}", highlight=False,
-                              soft_wrap=True)
+            say(err_console, f"estimate: {_estimate_text(est, scheduler)}")
         if start.cells_todo:
             announce_compilation()
             if not quiet:
@@ -261,24 +259,25 @@ def sweep_command(
                       if disk and store_io.is_store(path) else "")) from None
     total = report.tiles_total
     if report.tiles_before == total:
-        console.print(f"{path}: all {total} tiles are done already ({grid.n_cells:,} cells). "
-                      f"Next: coin basin render {path}; coin basin stats {path}",
-                      highlight=False, soft_wrap=True)
+        say(console, f"{path}: all {total} tiles are done already ({grid.n_cells:,} cells). "
+                     f"Next: {command('coin', 'basin', 'render', path)}; "
+                     f"{command('coin', 'basin', 'stats', path)}")
         return
     rate = report.cells / report.wall_seconds if report.wall_seconds > 0 else math.nan
     where = (f"{report.workers} threads" if report.mode == "threads"
              else f"Dask ({scheduler or f'{report.workers} local workers'})")
     others = (f"; {report.tiles_elsewhere} tiles by other processes"
               if report.tiles_elsewhere else "")
-    console.print(f"{path}: {report.tiles_done}/{total} tiles done; this run computed "
-                  f"{report.tiles_computed} tiles ({report.cells:,} cells) in "
-                  f"{report.wall_seconds:.1f} s wall, {rate:,.0f} "
-                  f"cells/s on {where}{others}.", highlight=False, soft_wrap=True)
+    say(console, f"{path}: {report.tiles_done}/{total} tiles done; this run computed "
+                 f"{report.tiles_computed} tiles ({report.cells:,} cells) in "
+                 f"{report.wall_seconds:.1f} s wall, {rate:,.0f} "
+                 f"cells/s on {where}{others}.")
     if report.interrupted or not report.complete:
-        err_console.print(f"[yellow]stopped:[/] {total - report.tiles_done} tiles left; run the "
-                          "same command again to resume.")
+        say(err_console, f"[yellow]stopped:[/] {total - report.tiles_done} tiles left; run the "
+                         "same command again to resume.")
         raise typer.Exit(code=130)
-    console.print(f"Next: coin basin render {path} -o basin.png; coin basin stats {path}")
+    say(console, f"Next: {command('coin', 'basin', 'render', path, '-o', 'basin.png')}; "
+                 f"{command('coin', 'basin', 'stats', path)}")
 
 
 MAX_SECONDS = 12 * 3600.0  # a sweep estimated longer is refused without --yes
@@ -341,7 +340,7 @@ def verify_command(
         if json_out:
             print_json({"path": str(path), "intact": False, "error": str(exc)})
         else:
-            err_console.print(f"[bold red]damaged:[/] {exc}", highlight=False, soft_wrap=True)
+            say(err_console, f"[bold red]damaged:[/] {exc}")
         raise typer.Exit(code=1) from None
     total = int(found.done.size)
     unrepaired = [k for k in found.metadata if k not in found.repaired]
@@ -355,24 +354,21 @@ def verify_command(
                     "seconds": found.seconds})
     elif found.intact:
         missing = total - found.tiles_done
-        console.print(f"{path}: intact: {found.tiles_done} of {total} tiles done and verified"
-                      + (f", {missing} not computed yet" if missing else "")
-                      + f" ({found.seconds:.2f} s)", highlight=False, soft_wrap=True)
+        say(console, f"{path}: intact: {found.tiles_done} of {total} tiles done and verified"
+                     + (f", {missing} not computed yet" if missing else "")
+                     + f" ({found.seconds:.2f} s)")
     else:
-        console.print(f"{path}: DAMAGED: {len(found.damaged)} tile(s)"
-                      + (f" and {len(unrepaired)} metadata file(s)" if unrepaired else "")
-                      + f"; {found.tiles_done} of {total} tiles intact ({found.seconds:.2f} s). "
-                      "Rerun the sweep command to recompute the damaged tiles.",
-                      highlight=False, soft_wrap=True)
+        say(console, f"{path}: DAMAGED: {len(found.damaged)} tile(s)"
+                     + (f" and {len(unrepaired)} metadata file(s)" if unrepaired else "")
+                     + f"; {found.tiles_done} of {total} tiles intact ({found.seconds:.2f} s). "
+                     "Rerun the sweep command to recompute the damaged tiles.")
         for tile, why in sorted(found.damaged.items()):
-            console.print(f"  tile {tile}: {why}", highlight=False, soft_wrap=True)
+            say(console, f"  tile {tile}: {why}")
         for key in unrepaired:
-            console.print(f"  metadata {key}: differs from what the store's parameters give",
-                          highlight=False, soft_wrap=True)
+            say(console, f"  metadata {key}: differs from what the store's parameters give")
     if found.leftovers and not json_out:
-        err_console.print(f"note: {found.leftovers} temporary file(s) of interrupted writes "
-                          "(*.partial); the next sweep removes them", highlight=False,
-                          soft_wrap=True)
+        say(err_console, f"note: {found.leftovers} temporary file(s) of interrupted writes "
+                         "(*.partial); the next sweep removes them")
     if not found.intact:
         raise typer.Exit(code=1)
 
@@ -430,14 +426,14 @@ def render_command(
                 log_rerun(basin, rrd)
             except OSError as exc:
                 raise fail(describe(exc, f"cannot write {rrd}")) from None
-            console.print(f"wrote {rrd} (open with: rerun {rrd})")
+            say(console, f"wrote {rrd} (open with: {command('rerun', rrd)})")
 
 
 def _damaged_note(path, damaged, treated: str) -> None:
     if damaged:
-        err_console.print(f"[yellow]damaged:[/] {len(damaged)} tile(s) of {path} failed their "
-                          f"check and are {treated}: {_tile_list(damaged)}; rerun the sweep "
-                          "command to recompute them", highlight=False, soft_wrap=True)
+        say(err_console, f"[yellow]damaged:[/] {len(damaged)} tile(s) of {path} failed their "
+                         f"check and are {treated}: {_tile_list(damaged)}; rerun the sweep "
+                         "command to recompute them")
 
 
 def _pct(x) -> str:
@@ -511,45 +507,43 @@ def stats_command(
             cells += [f"{r['count']:,}", _pct(r["fraction"])] if r else ["0", "-"]
         table.add_row(*cells, style=style)
     console.print(table)
-    summary = Table(show_header=False, box=None, pad_edge=False)
-    summary.add_column(style="bold", no_wrap=True)
-    summary.add_column()
-    summary.add_row("cells", f"{stats['cells']:,}: {stats['computed']:,} computed "
+    summary = []
+    summary.append(("cells", f"{stats['cells']:,}: {stats['computed']:,} computed "
                              f"({stats['tiles_done']}/{stats['tiles_total']} tiles), "
-                             f"{stats['not_computed']:,} not computed")
+                             f"{stats['not_computed']:,} not computed"))
     if stats["tiles_damaged"]:
         damaged = stats["tiles_damaged"]
-        summary.add_row("damaged", f"{len(damaged)} tile(s) failed their check and count as "
+        summary.append(("damaged", f"{len(damaged)} tile(s) failed their check and count as "
                                    f"not computed: {_tile_list(damaged)}; rerun the sweep "
-                                   "command to recompute them")
+                                   "command to recompute them"))
     counts = ", ".join(f"{count:,} {name}" for name, count in stats["status"].items()
                        if count and name != "not computed")
-    summary.add_row("status", counts or "-")
+    summary.append(("status", counts or "-"))
     if verified:
         u = stats["uncertain"]
-        summary.add_row("certain", _share(stats["certain"]))
-        summary.add_row("uncertain", f"{u['count']:,} of {u['of']:,} = {_pct(u['probability'])}"
+        summary.append(("certain", _share(stats["certain"])))
+        summary.append(("uncertain", f"{u['count']:,} of {u['of']:,} = {_pct(u['probability'])}"
                                      f" (no two rungs agreed); {u['standing']:,} of them "
-                                     "standing")
-        summary.add_row("standing", f"{_share(stats['standing_certain'])} of the certain "
-                                    "cells")
-        summary.add_row("", f"{_share(stats['standing'])} of all labelled cells")
+                                     "standing"))
+        summary.append(("standing", f"{_share(stats['standing_certain'])} of the certain "
+                                    "cells"))
+        summary.append(("", f"{_share(stats['standing'])} of all labelled cells"))
     else:
-        summary.add_row("standing", _share(stats["standing"]))
-        summary.add_row("verified", "no: a single pass (labels unverified)")
+        summary.append(("standing", _share(stats["standing"])))
+        summary.append(("verified", "no: a single pass (labels unverified)"))
     cost = stats["cost"]
     if not stats["computed"]:
-        summary.add_row("cost", "nothing computed yet")
+        summary.append(("cost", "nothing computed yet"))
     elif "cpu_seconds" in cost:
-        summary.add_row("cost", f"{cost['cpu_seconds']:.4g} CPU s, "
+        summary.append(("cost", f"{cost['cpu_seconds']:.4g} CPU s, "
                                 f"{cost['cpu_ms_per_cell']:.3g} ms a cell, "
-                                f"{cost['trajectories_per_cpu_second']:,.0f} cells per CPU s")
+                                f"{cost['trajectories_per_cpu_second']:,.0f} cells per CPU s"))
     if cost.get("wall_seconds"):
         runs = cost["runs"]
-        summary.add_row("wall", f"{cost['wall_seconds']:.4g} s over {runs} "
+        summary.append(("wall", f"{cost['wall_seconds']:.4g} s over {runs} "
                                 f"run{'s' if runs != 1 else ''}, "
-                                f"{cost['trajectories_per_second']:,.0f} cells/s")
-    console.print(summary)
+                                f"{cost['trajectories_per_second']:,.0f} cells/s"))
+    print_rows(console, summary)
 
 
 def _write_csv(stats: dict, target: Path) -> None:

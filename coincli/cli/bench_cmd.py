@@ -29,6 +29,7 @@ from .common import (
     print_json,
     user_errors,
 )
+from .text import say
 
 
 @app.command("bench")
@@ -63,11 +64,12 @@ def bench_command(
         label_grid = vy_vphi_grid(scene, vy, vphi, parse_res(label_res))
     announce_compilation()
     with console.status("") as status:
-        say = lambda text: status.update(f"bench: {text}")  # noqa: E731
-        rows = bench.side_by_side(scene, cost_grid, repeats, say)
-        check = bench.label_check(scene, label_grid, rows, threads, say)
-        startup = time_startup(say)
-        basin = time_basin_command(basin_res, say) if basin_res else None
+        def report(text):
+            status.update(f"bench: {text}")
+        rows = bench.side_by_side(scene, cost_grid, repeats, report)
+        check = bench.label_check(scene, label_grid, rows, threads, report)
+        startup = time_startup(report)
+        basin = time_basin_command(basin_res, report) if basin_res else None
     from ..integrators.registry import setting_text
 
     paper = next(r for r in rows if r.full_run)
@@ -100,22 +102,22 @@ def bench_command(
         table.add_row(r["name"], f"{r['ms_per_trajectory']:.3g}",
                       f"{r['speedup_vs_paper']:,.0f}", right, uncertain)
     console.print(table)
-    console.print(f"Label grid {label_grid.shape[0]} x {label_grid.shape[1]}: references (event "
-                  f"rtol=1e-12, rk4 h=2.5e-7) agree on {check.agreement_ab:.1%} of cells; "
-                  f"{result['robust_cells']} robust cells: right and uncertain are fractions of "
-                  "those (a verified setting's right cells are the certain ones with the "
-                  "reference's label).", highlight=False)
-    console.print(f"Start-up, median of {STARTUP_RUNS} runs: coin --help "
-                  f"{startup['help_seconds']:.2f} s, coin simulate (fig. 2, warm, --no-rrd) "
-                  f"{startup['simulate_seconds']:.2f} s.", highlight=False)
+    say(console, f"Label grid {label_grid.shape[0]} x {label_grid.shape[1]}: references (event "
+                 f"rtol=1e-12, rk4 h=2.5e-7) agree on {check.agreement_ab:.1%} of cells; "
+                 f"{result['robust_cells']} robust cells: right and uncertain are fractions of "
+                 "those (a verified setting's right cells are the certain ones with the "
+                 "reference's label).")
+    say(console, f"Start-up, median of {STARTUP_RUNS} runs: coin --help "
+                 f"{startup['help_seconds']:.2f} s, coin simulate (fig. 2, warm, --no-rrd) "
+                 f"{startup['simulate_seconds']:.2f} s.")
     if basin:
-        console.print(
+        say(console,
             f"Default basin {basin_res} x {basin_res} ({basin['cells']:,} cells, verified), "
             f"the whole command: {basin['wall_seconds']:.2f} s wall on {basin['threads']} "
             f"threads: start-up {basin['startup_seconds']:.2f} s, kernels "
             f"{basin['kernel_seconds']:.2f} s, tiles and store {basin['store_seconds']:.2f} s, "
             f"other {basin['other_seconds']:.2f} s; {basin['outside_kernels']:.0%} outside "
-            f"the kernels; peak memory {basin['peak_rss_mb']:.0f} MB.", highlight=False)
+            f"the kernels; peak memory {basin['peak_rss_mb']:.0f} MB.")
 
 
 STARTUP_RUNS = 5
@@ -131,7 +133,7 @@ def _wall(args: list[str], cwd: str) -> float:
     return wall
 
 
-def time_startup(say) -> dict:
+def time_startup(report) -> dict:
     """Wall time of `coin --help` and of a warm `coin simulate` (median of STARTUP_RUNS each,
     the two interleaved)."""
     scratch = tempfile.mkdtemp(prefix="coin-bench-")
@@ -140,7 +142,7 @@ def time_startup(say) -> dict:
     try:
         _wall(simulate, scratch)  # warm: caches loaded once
         for k in range(STARTUP_RUNS):
-            say(f"start-up {k + 1}/{STARTUP_RUNS}")
+            report(f"start-up {k + 1}/{STARTUP_RUNS}")
             help_times.append(_wall(["--help"], scratch))
             simulate_times.append(_wall(simulate, scratch))
     finally:
@@ -150,10 +152,10 @@ def time_startup(say) -> dict:
             "simulate_runs": simulate_times}
 
 
-def time_basin_command(res: int, say) -> dict:
+def time_basin_command(res: int, report) -> dict:
     """Run the real `coin basin STORE --res RES` into a scratch store and time it: the whole
     command, and from its run record the tiles' time in the kernels and in the store."""
-    say(f"default basin {res} x {res}, the whole command")
+    report(f"default basin {res} x {res}, the whole command")
     scratch = tempfile.mkdtemp(prefix="coin-bench-")
     store = os.path.join(scratch, "basin.zarr")
     try:

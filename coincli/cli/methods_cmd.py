@@ -21,6 +21,7 @@ from .common import (
     print_json,
     user_errors,
 )
+from .text import say
 
 
 @app.command("methods")
@@ -47,8 +48,8 @@ def methods_command(
     if json_out:
         print_json({"omega_max": omega, "zeta": zeta, "methods": rows})
         return
-    console.print(f"[bold]Integration methods[/] (stiffest mode: rocking on two corners, "
-                  f"omega = {omega:.4g} rad/s, damping ratio {zeta:.3f})", highlight=False)
+    say(console, f"[bold]Integration methods[/] (stiffest mode: rocking on two corners, "
+                 f"omega = {omega:.4g} rad/s, damping ratio {zeta:.3f})")
     table = Table(box=box.SIMPLE_HEAD, pad_edge=False)
     for col, justify in (("method", "left"), ("order", "right"), ("adaptive", "left"),
                          ("symplectic", "left"), ("stable step", "right")):
@@ -60,7 +61,6 @@ def methods_command(
                       "yes" if r["symplectic"] else "no", limit)
     console.print(table)
     for r in rows:
-        console.print(f"[bold]{r['name']}[/]: {r['summary']}", highlight=False)
-    console.print("stable step: the largest fixed step whose error on the stiffest mode does "
-                  "not grow (simulate and basin refuse a larger --dt without --force).",
-                  highlight=False)
+        say(console, f"[bold]{r['name']}[/]: {r['summary']}")
+    say(console, "stable step: the largest fixed step whose error on the stiffest mode does "
+                 "not grow (simulate and basin refuse a larger --dt without --force).")

@@ -9,6 +9,7 @@ from .. import presets as presets_mod
 from ..defaults import DEFAULT_PRESET
 from . import app
 from .common import JsonOpt, console, print_json, user_errors
+from .text import say
 
 
 @app.command("presets")
@@ -22,8 +23,8 @@ def presets_command(json_out: JsonOpt = False) -> None:
         print_json({p.name: {"path": str(p.path), "description": p.description,
                              **p.scene.to_dict()} for p in found})
         return
-    console.print(f"[bold]Presets[/] in {presets_mod.presets_dir()} (--preset NAME, or "
-                  "--preset PATH.toml for your own)", highlight=False)
+    say(console, f"[bold]Presets[/] in {presets_mod.presets_dir()} (--preset NAME, or "
+                 "--preset PATH.toml for your own)")
     table = Table(box=box.SIMPLE_HEAD, pad_edge=False)
     for col in ("name", "d (mm)", "t (mm)", "m (g)", "I (kg m^2)", "k (N/m)", "c (N s/m)"):
         table.add_column(col, justify="left" if col == "name" else "right", no_wrap=True)
@@ -37,5 +38,5 @@ def presets_command(json_out: JsonOpt = False) -> None:
     for p in found:
         integ = p.scene.integration
         run_to = "stop when decided" if integ.stop_on_settle else f"full {integ.t_end:g} s"
-        console.print(f"[bold]{p.name}[/]: {integ.method.label}, {describe(integ)}, {run_to}. "
-                      f"{p.description}", highlight=False)
+        say(console, f"[bold]{p.name}[/]: {integ.method.label}, {describe(integ)}, {run_to}. "
+                     f"{p.description}")

@@ -7,7 +7,6 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.table import Table
 
 from ..defaults import DEFAULT_LOG_EVERY
 from ..enums import Certainty, Status
@@ -45,6 +44,7 @@ from .common import (
     print_json,
     user_errors,
 )
+from .text import NBSP, command, print_rows, say
 
 REC = "Recording (Rerun)"
 MAX_FRAMES = 1_000_000
@@ -169,13 +169,16 @@ def _check_recording_options(scene, rrd_path, connect, log_every) -> None:
 def print_recording(info) -> None:
     where = []
     if info.rrd is not None:
-        where.append(f"{info.rrd}  (open with: rerun {info.rrd})")
+        where.append(f"{info.rrd}  (open with: {command('rerun', info.rrd)})")
     if info.spawn:
         where.append("streamed to a new viewer")
     if info.connect is not None:
         where.append(f"streamed to {info.connect}")
-    console.print(f"[bold]recording[/]    {'; '.join(where)}: {info.frames:,} frames, "
-                  f"{info.events} contact events", highlight=False, soft_wrap=True)
+    print_rows(console, [("recording", f"{'; '.join(where)}: {info.frames:,} frames, "
+                              f"{info.events} contact events")])
+
+
+LABEL_WIDTH = 12  # the widest label, "final state", and a space
 
 
 def outcome_text(tr) -> str:
@@ -204,34 +207,36 @@ def print_summary(tr) -> None:
     s = tr.summary()
     integ = tr.scene.integration
     init = tr.scene.initial
-    console.print(f"[bold]coin simulate[/]  vy0 = {init.vy:g} m/s, vphi0 = {init.vphi:g} rad/s, "
-                  f"phi0 = {init.phi0:g}, vx0 = {init.vx:g}, y0 = {tr.scene.y0:.6g} m")
-    table = Table(show_header=False, box=None, pad_edge=False)
-    table.add_column(style="bold", no_wrap=True)
-    table.add_column()
-    table.add_row("outcome", outcome_text(tr))
+    say(console, f"[bold]coin simulate[/]  vy0 = {init.vy:g} m/s, vphi0 = {init.vphi:g} rad/s, "
+                 f"phi0 = {init.phi0:g}, vx0 = {init.vx:g}, y0 = {tr.scene.y0:.6g} m",
+        indent=LABEL_WIDTH)
+    rows = [("outcome", outcome_text(tr))]
     if tr.settled:
-        table.add_row("decided", f"at t = {tr.settle_time:.6g} s: the energy fell below "
-                                 f"E_crit = {tr.e_crit * 1e3:.4g} mJ, so n is final")
+        rows.append(("decided", f"at t = {tr.settle_time:.6g} s: the energy fell below "
+                                f"E_crit = {tr.e_crit * 1e3:.4g} mJ, so n is final"))
     if tr.rounded_quarter_turns is not None and tr.rounded_quarter_turns != tr.quarter_turns:
-        table.add_row("round(2 phi/pi)", f"{tr.rounded_quarter_turns} at t = {tr.t_final:g} s")
+        rows.append(("rounded n", f"round(2 phi / pi) = {tr.rounded_quarter_turns} at "
+                                  f"t = {tr.t_final:g} s"))
     fs = s["final_state"]
-    table.add_row("final state", f"t = {tr.t_final:.6g} s  x = {fs['x']:.6g} m  "
-                                 f"y = {fs['y']:.6g} m  phi = {fs['phi']:.6g} rad "
-                                 f"({math.degrees(fs['phi']):.2f} deg)")
-    table.add_row("", f"vx = {fs['vx']:.4g} m/s  vy = {fs['vy']:.4g} m/s  "
-                      f"vphi = {fs['vphi']:.4g} rad/s")
-    table.add_row("energy", f"{tr.energy_initial * 1e3:.5g} mJ -> {tr.energy_final * 1e3:.5g} "
-                            f"mJ ({s['energy_dissipated'] * 1e3:.5g} mJ dissipated)")
+    rows.append(("final state", f"t = {tr.t_final:.6g} s  x = {fs['x']:.6g} m  "
+                                f"y = {fs['y']:.6g} m  phi = {fs['phi']:.6g} rad "
+                                f"({math.degrees(fs['phi']):.2f} deg)"))
+    rows.append(("", f"vx = {fs['vx']:.4g} m/s  vy = {fs['vy']:.4g} m/s  "
+                     f"vphi = {fs['vphi']:.4g} rad/s"))
+    lost = s["energy_dissipated"]
+    if abs(lost) < 1e-12 * tr.energy_initial:  # rounding of a flight: nothing was lost
+        lost = 0.0
+    rows.append(("energy", f"{tr.energy_initial * 1e3:.5g} mJ -> {tr.energy_final * 1e3:.5g} "
+                           f"mJ ({lost * 1e3:.5g} mJ dissipated)"))
     run_to = "stop when decided" if integ.stop_on_settle else f"full {integ.t_end:g} s"
-    table.add_row("method", f"{integ.method.label}, {describe(integ)}, {run_to}")
+    rows.append(("method", f"{integ.method.label}, {describe(integ)}, {run_to}"))
     if len(tr.rungs) > 1:
-        table.add_row("ladder", "; ".join(f"{r.setting}: n = {r.quarter_turns}"
-                                          for r in tr.rungs))
+        rows.append(("ladder", "; ".join(f"{r.setting}: n = {r.quarter_turns}".replace(" ", NBSP)
+                                         for r in tr.rungs)))
     rungs = len(tr.rungs)
-    table.add_row("cost", f"{tr.steps:,} step{'s' if tr.steps != 1 else ''}"
-                          + (f" over {rungs} rungs" if rungs > 1 else "")
-                          + f", {tr.wall_time * 1e3:.3g} ms wall")
-    console.print(table)
+    rows.append(("cost", f"{tr.steps:,} step{'s' if tr.steps != 1 else ''}"
+                         + (f" over {rungs} rungs" if rungs > 1 else "")
+                         + f", {tr.wall_time * 1e3:.3g} ms wall"))
+    print_rows(console, rows, LABEL_WIDTH)
     for note in tr.notes:
-        console.print(f"[yellow]note:[/] {note}")
+        say(console, f"[yellow]note:[/] {note}")

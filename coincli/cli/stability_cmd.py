@@ -23,6 +23,7 @@ from .common import (
     print_json,
     user_errors,
 )
+from .text import say
 
 
 @app.command("stability")
@@ -80,27 +81,27 @@ def stability_command(
     states = ["lying (phi = 0): static"]
     if report.standing_static:
         states.append("standing (phi = pi/2): static")
-    console.print("Static states for k = {:g} N/m: {}.".format(report.k, "; ".join(states)))
+    say(console, "Static states for k = {:g} N/m: {}.".format(report.k, "; ".join(states)))
     if not report.standing_static:
         if report.standing_well_depth > 0:
-            console.print(
+            say(console,
                 f"[bold yellow]k = {report.k:g} N/m is below k_cr = {report.k_cr:.2f} N/m: by the "
                 "paper's criterion (eq. 13) a standing coin cannot be at rest.[/] Counting the "
                 "foundation's elastic energy, a shallow standing well of "
                 f"{report.standing_well_depth * mj:.3g} mJ remains down to k = "
                 f"{report.k_stand_exact:.1f} N/m, so a coin may still end standing.")
         elif report.k > report.k_rock:
-            console.print(
+            say(console,
                 f"[bold yellow]k = {report.k:g} N/m is below k_cr / 2 = "
                 f"{report.k_stand_exact:.1f} N/m:[/] a standing coin is still a shallow minimum "
                 f"of the potential (down to k = {report.k_rock:.1f} N/m, where rocking on its "
                 "rim turns unstable), but its energy is above E_crit, so a throw that ends "
                 "there is never certified: it stays unsettled.")
         else:
-            console.print(f"[bold yellow]k = {report.k:g} N/m is below k_cr = {report.k_cr:.2f} "
-                          f"N/m and below {report.k_rock:.1f} N/m, where rocking on the rim "
-                          "turns unstable: a standing coin cannot be at rest (by the paper's "
-                          "criterion and by the exact energies); every coin ends lying.[/]")
+            say(console, f"[bold yellow]k = {report.k:g} N/m is below k_cr = {report.k_cr:.2f} "
+                         f"N/m and below {report.k_rock:.1f} N/m, where rocking on the rim "
+                         "turns unstable: a standing coin cannot be at rest (by the paper's "
+                         "criterion and by the exact energies); every coin ends lying.[/]")
     if not report.single_corner_contact:
-        console.print(f"[yellow]k is below k_min = {report.k_min:.1f} N/m: a coin at phi_cr "
-                      "sinks onto a second corner (eq. 10 does not hold).[/]")
+        say(console, f"[yellow]k is below k_min = {report.k_min:.1f} N/m: a coin at phi_cr "
+                     "sinks onto a second corner (eq. 10 does not hold).[/]")

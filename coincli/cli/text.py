@@ -1,0 +1,86 @@
+"""Line breaking for the terminal that never splits a number from its name or its unit.
+
+Rich wraps at any space, so at 80 columns "y0 = 0.0100499 m" could end a line at "y0 =" and
+"phi = 9.6 rad" could lose its unit. These helpers break only between phrases: a word is glued
+to "=" or "->" on either side, to a unit after it and to the number after "eq." or "fig.",
+and the breaks become explicit newlines
+that rich then has no reason to move. A caller marks a phrase of its own with no-break spaces
+(NBSP), which are never broken and print as spaces.
+"""
+
+from __future__ import annotations
+
+import re
+import shlex
+
+UNITS = frozenset({"m", "mm", "um", "m/s", "rad", "rad/s", "deg", "s", "ms", "mJ", "N/m", "N",
+                   "kg", "g", "%", "cells", "cells/s", "tiles", "traj/s", "trajectories/s", "MB"})
+GLUE = frozenset({"=", "->", "<", ">", "<=", ">=", "+-", "~"})
+BEFORE_NUMBER = frozenset({"eq", "eqs", "fig", "figs", "section", "tile"})
+NBSP = "\u00a0"
+_SPACES = re.compile(r"( +)")  # ASCII spaces only: NBSP never breaks
+_TAG = re.compile(r"\[/?[a-z][a-z \u00a0]*\]|\[/\]")  # rich markup: [bold], [bold red], [/]
+
+
+def _visible(markup: str) -> int:
+    return len(_TAG.sub("", markup))
+
+
+def _bare(word: str) -> str:
+    """A word without markup and the punctuation that may follow a unit."""
+    return _TAG.sub("", word).strip("()[],;:.")
+
+
+def _glued(left: str, right: str) -> bool:
+    left, right = _bare(left), _bare(right)
+    times = (right == "x" and left[-1:].isdigit()) or (left == "x" and right[:1].isdigit())
+    return (times or left in GLUE or left in BEFORE_NUMBER or right in GLUE or right in UNITS)
+
+
+def keep_whole(text: str, width: int, indent: int = 0) -> str:
+    """`text` broken into lines of at most `width` cells, only between phrases.
+
+    Continuation lines are indented by `indent` spaces; a phrase longer than a line stays whole
+    (the terminal folds it). Markup is kept; widths count only what is shown.
+    """
+    text = _TAG.sub(lambda tag: tag.group(0).replace(" ", NBSP), text)  # a tag is no phrase
+    parts = _SPACES.split(text)
+    words, seps = parts[0::2], parts[1::2]
+    phrases, joins = [words[0]], []
+    for sep, word in zip(seps, words[1:], strict=True):
+        if _glued(phrases[-1].rsplit(" ", 1)[-1], word):
+            phrases[-1] += sep + word
+        else:
+            phrases.append(word)
+            joins.append(sep)
+    lines, line, used = [], phrases[0], _visible(phrases[0])
+    for sep, phrase in zip(joins, phrases[1:], strict=True):
+        size = _visible(phrase)
+        if used + len(sep) + size <= width:
+            line, used = line + sep + phrase, used + len(sep) + size
+        else:
+            lines.append(line)
+            line, used = " " * indent + phrase, indent + size
+    lines.append(line)
+    return "\n".join(lines).replace(NBSP, " ")
+
+
+def command(*words) -> str:
+    """A command to copy from the terminal: quoted for the shell, one phrase, never broken."""
+    return NBSP.join(shlex.quote(str(word)).replace(" ", NBSP) for word in words)
+
+
+def say(console, text: str, indent: int = 0) -> None:
+    """Print a paragraph broken between phrases at the console's width."""
+    console.print(keep_whole(text, console.width, indent), highlight=False, soft_wrap=True)
+
+
+def print_rows(console, rows, label_width: int | None = None) -> None:
+    """Label and value rows, each value broken between phrases to fit the console."""
+    if label_width is None:
+        label_width = max(len(label) for label, _ in rows) + 1
+    width = max(console.width - label_width, 20)
+    for label, value in rows:
+        console.print(f"[bold]{label:<{label_width}}[/]"
+                      f"{keep_whole(value, width, indent=label_width)}",
+                      highlight=False, soft_wrap=True)
