@@ -6,15 +6,17 @@ The public API (see :mod:`coincli.api` and the README's "Python API"):
     scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
     run = coincli.simulate(scene)
     ds = coincli.basin(scene, vy=(0.05, 2.0), vphi=(-20.0, 20.0), res=64)
+    p = coincli.fractions(scene, phi0="0:2pi", precision=0.001).standing   # Monte Carlo
 
 Names load on first use, so ``import coincli`` (and ``coin --help``) stays cheap.
 """
 
 from .version import __version__
 
-_API = ("Method", "Outcome", "Scene", "Status", "SweepPlan", "SweepProgress", "SweepReport",
-        "Trajectory", "basin", "basin_stats", "classify", "load_preset", "open_basin",
-        "plan_sweep", "render_basin", "simulate", "stability", "sweep")
+_API = ("Fractions", "FractionsOver", "Method", "Outcome", "Scene", "Status", "SweepPlan",
+        "SweepProgress", "SweepReport", "Trajectory", "basin", "basin_stats", "classify",
+        "fractions", "fractions_over", "load_preset", "open_basin", "plan_sweep",
+        "render_basin", "render_fractions", "simulate", "stability", "sweep")
 
 __all__ = ["__version__", *_API]
 
@@ -24,6 +26,12 @@ def __getattr__(name: str):
         from .params import Scene
 
         return Scene
+    if name == "fractions":
+        # the module coincli.fractions, callable as coincli.api.fractions: one object whether
+        # or not the submodule was imported first (importing it binds this name to it)
+        import importlib
+
+        return importlib.import_module(f"{__name__}.fractions")
     if name in _API:
         from . import api
 
