@@ -852,9 +852,10 @@ def continuation_note(scene: Scene, parameter: str, keep: tuple[str, ...] = ()) 
             f"disc of the base coin's density ({disc_density(scene):.5g} kg/m^3): "
             "m = rho pi (d/2)^2 t, I = m (3 (d/2)^2 + t^2) / 12")
     if "inertia" in follow and abs(disc_i - c.inertia) > 1e-3 * c.inertia:
+        paper = " printed in the paper" if abs(c.inertia - 7.06e-8) < 1e-12 else ""
         text += (f"; at the base coin (d = {c.diameter:g} m, t = {c.thickness:g} m) the "
-                 f"disc's I is {disc_i:.3g} kg m^2, not the scene's {c.inertia:.3g} "
-                 "(the paper prints 7.06e-8; a solid disc of its size and mass has 7.96e-8)")
+                 f"disc's I is {disc_i:.3g} kg m^2, not the scene's {c.inertia:.3g}{paper}: "
+                 "the curve does not pass through the base scene")
     if keep:
         text += f"; {' and '.join(keep)} held at the scene's value"
     return text

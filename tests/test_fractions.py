@@ -212,6 +212,54 @@ def test_an_interrupted_store_resumes_to_the_same_store_and_results(tmp_path):
         coincli.fractions(PAPER, store=tmp_path / "whole.zarr", seed=1, **kw)
 
 
+def test_asking_a_store_for_more_samples_extends_it(tmp_path):
+    store = tmp_path / "grow.zarr"
+    small = coincli.fractions(PAPER, samples=1024, batch=512, store=store)
+    more = coincli.fractions(PAPER, samples=2560, batch=512, store=store)
+    assert more.cost["computed"] == 1536 and more.samples == 2560
+    assert coincli.api.open_fractions(store).sizes["sample"] == 2560
+    fresh = coincli.fractions(PAPER, samples=2560, batch=512)
+    assert more.outcomes == fresh.outcomes and small.samples == 1024
+
+
+def _filled(path: Path) -> int:
+    import zarr
+
+    try:
+        return int((np.asarray(zarr.open_group(str(path), mode="r")["filled"][:]) > 0).sum())
+    except (FileNotFoundError, KeyError, ValueError):
+        return 0
+
+
+def test_a_run_killed_with_sigkill_resumes_to_the_same_store(tmp_path):
+    import signal
+    import subprocess
+    import time
+
+    args = ["--samples", "16384", "--batch", "256", "--phi0", "-pi:pi", "-q"]
+    killed = tmp_path / "killed.zarr"
+    proc = subprocess.Popen([sys.executable, "-m", "coincli", "fractions", *args, "--threads",
+                             "1", "--store", str(killed)], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, cwd=Path(__file__).parent.parent)
+    end = time.monotonic() + 90
+    while _filled(killed) < 4:
+        assert proc.poll() is None, proc.communicate()[1].decode()[-2000:]
+        assert time.monotonic() < end, "no batch was written in time"
+        time.sleep(0.005)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert 4 <= _filled(killed) < 64, "not killed mid-run"
+    runner = CliRunner()
+    resumed = runner.invoke(app, ["fractions", *args, "--store", str(killed), "--json"])
+    assert resumed.exit_code == 0, resumed.stderr
+    clean = tmp_path / "clean.zarr"
+    whole = runner.invoke(app, ["fractions", *args, "--store", str(clean), "--json"])
+    assert json.loads(resumed.stdout)["cost"]["computed"] < 16384
+    for key in ("samples", "standing", "lying", "uncertain", "outcomes"):
+        assert json.loads(resumed.stdout)[key] == json.loads(whole.stdout)[key], key
+    assert _files(killed) == _files(clean)
+
+
 def test_a_continuation_uses_the_same_samples_at_every_value(tmp_path):
     d = PAPER.coin.diameter
     store = tmp_path / "over.zarr"

@@ -196,10 +196,10 @@ def fractions_command(
     def show(update) -> None:
         v = update.value
         p, lo, hi = update.standing
-        estimate = f"{_pct(p)} [{_pct(lo)}, {_pct(hi)}]"
-        width = "" if update.precision is None else \
-            f"±{100 * update.widest:.3g} pp → {100 * update.precision:.3g} pp" \
-            if not math.isnan(update.widest) else ""
+        estimate = "-" if math.isnan(p) else \
+            f"{100 * p:.4g} % [{100 * lo:.4g}, {100 * hi:.4g}]"
+        width = "" if update.precision is None or math.isnan(update.widest) else \
+            f"±{100 * update.widest:.2g}→{100 * update.precision:.2g} pp"
         label = "" if update.values == 1 else \
             f"{plan.parameter} = {plan.values[v]:g} ({v + 1}/{update.values})"
         if v not in tasks:

@@ -42,6 +42,8 @@ def plot_over(result: FractionsOver, out, *, title: str | None = None, dpi: int 
                                       constrained_layout=True)
     p, lo, _ = _band(top, x, [r.standing for r in result.results], "P(standing), certain labels",
                      "#000000")
+    _band(top, x, [r.all_labelled["standing"] for r in result.results],
+          "P(standing), all labelled (uncertain ones included)", "#1f77b4", marker="^")
     _band(top, x, [r.uncertain for r in result.results], "uncertain (of all samples)",
           "#888888", marker=".")
     if name in ("thickness", "diameter"):
@@ -57,6 +59,17 @@ def plot_over(result: FractionsOver, out, *, title: str | None = None, dpi: int 
         top.set_yscale("log")
         floor = np.nanmin(np.where(lo > 0, lo, np.nan)) if np.any(lo > 0) else positive.min()
         top.set_ylim(bottom=max(floor / 2, 1e-7))
+    diameters = {r.scene["coin"]["diameter"] for r in result.results}
+    thicknesses = {r.scene["coin"]["thickness"] for r in result.results}
+    if name == "thickness" and len(diameters) == 1:
+        d = diameters.pop()
+        top.secondary_xaxis("top", functions=(lambda t: t / d, lambda q: q * d)) \
+            .set_xlabel("t / d")
+    elif name == "diameter" and len(thicknesses) == 1:
+        t = thicknesses.pop()
+        top.secondary_xaxis("top", functions=(lambda d: t / np.maximum(d, 1e-12),
+                                              lambda q: t / np.maximum(q, 1e-12))) \
+            .set_xlabel("t / d")
     top.set_ylabel("probability")
     top.legend(fontsize=8, loc="best")
     top.grid(True, which="both", alpha=0.3)
@@ -78,7 +91,7 @@ def plot_over(result: FractionsOver, out, *, title: str | None = None, dpi: int 
     bottom.grid(True, alpha=0.3)
     samples = sorted({r.samples for r in result.results})
     count = f"{samples[0]:,}" if len(samples) == 1 else f"{samples[0]:,}-{samples[-1]:,}"
-    fig.suptitle(title or f"Outcome probabilities against {name}: {count} samples a value, "
+    fig.suptitle(title or f"Outcome probabilities against {name}: {count} samples a value,\n"
                  "the same points at every value; bands: 95 % Wilson intervals", fontsize=9)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=dpi)

@@ -116,6 +116,9 @@ def differences(stored: dict, wanted: dict) -> list[str]:
     """'parameters.foundation.k = 10000 in the store, 5000 here', one per difference."""
     a = _flatten({k: stored.get(k) for k in COMPARED})
     b = _flatten({k: wanted.get(k) for k in COMPARED})
+    for flat in (a, b):  # explanations, not what was computed
+        for key in [k for k in flat if k.endswith((".note", ".sample_i"))]:
+            del flat[key]
     out = []
     for key in sorted(set(a) | set(b)):
         if a.get(key, "absent") != b.get(key, "absent"):
