@@ -441,7 +441,10 @@ class Draws:
             raise ParameterError(f"a Sobol sequence has {SOBOL_MAX:,} points; use "
                                  "--sampler random for more samples")
         if self._engine is None or start < self._position:
-            self._engine = qmc.Sobol(self.dims, scramble=True, rng=self.sampling.seed)
+            try:
+                self._engine = qmc.Sobol(self.dims, scramble=True, rng=self.sampling.seed)
+            except TypeError:  # scipy < 1.15 names it seed (the same generator from an int)
+                self._engine = qmc.Sobol(self.dims, scramble=True, seed=self.sampling.seed)
             self._position = 0
         if start > self._position:
             self._engine.fast_forward(start - self._position)
