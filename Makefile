@@ -34,7 +34,7 @@ test: install
 bench: install
 	$(COIN) bench
 
-# Regenerate every picture and table under docs/ (about 20 minutes on 2 cores; the screenshot
+# Regenerate every picture and table under docs/ (about 35 minutes on 2 cores; the screenshot
 # needs Debian's xvfb and mesa-vulkan-drivers).
 docs: install
 	$(COIN) accuracy --res 32 -o docs/accuracy.png --table docs/accuracy.json
@@ -43,6 +43,8 @@ docs: install
 	$(COIN) basin analyze $(OUT)/docs-basin.zarr -o docs/basin-analysis.png
 	$(COIN) basin $(OUT)/docs-certified.zarr --certify --overwrite
 	$(COIN) basin render $(OUT)/docs-certified.zarr -o docs/basin-certified.png
+	$(COIN) fractions --y0 r:5r --phi0 -pi:pi --vx -0.5:0.5 --over thickness=0.001:0.02:20 \
+		--samples 64k --store $(OUT)/docs-thickness.zarr --plot docs/fractions-thickness.png
 	$(COIN) simulate --vy 1.197 --vphi 3.508 --rrd $(OUT)/fig2.rrd
 	xvfb-run -a -s '-screen 0 1600x1000x24' $(BIN)/rerun --window-size 1600x1000 \
 		--screenshot-to docs/simulate-fig2.png $(OUT)/fig2.rrd

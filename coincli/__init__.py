@@ -6,16 +6,19 @@ The public API (see :mod:`coincli.api` and the README's "Python API"):
     scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
     run = coincli.simulate(scene)
     ds = coincli.basin(scene, vy=(0.05, 2.0), vphi=(-20.0, 20.0), res=64)
+    p = coincli.fractions(scene, phi0="0:2pi", precision=0.001).standing   # Monte Carlo
 
 Names load on first use, so ``import coincli`` (and ``coin --help``) stays cheap.
 """
 
 from .version import __version__
 
-_API = ("Method", "Outcome", "Scene", "Status", "SweepEstimate", "SweepPlan", "SweepProgress",
-        "SweepReport", "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin",
-        "basin_stats", "classify", "estimate_sweep", "load_preset", "open_basin", "plan_sweep",
-        "render_analysis", "render_basin", "simulate", "stability", "sweep", "verify_basin")
+_API = ("Fractions", "FractionsOver", "Method", "Outcome", "Scene", "Status", "SweepEstimate",
+        "SweepPlan", "SweepProgress", "SweepReport", "SweepStart", "SweepTooLong", "Trajectory",
+        "analyze", "basin", "basin_stats", "classify", "estimate_sweep", "fractions",
+        "fractions_over", "load_preset", "open_basin", "open_fractions", "plan_sweep",
+        "render_analysis", "render_basin", "render_fractions", "simulate", "stability", "sweep",
+        "verify_basin")
 
 __all__ = ["__version__", *_API]
 

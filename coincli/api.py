@@ -38,6 +38,9 @@ from .grid import (
 )
 from .integrators import check_step, warm_up
 from .integrators.batch import verified_labels
+from .io.runner import check_where
+from .montecarlo import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, Fractions, FractionsOver
+from .montecarlo.plan import FractionsPlan, FractionsProgress, plan_fractions
 from .params import ParameterError, Scene, check_start, validate
 from .presets import load
 from .statics import StabilityReport, analyse
@@ -436,21 +439,6 @@ def _load_kernels(spec: SweepSpec) -> None:
     warm_up(spec.params, spec.settings, np.asarray(spec.grid.base_state, dtype=np.float64))
 
 
-def check_where(threads, workers, scheduler) -> None:
-    if workers is not None and scheduler is not None:
-        raise ParameterError("give --workers (a local cluster) or --scheduler (an existing "
-                             "one), not both")
-    for option, value in (("--threads", threads), ("--workers", workers)):
-        if value is not None and value < 1:
-            raise ParameterError(f"{option} must be at least 1, got {value}")
-    if threads is not None and (workers is not None or scheduler is not None):
-        raise ParameterError("--threads is for a local run; a Dask run uses one thread per "
-                             "worker")
-    if scheduler is not None and "://" not in scheduler:
-        raise ParameterError(f"--scheduler '{scheduler}' is not an address like "
-                             "tcp://HOST:PORT")
-
-
 def open_basin(store: str | os.PathLike):
     """A basin store as an xarray Dataset (in memory; every tile checked: cells of unfinished
     or damaged tiles read as not computed, status NOT_COMPUTED; the damaged tiles are listed in
@@ -590,8 +578,84 @@ def render_analysis(analysis, out: str | os.PathLike, *, title: str | None = Non
     return plot_analysis(analysis, Path(out), title=title, dpi=dpi)
 
 
-__all__ = ["Method", "Outcome", "Status", "SweepEstimate", "SweepPlan", "SweepProgress",
-           "SweepReport", "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin",
-           "basin_stats", "classify", "estimate_sweep", "load_preset", "open_basin",
-           "plan_sweep", "render_analysis", "render_basin", "simulate", "stability", "sweep",
-           "verify_basin"]
+# -- outcome probabilities (coin fractions) -----------------------------------------------------
+def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
+              samples: int | None = None, precision: float | None = None, of: str = "all",
+              max_samples: int = DEFAULT_MAX_SAMPLES, seed: int = 0, sampler: str = "sobol",
+              batch: int = DEFAULT_BATCH, store: str | os.PathLike | None = None,
+              overwrite: bool = False, threads: int | None = None, workers: int | None = None,
+              scheduler: str | None = None, force: bool = False,
+              progress: Callable[[FractionsProgress], None] | None = None,
+              stop=None) -> Fractions:
+    """The outcome probabilities of throws whose initial conditions are drawn at random.
+
+    Each of ``y0, phi0, vx, vy, vphi`` is a fixed value, a uniform range ``(lo, hi)`` or
+    ``'LO:HI'``, a ``'normal(MEAN,SD)'`` (truncated: ``'normal(MEAN,SD,LO,HI)'``), or a
+    :class:`coincli.montecarlo.Dist`; numbers may be written ``'2pi'``, ``'pi/2'``, and y0 in
+    multiples of the coin's half diagonal, ``'r:5r'``. Not given: the scene's values, except
+    vy and vphi, drawn over coin basin's default ranges. Samples are scrambled Sobol points
+    (``sampler='sobol'``) or independent draws (``'random'``), reproducible from ``seed``.
+
+    Runs batches of ``batch`` samples on ``threads`` threads (or on Dask: ``workers``,
+    ``scheduler``) until the 95 % interval of every probability has half-width <= ``precision``
+    (``of='standing'``: of P(standing) only), or ``max_samples`` are spent; ``samples`` fixes
+    the count instead. With ``store`` the samples and labels are kept in (and resumed from)
+    that Zarr store. ``stop`` (a threading.Event) or Ctrl-C ends the run early: the result then
+    says ``stopped='interrupted'``. Returns a :class:`coincli.montecarlo.Fractions`."""
+    plan = plan_fractions(scene, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi, samples=samples,
+                          precision=precision, of=of, max_samples=max_samples, seed=seed,
+                          sampler=sampler, batch=batch, force=force)
+    return run_fractions(plan, store=store, overwrite=overwrite, threads=threads,
+                         workers=workers, scheduler=scheduler, progress=progress, stop=stop)
+
+
+def fractions_over(scene: Scene, parameter: str, values, *, keep=(), **options) -> FractionsOver:
+    """The outcome probabilities at each of ``values`` of one physical ``parameter``
+    (thickness, diameter, k, c, mass, inertia, g), the same sample points at every value
+    (common random numbers). For thickness and diameter the mass and inertia follow a uniform
+    solid disc of the scene's density, except those named in ``keep`` (the result's ``note``
+    says which). Options are those of :func:`fractions`; each value is resumable on its own
+    in the store. Returns a :class:`coincli.montecarlo.FractionsOver`."""
+    run_options = {k: options.pop(k) for k in ("store", "overwrite", "threads", "workers",
+                                               "scheduler", "progress", "stop")
+                   if k in options}
+    plan = plan_fractions(scene, over=(parameter, values), keep=keep, **options)
+    return run_fractions(plan, **run_options)
+
+
+def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None,
+                  overwrite: bool = False, threads: int | None = None,
+                  workers: int | None = None, scheduler: str | None = None,
+                  progress: Callable[[FractionsProgress], None] | None = None,
+                  stop=None) -> Fractions | FractionsOver:
+    """Run a Monte Carlo run planned by :func:`plan_fractions` (see :func:`fractions` for the
+    options): a Fractions for a plain run, a FractionsOver for a continuation."""
+    from .io.fractions_run import run_fractions as run
+
+    return run(plan, store=store, overwrite=overwrite, threads=threads, workers=workers,
+               scheduler=scheduler, progress=progress, stop=stop)
+
+
+def open_fractions(store: str | os.PathLike):
+    """A `coin fractions` store as an xarray Dataset: ``initial`` ([value,] sample, ic) and the
+    labels ([value,] sample); batches not written hold the fill values (``filled`` says which
+    are)."""
+    from .io.fractions_store import open_fractions as open_store
+
+    return open_store(store)
+
+
+def render_fractions(result: FractionsOver, out: str | os.PathLike, *,
+                     title: str | None = None, dpi: int = 150) -> Path:
+    """Plot P(outcome) against the parameter of a continuation, with 95 % interval bands (PNG
+    or SVG by the file's suffix)."""
+    from .io.fractions_plot import plot_over
+
+    return plot_over(result, out, title=title, dpi=dpi)
+
+
+__all__ = ["Fractions", "FractionsOver", "FractionsPlan", "FractionsProgress", "Method",
+           "Outcome", "Status", "SweepPlan", "SweepProgress", "SweepReport", "Trajectory",
+           "basin", "basin_stats", "classify", "fractions", "fractions_over", "load_preset",
+           "open_basin", "open_fractions", "plan_fractions", "plan_sweep", "render_basin",
+           "render_fractions", "run_fractions", "simulate", "stability", "sweep"]

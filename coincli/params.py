@@ -234,10 +234,11 @@ def validate(scene: Scene) -> Scene:
     c, f, s, i = scene.coin, scene.foundation, scene.initial, scene.integration
     for name in ("diameter", "thickness", "mass", "inertia"):
         _check_number(name, getattr(c, name), positive=True)
-    if c.thickness >= c.diameter:
-        # lying and standing, phi_cr > 45 deg and the wells of NOTES.md assume a flat coin
+    if c.thickness > c.diameter:
+        # lying and standing, phi_cr >= 45 deg and the wells of NOTES.md assume a coin no
+        # thicker than wide; a square (t = d, phi_cr = 45 deg) is fine: its wells are all equal
         raise ParameterError(f"thickness ({c.thickness:g} m) must be smaller than the diameter "
-                             f"({c.diameter:g} m)")
+                             f"({c.diameter:g} m), or equal to it (a square section)")
     _check_number("k", f.k, positive=True)
     _check_number("c", f.c, nonnegative=True)
     _check_number("g", scene.g, positive=True)  # without gravity no coin ever comes to rest

@@ -13,7 +13,7 @@ LAYERS = [
     ("parameters", {"version", "enums", "defaults", "params", "presets", "jsonable"}),
     ("model", {"jit", "model", "statics"}),
     ("integrators", {"integrators"}),
-    ("analysis", {"throw", "grid", "stats", "accuracy", "bench", "boundary", "fractions",
+    ("analysis", {"throw", "grid", "stats", "accuracy", "bench", "boundary", "montecarlo",
                   "verify", "budget", "analysis"}),
     ("io", {"io"}),
     ("api", {"api", "__init__"}),

@@ -20,7 +20,7 @@ import os
 import signal
 import time
 import uuid
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from typing import NamedTuple
 
@@ -29,6 +29,7 @@ import numpy as np
 from ..enums import Status
 from ..grid import SweepSpec, compute_tile
 from ..integrators.batch import new_control
+from ..params import ParameterError
 from .claims import TileQueue
 
 POLL = 0.2  # s between looks at the stop flag while tiles run
@@ -68,7 +69,40 @@ def usable_cores() -> int:
         return os.cpu_count() or 1
 
 
-def run_threads(task: Callable, queue: TileQueue, threads: int, stop=None) -> Iterator:
+class ItemQueue:
+    """A :class:`TileQueue`'s interface over a lazy iterator of work items (any objects), for
+    one process without claims: :func:`run_threads` takes an item only when a thread is free,
+    so the iterator may decide what comes next from the results so far."""
+
+    def __init__(self, items: Iterable):
+        self._items = iter(items)
+        self._exhausted = False
+        self._out = 0
+
+    def take(self):
+        if not self._exhausted:
+            item = next(self._items, None)
+            if item is not None:
+                self._out += 1
+                return item
+            self._exhausted = True
+        return None
+
+    def settle(self, item) -> None:
+        self._out -= 1
+
+    drop = settle
+
+    @property
+    def finished(self) -> bool:
+        return self._exhausted and self._out == 0
+
+    def pause(self) -> None:  # never waits on others: nothing is claimed elsewhere
+        time.sleep(0.001)
+
+
+def run_threads(task: Callable, queue: TileQueue | ItemQueue, threads: int,
+                stop=None) -> Iterator:
     """Yield ``task(tile, control)`` for each tile of ``queue`` as it finishes, ``threads``
     tiles at a time (the kernels release the GIL); each tile is taken from the queue (claimed)
     only when a thread is free for it. ``stop`` set: the tiles in flight finish, no more start.
@@ -145,21 +179,9 @@ def run_dask(path: str, spec: SweepSpec, queue: TileQueue, scheduler: str | None
     go), so that stopping is clean: ``stop`` set cancels the tasks no worker has taken and waits
     for those being computed, which write their tiles completely. (A tile cut off anyway, say
     by a worker dying or a second Ctrl-C, has no ``done`` digest and is recomputed on resume.)"""
-    from distributed import Client, LocalCluster
     from distributed import wait as dask_wait
 
-    cluster = None
-    if scheduler:
-        client = Client(scheduler, timeout="20s")
-    else:
-        # the workers must not get the terminal's Ctrl-C: this process decides when to stop
-        previous = _ignore_sigint()
-        try:
-            cluster = LocalCluster(n_workers=workers or usable_cores(), threads_per_worker=1,
-                                   processes=True, dashboard_address=None)
-        finally:
-            _restore_sigint(previous)
-        client = Client(cluster)
+    client, cluster = open_dask(scheduler, workers)
     run_id = uuid.uuid4().hex[:12]
     running: dict = {}  # future -> tile
     hard = False
@@ -229,6 +251,24 @@ def run_dask(path: str, spec: SweepSpec, queue: TileQueue, scheduler: str | None
                 cluster.close()
 
 
+def open_dask(scheduler: str | None, workers: int | None):
+    """(client, cluster): a client of the cluster at ``scheduler`` (tcp://host:port; cluster
+    None), or of a new LocalCluster of ``workers`` processes with one thread each. The caller
+    closes both."""
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        return Client(scheduler, timeout="20s"), None
+    # the workers must not get the terminal's Ctrl-C: this process decides when to stop
+    previous = _ignore_sigint()
+    try:
+        cluster = LocalCluster(n_workers=workers or usable_cores(), threads_per_worker=1,
+                               processes=True, dashboard_address=None)
+    finally:
+        _restore_sigint(previous)
+    return Client(cluster), cluster
+
+
 def _ignore_sigint():
     try:
         return signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -241,4 +281,23 @@ def _restore_sigint(previous) -> None:
         signal.signal(signal.SIGINT, previous)
 
 
-__all__ = ["TileDone", "hard_stop", "run_dask", "run_threads", "run_tile_task", "usable_cores"]
+
+def check_where(threads, workers, scheduler) -> None:
+    """Refuse a contradictory or impossible choice of where to run (threads, a local Dask
+    cluster of workers, or an existing scheduler)."""
+    if workers is not None and scheduler is not None:
+        raise ParameterError("give --workers (a local cluster) or --scheduler (an existing "
+                             "one), not both")
+    for option, value in (("--threads", threads), ("--workers", workers)):
+        if value is not None and value < 1:
+            raise ParameterError(f"{option} must be at least 1, got {value}")
+    if threads is not None and (workers is not None or scheduler is not None):
+        raise ParameterError("--threads is for a local run; a Dask run uses one thread per "
+                             "worker")
+    if scheduler is not None and "://" not in scheduler:
+        raise ParameterError(f"--scheduler '{scheduler}' is not an address like "
+                             "tcp://HOST:PORT")
+
+
+__all__ = ["ItemQueue", "TileDone", "check_where", "hard_stop", "open_dask", "run_dask",
+           "run_threads", "run_tile_task", "usable_cores"]

@@ -1,0 +1,337 @@
+"""`coin fractions`: outcome probabilities by Monte Carlo over distributions of the five
+initial conditions, with 95 % intervals; resumable in a Zarr store; continuation along a
+physical parameter (--over) with a plot."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from ..montecarlo import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION
+from ..params import ParameterError
+from ..version import __version__
+from . import app
+from .basin_cmd import RateColumn, _Stop
+from .common import (
+    INIT,
+    COpt,
+    DiameterOpt,
+    DtOpt,
+    ForceOpt,
+    GOpt,
+    InertiaOpt,
+    JsonOpt,
+    KOpt,
+    MassOpt,
+    MaxStepsOpt,
+    MethodOpt,
+    PresetOpt,
+    RtolOpt,
+    SinglePassOpt,
+    StopOpt,
+    TEndOpt,
+    ThicknessOpt,
+    announce_compilation,
+    build_scene,
+    console,
+    err_console,
+    fail,
+    print_json,
+    user_errors,
+)
+
+SAMPLING = "Sampling and stopping"
+OVER = "Continuation along a parameter"
+RUN = "Where it runs"
+
+
+def _dist(name: str, text: str):
+    return typer.Option(f"--{name}", metavar="DIST", help=text,
+                        rich_help_panel=INIT, show_default=False)
+
+
+Y0Dist = Annotated[str | None, _dist("y0", "Initial height of the centroid, m, or in multiples "
+                                     "of the half diagonal r (r:5r) [dim]\\[r][/dim].")]
+Phi0Dist = Annotated[str | None, _dist("phi0", "Initial angle, rad; 0:2pi is a random landing "
+                                       "angle [dim]\\[0][/dim].")]
+VxDist = Annotated[str | None, _dist("vx", "Initial horizontal velocity, m/s "
+                                     "[dim]\\[0][/dim].")]
+VyDist = Annotated[str | None, _dist("vy", "Initial vertical velocity, m/s "
+                                     "[dim]\\[0.05:2][/dim].")]
+VphiDist = Annotated[str | None, _dist("vphi", "Initial angular velocity, rad/s "
+                                       "[dim]\\[-20:20][/dim].")]
+
+
+class _BatchStop(_Stop):
+    def _handle(self, signum, frame):
+        if self.requested:
+            raise KeyboardInterrupt
+        self.event.set()
+        err_console.print("[yellow]interrupt:[/] finishing the batches in flight, then "
+                          "stopping (Ctrl-C again to stop at once; rerun the same command "
+                          "with --store to resume)")
+
+
+def _pct(x, digits: int = 4) -> str:
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "-"
+    return f"{100 * x:.{digits}g} %"
+
+
+def _interval(p: dict) -> str:
+    return f"{_pct(p['low'])} to {_pct(p['high'])}"
+
+
+def _share(p: dict) -> str:
+    return (f"{_pct(p['probability'])} (95 % CI {_interval(p)}): {p['count']:,} of "
+            f"{p['of']:,}")
+
+
+TURN = {"none": "none", "clockwise": "cw", "counter-clockwise": "ccw"}
+
+
+@app.command("fractions")
+def fractions_command(
+    y0: Y0Dist = None, phi0: Phi0Dist = None, vx: VxDist = None, vy: VyDist = None,
+    vphi: VphiDist = None,
+    samples: Annotated[str | None, typer.Option(
+        "--samples", metavar="N", help="Run exactly N samples (e.g. 100000, 1e5, 100k) "
+        "instead of stopping at --precision.", rich_help_panel=SAMPLING)] = None,
+    precision: Annotated[str | None, typer.Option(
+        "--precision", metavar="P", help="Stop at the first batch at which the half-width "
+        "(high - low) / 2 of the 95 % interval of every probability (--of) is at most P: a "
+        f"probability (0.001) or percentage points (0.1%) [dim]\\[{DEFAULT_PRECISION:g}]"
+        "[/dim]", rich_help_panel=SAMPLING, show_default=False)] = None,
+    of: Annotated[str, typer.Option(
+        "--of", metavar="all|standing", help="Which intervals --precision applies to: all "
+        "(every outcome n, standing, lying and the uncertain fraction) or standing "
+        "(P(standing) only).", rich_help_panel=SAMPLING)] = "all",
+    max_samples: Annotated[str, typer.Option(
+        "--max-samples", metavar="N", help="The sample budget of a --precision run (whole "
+        "batches).", rich_help_panel=SAMPLING)] = str(DEFAULT_MAX_SAMPLES),
+    seed: Annotated[int, typer.Option("--seed", metavar="S", help="Seed of the scrambling or "
+                                      "of the generator: the same seed, the same samples.",
+                                      rich_help_panel=SAMPLING)] = 0,
+    sampler: Annotated[str, typer.Option(
+        "--sampler", metavar="sobol|random", help="Scrambled Sobol points (scipy.stats.qmc) or "
+        "independent draws (numpy's default_rng(\\[seed, batch])).",
+        rich_help_panel=SAMPLING)] = "sobol",
+    batch: Annotated[int, typer.Option("--batch", metavar="N", help="Samples a batch: the "
+                                       "unit of work, of storing and of the stop test.",
+                                       rich_help_panel=SAMPLING)] = DEFAULT_BATCH,
+    over: Annotated[str | None, typer.Option(
+        "--over", metavar="NAME=LO:HI:STEPS", help="Repeat at STEPS values of a physical "
+        "parameter (thickness, diameter, k, c, mass, inertia, g), the same samples at every "
+        "value. For thickness and diameter, mass and inertia follow a uniform solid disc "
+        "unless --mass or --inertia is given.", rich_help_panel=OVER)] = None,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", metavar="FILE", help="With --over: draw P(outcome) against the parameter "
+        "with 95 % bands (.png or .svg).", rich_help_panel=OVER)] = None,
+    store: Annotated[Path | None, typer.Option(
+        "--store", metavar="PATH", help="Keep the samples and labels in this Zarr store; the "
+        "same command resumes it.", rich_help_panel=RUN)] = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace a --store of other "
+                                            "samples.", rich_help_panel=RUN)] = False,
+    threads: Annotated[int | None, typer.Option("--threads", help="Threads on this machine "
+                                                "(default: one per core).",
+                                                rich_help_panel=RUN)] = None,
+    workers: Annotated[int | None, typer.Option("--workers", help="Run the batches on a "
+                                                "local Dask cluster of N processes.",
+                                                rich_help_panel=RUN)] = None,
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Run the batches on the "
+                                                  "Dask cluster at this address "
+                                                  "(tcp://HOST:PORT); the store stays here.",
+                                                  rich_help_panel=RUN)] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress line.",
+                                        rich_help_panel=RUN)] = False,
+    json_out: JsonOpt = False,
+    preset: PresetOpt = "paper",
+    diameter: DiameterOpt = None, thickness: ThicknessOpt = None, mass: MassOpt = None,
+    inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, g: GOpt = None,
+    method: MethodOpt = None, dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
+    stop_on_settle: StopOpt = None, force: ForceOpt = False, single_pass: SinglePassOpt = False,
+    max_steps: MaxStepsOpt = None,
+) -> None:
+    """Outcome probabilities of random throws: P(n), P(standing), P(lying) with 95 % intervals.
+
+    Each initial condition is a DIST: a value (0.01, 2pi), LO:HI (uniform), normal(MEAN,SD) or normal(MEAN,SD,LO,HI) (truncated); numbers may use pi (-pi:pi), and y0 multiples of the half diagonal r (r:5r). Samples are drawn until every 95 % interval is narrower than --precision (or --samples of them), counting only verified (certain) labels and reporting the uncertain fraction beside them. The same command gives the same samples and results; with --store it resumes where it stopped.
+
+    Example: coin fractions --y0 r:5r --phi0 -pi:pi --vx -0.5:0.5 --precision 0.05%
+    """  # noqa: E501
+    from .. import api
+    from ..montecarlo import parse_count, parse_precision
+
+    with user_errors():
+        scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
+                            inertia=inertia, k=k, c=c, g=g, method=method, dt=dt, rtol=rtol,
+                            t_end=t_end, stop_on_settle=stop_on_settle, max_steps=max_steps,
+                            verify=False if single_pass else None)
+        if plot is not None and over is None:
+            raise ParameterError("--plot draws a continuation: give --over NAME=LO:HI:STEPS")
+        if plot is not None and plot.suffix.lower() not in (".png", ".svg"):
+            raise ParameterError(f"--plot {plot}: the file name must end in .png or .svg")
+        keep = tuple(name for name, given in (("mass", mass), ("inertia", inertia))
+                     if given is not None)
+        plan = api.plan_fractions(
+            scene, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi,
+            samples=parse_count("--samples", samples), precision=parse_precision(precision),
+            of=of, max_samples=parse_count("--max-samples", max_samples), seed=seed,
+            sampler=sampler, batch=batch, over=over, keep=keep, force=force)
+        api.check_where(threads, workers, scheduler)
+    if plan.note and not json_out:
+        err_console.print(f"[cyan]note:[/] {plan.note}", highlight=False)
+    progress = Progress(
+        TextColumn("[bold]fractions[/]"), TextColumn("{task.fields[value]}"), BarColumn(),
+        TextColumn("{task.completed:,.0f}/{task.total:,.0f}"),
+        TextColumn("P(standing) {task.fields[estimate]}"),
+        TextColumn("{task.fields[width]}"), RateColumn("traj"), TimeElapsedColumn(),
+        console=err_console, disable=quiet, transient=False)
+    tasks: dict[int, int] = {}
+
+    def show(update) -> None:
+        v = update.value
+        p, lo, hi = update.standing
+        estimate = "-" if math.isnan(p) else \
+            f"{100 * p:.4g} % [{100 * lo:.4g}, {100 * hi:.4g}]"
+        width = "" if update.precision is None or math.isnan(update.widest) else \
+            f"±{100 * update.widest:.2g}→{100 * update.precision:.2g} pp"
+        label = "" if update.values == 1 else \
+            f"{plan.parameter} = {plan.values[v]:g} ({v + 1}/{update.values})"
+        if v not in tasks:
+            tasks[v] = progress.add_task("fractions", total=max(update.expected, 1),
+                                         value=label, estimate=estimate, width=width)
+        progress.update(tasks[v], completed=update.samples, total=max(update.expected,
+                                                                      update.samples, 1),
+                        estimate=estimate, width=width)
+
+    announce_compilation()
+    try:
+        with user_errors(), _BatchStop() as stop, progress:
+            result = api.run_fractions(plan, store=store, overwrite=overwrite, threads=threads,
+                                       workers=workers, scheduler=scheduler, progress=show,
+                                       stop=stop.event)
+    except OSError as exc:  # e.g. no scheduler at that address
+        raise fail(f"cannot run: {exc}") from None
+    if plot is not None:
+        with user_errors():
+            api.render_fractions(result, plot)
+    if json_out:
+        print_json({"version": __version__, **result.to_dict()})
+    elif plan.parameter is None:
+        _print_result(plan, result)
+    else:
+        _print_over(plan, result)
+    if plot is not None and not json_out:
+        console.print(f"wrote {plot}")
+    if result.interrupted:
+        err_console.print("[yellow]stopped:[/] interrupted; the estimates above are from the "
+                          "samples done" + (f"; rerun the same command to resume {store}"
+                                            if store is not None else ""))
+        raise typer.Exit(code=130)
+
+
+def _header(plan, samples: int) -> str:
+    s = plan.sampling
+    how = "scrambled Sobol points" if s.sampler == "sobol" else "independent draws"
+    return f"{samples:,} samples ({how}, seed {s.seed})"
+
+
+def _stopped(result) -> str:
+    goal = result.goal
+    if result.stopped == "precision":
+        of = "every probability" if goal["of"] == "all" else "P(standing)"
+        return (f"{of} known to ±{100 * goal['precision']:.3g} percentage points or better "
+                f"(95 %; widest now ±{100 * result.achieved:.3g})")
+    if result.stopped == "budget":
+        return (f"the budget of {goal['max_samples']:,} samples is spent before ±"
+                f"{100 * goal['precision']:.3g} pp (widest ±{100 * result.achieved:.3g} pp)")
+    if result.stopped == "samples":
+        return "the samples asked for are done"
+    return "interrupted"
+
+
+def _print_result(plan, r) -> None:
+    scene = plan.scene
+    console.print(f"[bold]coin fractions[/]  {_header(plan, r.samples)}; stopped: "
+                  f"{_stopped(r)}", highlight=False)
+    console.print(f"drawn: {plan.sampling.describe(scene)}", highlight=False)
+    basis = "certain labels" if r.verified else "settled runs (single pass: unverified)"
+    table = Table(title=f"Outcomes: probabilities over the {r.counted:,} {basis}, 95 % "
+                        "Wilson intervals", title_justify="left")
+    for col, just in (("n", "right"), ("pose", "left"), ("turn", "left"), ("count", "right"),
+                      ("P", "right"), ("95 % interval", "right")):
+        table.add_column(col, justify=just, no_wrap=True)
+    for row in r.outcomes:
+        style = "bold magenta" if row["pose"] == "standing" else None
+        table.add_row(str(row["n"]), row["pose"], TURN[row["direction"]], f"{row['count']:,}",
+                      _pct(row["probability"]), _interval(row), style=style)
+    console.print(table)
+    summary = Table(show_header=False, box=None, pad_edge=False)
+    summary.add_column(style="bold", no_wrap=True)
+    summary.add_column()
+    summary.add_row("standing", _share(r.standing))
+    summary.add_row("lying", _share(r.lying))
+    what = "no two rungs of the ladder agreed, or no label" if r.verified else "not settled"
+    summary.add_row("uncertain", f"{_share(r.uncertain)} samples ({what})")
+    a = r.all_labelled
+    summary.add_row("all labelled", f"standing {_pct(a['standing']['probability'])} (95 % CI "
+                                    f"{_interval(a['standing'])}) of {a['labelled']:,} "
+                                    "labelled samples, uncertain ones included")
+    cost = r.cost
+    if cost.get("computed"):
+        where = f"{cost['workers']} threads" if cost["mode"] == "threads" else "Dask"
+        summary.add_row("cost", f"{cost['computed']:,} trajectories in "
+                                f"{cost['wall_seconds']:.1f} s wall on {where} "
+                                f"({cost['trajectories_per_second']:,.0f} a second; "
+                                f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each, every "
+                                "rung of the ladder counted)")
+    else:
+        summary.add_row("cost", "nothing computed: every batch was in the store")
+    if r.store:
+        summary.add_row("store", r.store)
+    console.print(summary)
+
+
+def _print_over(plan, res) -> None:
+    first = res.results[0]
+    console.print(f"[bold]coin fractions[/] over {res.parameter} ({len(res.values)} values), "
+                  f"the same samples at every value ({plan.sampling.sampler}, seed "
+                  f"{plan.sampling.seed})", highlight=False)
+    console.print(f"drawn: {plan.sampling.describe()}", highlight=False)
+    if res.note:
+        console.print(f"note: {res.note}", highlight=False)
+    basis = "certain labels" if first.verified else "settled runs"
+    table = Table(title=f"P(standing) over the {basis}, 95 % Wilson intervals",
+                  title_justify="left")
+    unit = {"thickness": "m", "diameter": "m", "k": "N/m", "c": "N s/m", "mass": "kg",
+            "inertia": "kg m^2", "g": "m/s^2"}[res.parameter]
+    cols = [(f"{res.parameter} ({unit})", "right")]
+    if res.parameter in ("thickness", "diameter"):
+        cols.append(("t/d", "right"))
+    cols += [("samples", "right"), ("P(standing)", "right"), ("95 % interval", "right"),
+             ("uncertain", "right"), ("stopped", "left")]
+    for col, just in cols:
+        table.add_column(col, justify=just, no_wrap=True)
+    for value, r in zip(res.values, res.results, strict=True):
+        row = [f"{value:.4g}"]
+        if res.parameter in ("thickness", "diameter"):
+            row.append(f"{r.scene['coin']['thickness'] / r.scene['coin']['diameter']:.3g}")
+        row += [f"{r.samples:,}", _pct(r.standing["probability"]), _interval(r.standing),
+                _pct(r.uncertain["probability"], 3), r.stopped]
+        table.add_row(*row)
+    console.print(table)
+    cost = res.cost
+    if cost.get("computed"):
+        console.print(f"cost: {cost['computed']:,} trajectories in {cost['wall_seconds']:.1f} s "
+                      f"wall ({cost['trajectories_per_second']:,.0f} a second, "
+                      f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each)", highlight=False)
+    if res.store:
+        console.print(f"store: {res.store}", highlight=False)
+
+
+__all__ = ["fractions_command"]

@@ -1,0 +1,76 @@
+"""Any picklable function over a stream of items as Dask distributed tasks, results back to the
+client in the order they finish (`coin fractions` on Dask: each batch of samples is a task that
+returns its labels; the client keeps the store).
+
+The pattern is :func:`coincli.io.runner.run_dask`'s: tasks are submitted in a window of twice
+the cluster's threads (re-read as workers come and go), so that stopping is clean: closing the
+iterator cancels the tasks no worker has taken and waits for those being computed.
+"""
+
+from __future__ import annotations
+
+import uuid
+from collections.abc import Callable, Iterable, Iterator
+
+from .runner import open_dask
+
+
+def run_dask_tasks(fn: Callable, items: Iterable[tuple], key: Callable[[tuple], str],
+                   scheduler: str | None = None,
+                   workers: int | None = None) -> Iterator:
+    """Yield ``fn(*item)`` for each item as its task finishes: on the cluster at ``scheduler``
+    (tcp://host:port), or on a LocalCluster of ``workers`` processes with one thread each.
+    ``items`` is consumed lazily, as the window frees; ``key(item)`` names each task."""
+    from distributed import as_completed
+    from distributed import wait as dask_wait
+
+    client, cluster = open_dask(scheduler, workers)
+    run_id = uuid.uuid4().hex[:12]
+    queue = iter(items)
+    submitted = []
+    completed = as_completed()
+    hard_stop = False
+
+    def submit(count: int) -> None:
+        for _ in range(count):
+            item = next(queue, None)
+            if item is None:
+                return
+            future = client.submit(fn, *item, pure=False, key=f"{key(item)}-{run_id}")
+            submitted.append(future)
+            completed.add(future)
+
+    def window() -> int:
+        return max(2, 2 * sum(client.nthreads().values()))
+
+    try:
+        submit(window())
+        in_flight = len(submitted)
+        for future in completed:
+            in_flight -= 1
+            yield future.result()
+            before = len(submitted)
+            submit(max(0, window() - in_flight))
+            in_flight += len(submitted) - before
+    except KeyboardInterrupt:
+        hard_stop = True
+        raise
+    finally:
+        unfinished = [f for f in submitted if not f.done()]
+        if unfinished:
+            processing = set()
+            if not hard_stop:
+                try:
+                    processing = {k for keys in client.processing().values() for k in keys}
+                except Exception:  # noqa: BLE001 - the scheduler may be gone already
+                    processing = set()
+            running = [f for f in unfinished if f.key in processing]
+            client.cancel([f for f in unfinished if f.key not in processing])
+            if running and not hard_stop:
+                dask_wait(running, timeout=600)
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+__all__ = ["run_dask_tasks"]

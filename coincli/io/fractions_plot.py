@@ -1,0 +1,102 @@
+"""P(outcome) against the parameter of a continuation, with 95 % interval bands (matplotlib,
+loaded lazily; PNG or SVG by the file's suffix)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..montecarlo import PARAMETER_UNITS, FractionsOver, pender_uhrin
+from ..params import ParameterError
+
+FORMATS = (".png", ".svg")
+
+
+def _band(ax, x, rows, label, colour, marker="o"):
+    p = np.array([r["probability"] for r in rows], dtype=float)
+    lo = np.array([r["low"] for r in rows], dtype=float)
+    hi = np.array([r["high"] for r in rows], dtype=float)
+    ax.fill_between(x, lo, hi, color=colour, alpha=0.25, linewidth=0)
+    ax.plot(x, p, marker=marker, ms=3, lw=1.2, color=colour, label=label)
+    return p, lo, hi
+
+
+def plot_over(result: FractionsOver, out, *, title: str | None = None, dpi: int = 150) -> Path:
+    """Two panels: P(standing) (log scale when it spans more than two decades) with the
+    uncertain fraction and, for thickness or diameter, the planar-die formula of Pender and
+    Uhrin; and P(n) of the most probable outcomes."""
+    out = Path(out)
+    if out.suffix.lower() not in FORMATS:
+        raise ParameterError(f"{out}: the plot's file name must end in .png or .svg")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    x = np.asarray(result.values, dtype=float)
+    name = result.parameter
+    unit = PARAMETER_UNITS[name]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 7.5), sharex=True,
+                                      constrained_layout=True)
+    p, lo, _ = _band(top, x, [r.standing for r in result.results], "P(standing), certain labels",
+                     "#000000")
+    _band(top, x, [r.all_labelled["standing"] for r in result.results],
+          "P(standing), all labelled (uncertain ones included)", "#1f77b4", marker="^")
+    _band(top, x, [r.uncertain for r in result.results], "uncertain (of all samples)",
+          "#888888", marker=".")
+    if name in ("thickness", "diameter"):
+        ratios = np.array([r.scene["coin"]["thickness"] / r.scene["coin"]["diameter"]
+                           for r in result.results])
+        fine = np.linspace(ratios.min(), ratios.max(), 400)
+        xs = np.interp(fine, ratios, x) if ratios[0] < ratios[-1] else \
+            np.interp(fine, ratios[::-1], x[::-1])
+        top.plot(xs, pender_uhrin(fine), "--", color="#d62728", lw=1.2,
+                 label="planar die, Pender & Uhrin (random orientation)")
+    positive = p[np.isfinite(p) & (p > 0)]
+    if positive.size and positive.max() / max(positive.min(), 1e-300) > 100:
+        top.set_yscale("log")
+        floor = np.nanmin(np.where(lo > 0, lo, np.nan)) if np.any(lo > 0) else positive.min()
+        top.set_ylim(bottom=max(floor / 2, 1e-7))
+    diameters = {r.scene["coin"]["diameter"] for r in result.results}
+    thicknesses = {r.scene["coin"]["thickness"] for r in result.results}
+    if name == "thickness" and len(diameters) == 1:
+        d = diameters.pop()
+        top.secondary_xaxis("top", functions=(lambda t: t / d, lambda q: q * d)) \
+            .set_xlabel("t / d")
+    elif name == "diameter" and len(thicknesses) == 1:
+        t = thicknesses.pop()
+        top.secondary_xaxis("top", functions=(lambda d: t / np.maximum(d, 1e-12),
+                                              lambda q: t / np.maximum(q, 1e-12))) \
+            .set_xlabel("t / d")
+    top.set_ylabel("probability")
+    top.legend(fontsize=8, loc="best")
+    top.grid(True, which="both", alpha=0.3)
+    # the most probable outcomes n, by their largest probability over the values
+    best: dict[int, float] = {}
+    for r in result.results:
+        for row in r.outcomes:
+            if math.isfinite(row["probability"]):
+                best[row["n"]] = max(best.get(row["n"], 0.0), row["probability"])
+    shown = sorted(sorted(best, key=lambda n: -best[n])[:8])
+    colours = plt.get_cmap("tab10")
+    for i, n in enumerate(shown):
+        rows = [r.probability(n) for r in result.results]
+        _band(bottom, x, rows, f"n = {n} ({'standing' if n % 2 else 'lying'})", colours(i % 10),
+              marker="o" if n % 2 == 0 else "s")
+    bottom.set_ylabel("P(n), certain labels")
+    bottom.set_xlabel(f"{name} ({unit})")
+    bottom.legend(fontsize=8, ncol=2, loc="best")
+    bottom.grid(True, alpha=0.3)
+    samples = sorted({r.samples for r in result.results})
+    count = f"{samples[0]:,}" if len(samples) == 1 else f"{samples[0]:,}-{samples[-1]:,}"
+    fig.suptitle(title or f"Outcome probabilities against {name}: {count} samples a value,\n"
+                 "the same points at every value; bands: 95 % Wilson intervals", fontsize=9)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=dpi)
+    plt.close(fig)
+    return out
+
+
+__all__ = ["plot_over"]

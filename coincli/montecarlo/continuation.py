@@ -1,0 +1,104 @@
+"""The scenes along one physical parameter, mass and inertia following a solid disc, and
+Pender & Uhrin's prediction for comparison."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from ..params import ParameterError, Scene, validate
+
+
+def parse_over(text: str) -> tuple[str, np.ndarray]:
+    """``thickness=0.001:0.02:20`` -> ('thickness', linspace(0.001, 0.02, 20))."""
+    m = re.fullmatch(r"\s*([a-z_]+)\s*=\s*([^:]+):([^:]+):([^:]+)\s*", str(text), re.IGNORECASE)
+    if m is None:
+        raise ParameterError(f"--over '{text}' is not NAME=LO:HI:STEPS (e.g. "
+                             "thickness=0.001:0.02:20)")
+    name = m.group(1).lower()
+    if name not in PARAMETERS:
+        raise ParameterError(f"--over {name}: not a physical parameter; one of "
+                             f"{', '.join(PARAMETERS)}")
+    try:
+        lo, hi = float(m.group(2)), float(m.group(3))
+        steps = float(m.group(4))
+    except ValueError:
+        raise ParameterError(f"--over '{text}': LO, HI and STEPS must be numbers") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)) or not lo < hi:
+        raise ParameterError(f"--over '{text}': LO must be below HI")
+    if not steps.is_integer() or not 2 <= steps <= 10_000:
+        raise ParameterError(f"--over '{text}': STEPS must be a whole number from 2 to 10000")
+    return name, np.linspace(lo, hi, int(steps))
+
+PARAMETERS = ("thickness", "diameter", "k", "c", "mass", "inertia", "g")
+PARAMETER_UNITS = {"thickness": "m", "diameter": "m", "k": "N/m", "c": "N s/m", "mass": "kg",
+                   "inertia": "kg m^2", "g": "m/s^2"}
+
+
+def disc_density(scene: Scene) -> float:
+    """kg/m^3 of the scene's coin as a solid disc of its diameter and thickness."""
+    c = scene.coin
+    return c.mass / (math.pi * c.r_d ** 2 * c.thickness)
+
+
+def disc_inertia(mass: float, diameter: float, thickness: float) -> float:
+    """A uniform solid disc turning about a diameter: m (3 (d/2)^2 + t^2) / 12."""
+    return mass * (3 * (diameter / 2) ** 2 + thickness ** 2) / 12
+
+
+def lamina_inertia(mass: float, diameter: float, thickness: float) -> float:
+    """A rectangle lamina d x t turning in its plane: m (d^2 + t^2) / 12 (the square coin)."""
+    return mass * (diameter ** 2 + thickness ** 2) / 12
+
+
+def scene_at(scene: Scene, parameter: str, value: float, keep: tuple[str, ...] = ()) -> Scene:
+    """The scene with ``parameter`` set to ``value``. For thickness and diameter, the mass and
+    the inertia follow a uniform solid disc of the base coin's density (m = rho pi (d/2)^2 t,
+    I = m (3 (d/2)^2 + t^2) / 12), except those named in ``keep``, which keep the scene's."""
+    if parameter not in PARAMETERS:
+        raise ParameterError(f"cannot vary '{parameter}'; one of {', '.join(PARAMETERS)}")
+    new = scene.with_overrides(**{parameter: float(value)})
+    if parameter in ("thickness", "diameter"):
+        c = new.coin
+        mass = c.mass if "mass" in keep else \
+            disc_density(scene) * math.pi * c.r_d ** 2 * c.thickness
+        inertia = c.inertia if "inertia" in keep else \
+            disc_inertia(mass, c.diameter, c.thickness)
+        new = new.with_overrides(mass=mass, inertia=inertia)
+    return validate(new)
+
+
+def continuation_note(scene: Scene, parameter: str, keep: tuple[str, ...] = ()) -> str | None:
+    """What a user must know about the scenes of a continuation in thickness or diameter."""
+    if parameter not in ("thickness", "diameter"):
+        return None
+    follow = [name for name in ("mass", "inertia") if name not in keep]
+    if not follow:
+        return "mass and inertia are held at the scene's values at every " + parameter
+    c = scene.coin
+    disc_i = disc_inertia(c.mass, c.diameter, c.thickness)
+    text = (f"{' and '.join(follow)} follow{'s' if len(follow) == 1 else ''} a uniform solid "
+            f"disc of the base coin's density ({disc_density(scene):.5g} kg/m^3): "
+            "m = rho pi (d/2)^2 t, I = m (3 (d/2)^2 + t^2) / 12")
+    if "inertia" in follow and abs(disc_i - c.inertia) > 1e-3 * c.inertia:
+        paper = " printed in the paper" if abs(c.inertia - 7.06e-8) < 1e-12 else ""
+        text += (f"; at the base coin (d = {c.diameter:g} m, t = {c.thickness:g} m) the "
+                 f"disc's I is {disc_i:.3g} kg m^2, not the scene's {c.inertia:.3g}{paper}: "
+                 "the curve does not pass through the base scene")
+    if keep:
+        text += f"; {' and '.join(keep)} held at the scene's value"
+    return text
+
+
+def pender_uhrin(ratio) -> np.ndarray:
+    """P(standing) of a planar die with sides d and t = ratio d after Pender and Uhrin
+    (arXiv:1407.6307): P(edge) / P(face) = (sqrt(d^2 + t^2) - d) / (sqrt(d^2 + t^2) - t)
+    * arctan(t / d) / arctan(d / t), i.e. the ratio of the energy barriers times the ratio of
+    the angular widths of the wells (a die with random orientation rolling through many
+    revolutions on a bouncy or grippy surface). 1/2 for a square, 3.7e-4 for t/d = 0.1."""
+    x = np.asarray(ratio, dtype=np.float64)
+    hyp = np.hypot(1.0, x)
+    odds = (hyp - 1.0) / (hyp - x) * np.arctan(x) / np.arctan(1.0 / x)
+    return odds / (1.0 + odds)
