@@ -12,7 +12,7 @@ import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from ..montecarlo import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION
+from ..montecarlo import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION, PARAMETER_UNITS
 from ..params import ParameterError
 from ..version import __version__
 from . import app
@@ -44,6 +44,7 @@ from .common import (
     print_json,
     user_errors,
 )
+from .text import print_rows, say
 
 SAMPLING = "Sampling and stopping"
 OVER = "Continuation along a parameter"
@@ -72,9 +73,9 @@ class _BatchStop(_Stop):
         if self.requested:
             raise KeyboardInterrupt
         self.event.set()
-        err_console.print("[yellow]interrupt:[/] finishing the batches in flight, then "
-                          "stopping (Ctrl-C again to stop at once; rerun the same command "
-                          "with --store to resume)")
+        say(err_console, "[yellow]interrupt:[/] finishing the batches in flight, then "
+                         "stopping (Ctrl-C again to stop at once; rerun the same command "
+                         "with --store to resume)")
 
 
 def _pct(x, digits: int = 4) -> str:
@@ -184,7 +185,7 @@ def fractions_command(
             sampler=sampler, batch=batch, over=over, keep=keep, force=force)
         api.check_where(threads, workers, scheduler)
     if plan.note and not json_out:
-        err_console.print(f"[cyan]note:[/] {plan.note}", highlight=False)
+        say(err_console, f"[cyan]note:[/] {plan.note}")
     progress = Progress(
         TextColumn("[bold]fractions[/]"), TextColumn("{task.fields[value]}"), BarColumn(),
         TextColumn("{task.completed:,.0f}/{task.total:,.0f}"),
@@ -227,11 +228,11 @@ def fractions_command(
     else:
         _print_over(plan, result)
     if plot is not None and not json_out:
-        console.print(f"wrote {plot}")
+        say(console, f"wrote {plot}")
     if result.interrupted:
-        err_console.print("[yellow]stopped:[/] interrupted; the estimates above are from the "
-                          "samples done" + (f"; rerun the same command to resume {store}"
-                                            if store is not None else ""))
+        say(err_console, "[yellow]stopped:[/] interrupted; the estimates above are from the "
+                         "samples done" + (f"; rerun the same command to resume {store}"
+                                           if store is not None else ""))
         raise typer.Exit(code=130)
 
 
@@ -257,9 +258,9 @@ def _stopped(result) -> str:
 
 def _print_result(plan, r) -> None:
     scene = plan.scene
-    console.print(f"[bold]coin fractions[/]  {_header(plan, r.samples)}; stopped: "
-                  f"{_stopped(r)}", highlight=False)
-    console.print(f"drawn: {plan.sampling.describe(scene)}", highlight=False)
+    say(console, f"[bold]coin fractions[/]  {_header(plan, r.samples)}; stopped: "
+                 f"{_stopped(r)}")
+    say(console, f"drawn: {plan.sampling.describe(scene)}")
     basis = "certain labels" if r.verified else "settled runs (single pass: unverified)"
     table = Table(title=f"Outcomes: probabilities over the {r.counted:,} {basis}, 95 % "
                         "Wilson intervals", title_justify="left")
@@ -271,45 +272,42 @@ def _print_result(plan, r) -> None:
         table.add_row(str(row["n"]), row["pose"], TURN[row["direction"]], f"{row['count']:,}",
                       _pct(row["probability"]), _interval(row), style=style)
     console.print(table)
-    summary = Table(show_header=False, box=None, pad_edge=False)
-    summary.add_column(style="bold", no_wrap=True)
-    summary.add_column()
-    summary.add_row("standing", _share(r.standing))
-    summary.add_row("lying", _share(r.lying))
+    summary = []
+    summary.append(("standing", _share(r.standing)))
+    summary.append(("lying", _share(r.lying)))
     what = "no two rungs of the ladder agreed, or no label" if r.verified else "not settled"
-    summary.add_row("uncertain", f"{_share(r.uncertain)} samples ({what})")
+    summary.append(("uncertain", f"{_share(r.uncertain)} samples ({what})"))
     a = r.all_labelled
-    summary.add_row("all labelled", f"standing {_pct(a['standing']['probability'])} (95 % CI "
-                                    f"{_interval(a['standing'])}) of {a['labelled']:,} "
-                                    "labelled samples, uncertain ones included")
+    summary.append(("all labelled", f"standing {_pct(a['standing']['probability'])} (95 % CI "
+                                     f"{_interval(a['standing'])}) of {a['labelled']:,} "
+                                     "labelled samples, uncertain ones included"))
     cost = r.cost
     if cost.get("computed"):
         where = f"{cost['workers']} threads" if cost["mode"] == "threads" else "Dask"
-        summary.add_row("cost", f"{cost['computed']:,} trajectories in "
-                                f"{cost['wall_seconds']:.1f} s wall on {where} "
-                                f"({cost['trajectories_per_second']:,.0f} a second; "
-                                f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each, every "
-                                "rung of the ladder counted)")
+        summary.append(("cost", f"{cost['computed']:,} trajectories in "
+                                 f"{cost['wall_seconds']:.1f} s wall on {where} "
+                                 f"({cost['trajectories_per_second']:,.0f} a second; "
+                                 f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each, every "
+                                 "rung of the ladder counted)"))
     else:
-        summary.add_row("cost", "nothing computed: every batch was in the store")
+        summary.append(("cost", "nothing computed: every batch was in the store"))
     if r.store:
-        summary.add_row("store", r.store)
-    console.print(summary)
+        summary.append(("store", r.store))
+    print_rows(console, summary)
 
 
 def _print_over(plan, res) -> None:
     first = res.results[0]
-    console.print(f"[bold]coin fractions[/] over {res.parameter} ({len(res.values)} values), "
-                  f"the same samples at every value ({plan.sampling.sampler}, seed "
-                  f"{plan.sampling.seed})", highlight=False)
-    console.print(f"drawn: {plan.sampling.describe()}", highlight=False)
+    say(console, f"[bold]coin fractions[/] over {res.parameter} ({len(res.values)} values), "
+                 f"the same samples at every value ({plan.sampling.sampler}, seed "
+                 f"{plan.sampling.seed})")
+    say(console, f"drawn: {plan.sampling.describe()}")
     if res.note:
-        console.print(f"note: {res.note}", highlight=False)
+        say(console, f"note: {res.note}")
     basis = "certain labels" if first.verified else "settled runs"
     table = Table(title=f"P(standing) over the {basis}, 95 % Wilson intervals",
                   title_justify="left")
-    unit = {"thickness": "m", "diameter": "m", "k": "N/m", "c": "N s/m", "mass": "kg",
-            "inertia": "kg m^2", "g": "m/s^2"}[res.parameter]
+    unit = PARAMETER_UNITS[res.parameter]
     cols = [(f"{res.parameter} ({unit})", "right")]
     if res.parameter in ("thickness", "diameter"):
         cols.append(("t/d", "right"))
@@ -327,11 +325,11 @@ def _print_over(plan, res) -> None:
     console.print(table)
     cost = res.cost
     if cost.get("computed"):
-        console.print(f"cost: {cost['computed']:,} trajectories in {cost['wall_seconds']:.1f} s "
-                      f"wall ({cost['trajectories_per_second']:,.0f} a second, "
-                      f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each)", highlight=False)
+        say(console, f"cost: {cost['computed']:,} trajectories in {cost['wall_seconds']:.1f} s "
+                     f"wall ({cost['trajectories_per_second']:,.0f} a second, "
+                     f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each)")
     if res.store:
-        console.print(f"store: {res.store}", highlight=False)
+        say(console, f"store: {res.store}")
 
 
 __all__ = ["fractions_command"]
