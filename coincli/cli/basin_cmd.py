@@ -57,7 +57,7 @@ from .common import (
     print_json,
     user_errors,
 )
-from .text import command, print_rows, say
+from .text import TURN, command, percent, print_rows, say, share
 
 SWEEP = "Sweep"
 RUN = "Where it runs"
@@ -436,18 +436,6 @@ def _damaged_note(path, damaged, treated: str) -> None:
                          "command to recompute them")
 
 
-def _pct(x) -> str:
-    return "-" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{100 * x:.3g} %"
-
-
-def _share(p: dict) -> str:
-    """'770 of 262,144 = 0.294 % (95 % CI 0.274 % to 0.315 %)'"""
-    return (f"{p['count']:,} of {p['of']:,} = {_pct(p['probability'])} "
-            f"(95 % CI {_pct(p['low'])} to {_pct(p['high'])})")
-
-
-TURN = {"none": "none", "clockwise": "cw", "counter-clockwise": "ccw"}
-
 
 @basin_app.command("stats")
 def stats_command(
@@ -501,10 +489,10 @@ def stats_command(
     for row in stats["outcomes"]:
         style = "bold magenta" if row["pose"] == "standing" else None
         cells = [str(row["n"]), row["pose"], TURN[row["direction"]], f"{row['count']:,}",
-                 _pct(row["fraction"])]
+                 percent(row["fraction"])]
         if verified:
             r = certain_rows.get(row["n"])
-            cells += [f"{r['count']:,}", _pct(r["fraction"])] if r else ["0", "-"]
+            cells += [f"{r['count']:,}", percent(r["fraction"])] if r else ["0", "-"]
         table.add_row(*cells, style=style)
     console.print(table)
     summary = []
@@ -521,15 +509,15 @@ def stats_command(
     summary.append(("status", counts or "-"))
     if verified:
         u = stats["uncertain"]
-        summary.append(("certain", _share(stats["certain"])))
-        summary.append(("uncertain", f"{u['count']:,} of {u['of']:,} = {_pct(u['probability'])}"
+        summary.append(("certain", share(stats["certain"])))
+        summary.append(("uncertain", f"{u['count']:,} of {u['of']:,} = {percent(u['probability'])}"
                                      f" (no two rungs agreed); {u['standing']:,} of them "
                                      "standing"))
-        summary.append(("standing", f"{_share(stats['standing_certain'])} of the certain "
+        summary.append(("standing", f"{share(stats['standing_certain'])} of the certain "
                                     "cells"))
-        summary.append(("", f"{_share(stats['standing'])} of all labelled cells"))
+        summary.append(("", f"{share(stats['standing'])} of all labelled cells"))
     else:
-        summary.append(("standing", _share(stats["standing"])))
+        summary.append(("standing", share(stats["standing"])))
         summary.append(("verified", "no: a single pass (labels unverified)"))
     cost = stats["cost"]
     if not stats["computed"]:
@@ -694,7 +682,7 @@ def _print_analysis(path: Path, result, data: dict) -> None:
     console.print(f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
                   f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells; "
                   f"evidence: {'certain' if result.verified else 'settled (unverified)'} "
-                  f"labels, {_pct(1 - w.uncertain_cells)} of the cells", highlight=False)
+                  f"labels, {percent(1 - w.uncertain_cells)} of the cells", highlight=False)
     regions = [w, *result.bands]
     head = f"{ax0['name']} ({ax0['units']})"
 
@@ -736,7 +724,7 @@ def _print_analysis(path: Path, result, data: dict) -> None:
                         _num(None if x is None else x.boundary_dimension, ".2f"),
                         _local(d["perturbation"]["local_exponents"] if d["perturbation"]
                                else []),
-                        _pct(r.uncertain_fraction),
+                        percent(r.uncertain_fraction),
                         _num(r.grid_exponent.alpha if r.grid_exponent else None, ".2f"),
                         style="bold" if r is w else None)
         console.print(exp)

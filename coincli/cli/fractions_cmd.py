@@ -44,7 +44,7 @@ from .common import (
     print_json,
     user_errors,
 )
-from .text import print_rows, say
+from .text import TURN, interval, percent, print_rows, say, share
 
 SAMPLING = "Sampling and stopping"
 OVER = "Continuation along a parameter"
@@ -77,23 +77,6 @@ class _BatchStop(_Stop):
                          "stopping (Ctrl-C again to stop at once; rerun the same command "
                          "with --store to resume)")
 
-
-def _pct(x, digits: int = 4) -> str:
-    if x is None or (isinstance(x, float) and math.isnan(x)):
-        return "-"
-    return f"{100 * x:.{digits}g} %"
-
-
-def _interval(p: dict) -> str:
-    return f"{_pct(p['low'])} to {_pct(p['high'])}"
-
-
-def _share(p: dict) -> str:
-    return (f"{_pct(p['probability'])} (95 % CI {_interval(p)}): {p['count']:,} of "
-            f"{p['of']:,}")
-
-
-TURN = {"none": "none", "clockwise": "cw", "counter-clockwise": "ccw"}
 
 
 @app.command("fractions")
@@ -270,16 +253,16 @@ def _print_result(plan, r) -> None:
     for row in r.outcomes:
         style = "bold magenta" if row["pose"] == "standing" else None
         table.add_row(str(row["n"]), row["pose"], TURN[row["direction"]], f"{row['count']:,}",
-                      _pct(row["probability"]), _interval(row), style=style)
+                      percent(row["probability"]), interval(row), style=style)
     console.print(table)
     summary = []
-    summary.append(("standing", _share(r.standing)))
-    summary.append(("lying", _share(r.lying)))
+    summary.append(("standing", share(r.standing)))
+    summary.append(("lying", share(r.lying)))
     what = "no two rungs of the ladder agreed, or no label" if r.verified else "not settled"
-    summary.append(("uncertain", f"{_share(r.uncertain)} samples ({what})"))
+    summary.append(("uncertain", f"{share(r.uncertain)} ({what})"))
     a = r.all_labelled
-    summary.append(("all labelled", f"standing {_pct(a['standing']['probability'])} (95 % CI "
-                                     f"{_interval(a['standing'])}) of {a['labelled']:,} "
+    summary.append(("all labelled", f"standing {percent(a['standing']['probability'])} (95 % CI "
+                                     f"{interval(a['standing'])}) of {a['labelled']:,} "
                                      "labelled samples, uncertain ones included"))
     cost = r.cost
     if cost.get("computed"):
@@ -319,8 +302,8 @@ def _print_over(plan, res) -> None:
         row = [f"{value:.4g}"]
         if res.parameter in ("thickness", "diameter"):
             row.append(f"{r.scene['coin']['thickness'] / r.scene['coin']['diameter']:.3g}")
-        row += [f"{r.samples:,}", _pct(r.standing["probability"]), _interval(r.standing),
-                _pct(r.uncertain["probability"], 3), r.stopped]
+        row += [f"{r.samples:,}", percent(r.standing["probability"]), interval(r.standing),
+                percent(r.uncertain["probability"], 3), r.stopped]
         table.add_row(*row)
     console.print(table)
     cost = res.cost

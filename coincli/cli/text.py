@@ -10,6 +10,7 @@ that rich then has no reason to move. A caller marks a phrase of its own with no
 
 from __future__ import annotations
 
+import math
 import re
 import shlex
 
@@ -84,3 +85,26 @@ def print_rows(console, rows, label_width: int | None = None) -> None:
         console.print(f"[bold]{label:<{label_width}}[/]"
                       f"{keep_whole(value, width, indent=label_width)}",
                       highlight=False, soft_wrap=True)
+
+
+# -- numbers as the tables print them -----------------------------------------------------------
+TURN = {"none": "none", "clockwise": "cw", "counter-clockwise": "ccw"}  # table column "turn"
+
+
+def percent(x, digits: int = 3) -> str:
+    """0.00294 -> '0.294 %'; None or NaN -> '-'."""
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "-"
+    return f"{100 * x:.{digits}g} %"
+
+
+def interval(p: dict, digits: int = 3) -> str:
+    """A proportion's 95 % interval: '0.274 % to 0.315 %'."""
+    return f"{percent(p['low'], digits)} to {percent(p['high'], digits)}"
+
+
+def share(p: dict, digits: int = 3) -> str:
+    """A proportion (see coincli.stats.proportion): '770 of 262,144 = 0.294 % (95 % CI 0.274 %
+    to 0.315 %)'."""
+    return (f"{p['count']:,} of {p['of']:,} = {percent(p['probability'], digits)} "
+            f"(95 % CI {interval(p, digits)})")
