@@ -26,7 +26,8 @@ demo: install
 	$(COIN) basin $(OUT)/basin.zarr --res 128
 	$(COIN) basin render $(OUT)/basin.zarr -o $(OUT)/basin.png
 	$(COIN) basin stats $(OUT)/basin.zarr
-	@echo "outputs in $(OUT)/: fig2.rrd (open with: rerun $(OUT)/fig2.rrd), basin.zarr, basin.png"
+	@echo "outputs in $(OUT)/: fig2.rrd (open with: $(BIN)/rerun $(OUT)/fig2.rrd), basin.zarr, basin.png"
+	@echo "to type coin and rerun as the hints print them: source $(BIN)/activate"
 
 test: install
 	$(BIN)/python -m pytest -n 2 -q
@@ -34,15 +35,16 @@ test: install
 bench: install
 	$(COIN) bench
 
-# Regenerate every picture and table under docs/ (about 35 minutes on 2 cores; the screenshot
-# needs Debian's xvfb and mesa-vulkan-drivers).
+# Regenerate every picture and table under docs/ (about 45 minutes on 2 idle cores; the
+# screenshot needs Debian's xvfb and mesa-vulkan-drivers).
 docs: install
 	$(COIN) accuracy --res 32 -o docs/accuracy.png --table docs/accuracy.json
+	$(COIN) accuracy --preset thick --res 24 -o docs/accuracy-thick.png \
+		--table docs/accuracy-thick.json
 	$(COIN) basin $(OUT)/docs-basin.zarr --overwrite
 	$(COIN) basin render $(OUT)/docs-basin.zarr -o docs/basin.png
+	$(COIN) basin render $(OUT)/docs-basin.zarr --field settle_time -o docs/basin-settle-time.png
 	$(COIN) basin analyze $(OUT)/docs-basin.zarr -o docs/basin-analysis.png
-	$(COIN) basin $(OUT)/docs-certified.zarr --certify --overwrite
-	$(COIN) basin render $(OUT)/docs-certified.zarr -o docs/basin-certified.png
 	$(COIN) fractions --y0 r:5r --phi0 -pi:pi --vx -0.5:0.5 --over thickness=0.001:0.02:20 \
 		--samples 64k --store $(OUT)/docs-thickness.zarr --plot docs/fractions-thickness.png
 	$(COIN) simulate --vy 1.197 --vphi 3.508 --rrd $(OUT)/fig2.rrd

@@ -27,5 +27,14 @@ DEFAULT_CHUNK = 64
 
 DEFAULT_LOG_EVERY = 1e-3  # s of simulated time between frames of a recording
 
-__all__ = ["AXIS_INFO", "DEFAULT_CHUNK", "DEFAULT_LOG_EVERY", "DEFAULT_PRESET", "DEFAULT_RANGES",
-           "DEFAULT_RES", "IC_NAMES"]
+# coin fractions
+DEFAULT_BATCH = 8192  # 2^13: Sobol points keep their balance in powers of two
+DEFAULT_PRECISION = 0.002  # +- 0.2 percentage points
+DEFAULT_MAX_SAMPLES = 1 << 24
+# The physical parameters a continuation (--over) can follow, and their units.
+PARAMETER_UNITS = {"thickness": "m", "diameter": "m", "k": "N/m", "c": "N s/m", "mass": "kg",
+                   "inertia": "kg m^2", "g": "m/s^2"}
+
+__all__ = ["AXIS_INFO", "DEFAULT_BATCH", "DEFAULT_CHUNK", "DEFAULT_LOG_EVERY",
+           "DEFAULT_MAX_SAMPLES", "DEFAULT_PRECISION", "DEFAULT_PRESET", "DEFAULT_RANGES",
+           "DEFAULT_RES", "IC_NAMES", "PARAMETER_UNITS"]

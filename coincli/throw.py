@@ -24,7 +24,15 @@ from .integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
 from .integrators.ladder import ladder_of
 from .jit import compiled, is_active, python
 from .model import energies, rounded_quarter_turns
-from .params import STATE_NAMES, Scene, model_params, run_settings, state_array, validate
+from .params import (
+    STATE_NAMES,
+    Scene,
+    model_params,
+    run_settings,
+    state_array,
+    step_budget,
+    validate,
+)
 
 MAX_EVENTS = 200_000
 # Engine.AUTO runs the kernel as Python (no numba to import, no machine code to load: ~0.7 s
@@ -236,7 +244,9 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
         notes.append(f"the run went non-finite near t = {t:.4g} s: no outcome (try a smaller "
                      "step or tolerance)")
     if status == Status.BUDGET:
-        notes.append(f"the run used up its budget of {result.steps:,} steps at t = {t:.4g} s: "
+        # The budget counts rejected steps and flight iterations too, so not result.steps.
+        notes.append(f"the run used up its budget of {step_budget(integ):,} steps at "
+                     f"t = {t:.4g} s: "
                      "no outcome (raise --max-steps, or check the throw: a spin or a damping "
                      "this large needs steps too small to finish)")
     if certainty == Certainty.UNCERTAIN and status == Status.SETTLED:

@@ -58,6 +58,18 @@ def test_basin_into_a_store_reports_progress_and_resumes(tmp_path):
                       **SMALL)
 
 
+@pytest.mark.parametrize("first, then", [(False, True), (True, False)])
+def test_a_store_is_not_resumed_with_the_other_kind_of_labels(tmp_path, first, then):
+    """The ladder is part of a store's parameters: single-pass cells never mix with verified
+    ones, either way round."""
+    scene = coincli.load_preset("paper")
+    coincli.basin(scene.with_overrides(verify=first), store=tmp_path / "b.zarr", chunk=8,
+                  **SMALL)
+    with pytest.raises(ParameterError, match="different sweep"):
+        coincli.basin(scene.with_overrides(verify=then), store=tmp_path / "b.zarr", chunk=8,
+                      **SMALL)
+
+
 def test_stop_event_interrupts_and_the_store_resumes_to_the_same_map(tmp_path):
     scene = coincli.load_preset("paper")
     plan = coincli.plan_sweep(scene, chunk=4, **SMALL)

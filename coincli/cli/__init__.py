@@ -5,6 +5,19 @@ from __future__ import annotations
 from typing import Annotated
 
 import typer
+import typer.core
+
+
+def _flag_type(self, ctx):
+    # typer >= 0.20 shows every flag as "<bool>", which reads as if the flag took a value;
+    # an on/off flag needs no type column, a value option keeps its metavar or type.
+    if self.is_flag and self.metavar is None:
+        return ""
+    return _value_type(self, ctx)
+
+
+_value_type = typer.core.TyperOption.display_type_rich
+typer.core.TyperOption.display_type_rich = _flag_type
 
 app = typer.Typer(
     name="coin",

@@ -62,7 +62,8 @@ def accuracy_command(
         "accuracy.png"),
     table: Annotated[Path | None, typer.Option("--table", help="Table of every point (.json "
                                                "or .csv); default: next to the chart.")] = None,
-    res: Annotated[str, typer.Option("--res", help="Label grid, N or NxM (vy0 x vphi0).")] = "32",
+    res: Annotated[str, typer.Option("--res", metavar="N|NxM",
+                                     help="Label grid, N or NxM (vy0 x vphi0).")] = "32",
     vy_range: Annotated[str, typer.Option("--vy", "--vy-range", metavar="LO:HI",
                                           help="vy0 range, m/s.")] = "0.05:2",
     vphi_range: Annotated[str, typer.Option("--vphi", "--vphi-range", metavar="LO:HI",

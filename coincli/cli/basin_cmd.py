@@ -85,7 +85,8 @@ app.add_typer(basin_app, name="basin")
 
 
 def _ic(name: str, help_text: str, default_note: str = ""):
-    return typer.Option(f"--{name}", help=help_text + " A LO:HI range sweeps it (cell centres "
+    return typer.Option(f"--{name}", metavar="X|LO:HI",
+                        help=help_text + " A LO:HI range sweeps it (cell centres "
                         "linspace(LO, HI, n), both ends included)." + default_note,
                         rich_help_panel=INIT)
 
@@ -154,10 +155,12 @@ def sweep_command(
                                          metavar="STORE")],
     x0: X0Range = None, y0: Y0Range = None, phi0: Phi0Range = None, vx: VxRange = None,
     vy: VyRange = DEFAULT_TEXT["vy"], vphi: VphiRange = DEFAULT_TEXT["vphi"],
-    res: Annotated[str, typer.Option("--res", help="Cells per axis: N, or NxM (N along the "
+    res: Annotated[str, typer.Option("--res", metavar="N|NxM",
+                                     help="Cells per axis: N, or NxM (N along the "
                                      "first swept axis, M along the second).",
                                      rich_help_panel=SWEEP)] = str(DEFAULT_RES),
-    chunk: Annotated[str, typer.Option("--chunk", help="Tile size in cells, N or NxM: the "
+    chunk: Annotated[str, typer.Option("--chunk", metavar="N|NxM",
+                                       help="Tile size in cells, N or NxM: the "
                                        "unit of work, of writing and of resuming.",
                                        rich_help_panel=SWEEP)] = str(DEFAULT_CHUNK),
 

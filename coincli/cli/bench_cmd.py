@@ -34,9 +34,11 @@ from .text import say
 
 @app.command("bench")
 def bench_command(
-    cost_res: Annotated[str, typer.Option("--cost-res", help="Cells timed side by side "
+    cost_res: Annotated[str, typer.Option("--cost-res", metavar="N|NxM",
+                                          help="Cells timed side by side "
                                           "(N or NxM).")] = "8",
-    label_res: Annotated[str, typer.Option("--label-res", help="Grid for label agreement.")] = "24",
+    label_res: Annotated[str, typer.Option("--label-res", metavar="N|NxM",
+                                           help="Grid for label agreement.")] = "24",
     repeats: Annotated[int, typer.Option("--repeats", help="Rounds of the side-by-side "
                                          "timing (median reported).")] = 3,
     basin_res: Annotated[int, typer.Option("--basin-res", help="Resolution of the full basin "

@@ -12,7 +12,7 @@ import typer
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from ..montecarlo import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION, PARAMETER_UNITS
+from ..defaults import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION, PARAMETER_UNITS
 from ..params import ParameterError
 from ..version import __version__
 from . import app

@@ -169,13 +169,13 @@ def _check_recording_options(scene, rrd_path, connect, log_every) -> None:
 def print_recording(info) -> None:
     where = []
     if info.rrd is not None:
-        where.append(f"{info.rrd}  (open with: {command('rerun', info.rrd)})")
+        where.append(f"{info.rrd} (open with: {command('rerun', info.rrd)})")
     if info.spawn:
         where.append("streamed to a new viewer")
     if info.connect is not None:
         where.append(f"streamed to {info.connect}")
     print_rows(console, [("recording", f"{'; '.join(where)}: {info.frames:,} frames, "
-                              f"{info.events} contact events")])
+                              f"{info.events} contact events")], LABEL_WIDTH)
 
 
 LABEL_WIDTH = 12  # the widest label, "final state", and a space

@@ -92,10 +92,15 @@ TURN = {"none": "none", "clockwise": "cw", "counter-clockwise": "ccw"}  # table 
 
 
 def percent(x, digits: int = 3) -> str:
-    """0.00294 -> '0.294 %'; None or NaN -> '-'."""
+    """0.00294 -> '0.294 %'; 0.999977 -> '99.998 %', never a rounded '100 %' or '0 %' for a
+    fraction that is not exactly 1 or 0; None or NaN -> '-'."""
     if x is None or (isinstance(x, float) and math.isnan(x)):
         return "-"
-    return f"{100 * x:.{digits}g} %"
+    text = f"{100 * x:.{digits}g}"
+    while digits < 12 and ((text == "100" and x < 1) or (float(text) == 0 and x > 0)):
+        digits += 1
+        text = f"{100 * x:.{digits}g}"
+    return f"{text} %"
 
 
 def interval(p: dict, digits: int = 3) -> str:

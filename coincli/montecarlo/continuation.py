@@ -8,6 +8,7 @@ import re
 
 import numpy as np
 
+from ..defaults import PARAMETER_UNITS
 from ..params import ParameterError, Scene, validate
 
 
@@ -32,9 +33,7 @@ def parse_over(text: str) -> tuple[str, np.ndarray]:
         raise ParameterError(f"--over '{text}': STEPS must be a whole number from 2 to 10000")
     return name, np.linspace(lo, hi, int(steps))
 
-PARAMETERS = ("thickness", "diameter", "k", "c", "mass", "inertia", "g")
-PARAMETER_UNITS = {"thickness": "m", "diameter": "m", "k": "N/m", "c": "N s/m", "mass": "kg",
-                   "inertia": "kg m^2", "g": "m/s^2"}
+PARAMETERS = tuple(PARAMETER_UNITS)
 
 
 def disc_density(scene: Scene) -> float:

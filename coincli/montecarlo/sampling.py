@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..defaults import DEFAULT_BATCH
 from ..params import ParameterError, Scene, check_start
 
 # The five initial conditions drawn (x0 stays the scene's: the model is translation invariant).
@@ -17,7 +18,6 @@ IC5 = ("y0", "phi0", "vx", "vy", "vphi")
 UNITS = {"y0": "m", "phi0": "rad", "vx": "m/s", "vy": "m/s", "vphi": "rad/s"}
 DEFAULT_DISTRIBUTIONS = {"vy": "0.05:2", "vphi": "-20:20"}  # as coin basin's default axes
 SAMPLERS = ("sobol", "random")
-DEFAULT_BATCH = 8192  # 2^13: Sobol points keep their balance in powers of two
 SOBOL_MAX = 1 << 30  # scipy's Sobol engine has 30 bits
 # -- distributions ------------------------------------------------------------------------------
 @dataclass(frozen=True)

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..defaults import DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION
 from ..enums import Certainty, Status
 from ..params import ParameterError
 from ..stats import outcome_rows, proportion
@@ -65,8 +66,6 @@ class Tally:
         return sum(c for n, c in self.labelled.items() if n % 2)
 
 GOALS = ("all", "standing")
-DEFAULT_PRECISION = 0.002  # +- 0.2 percentage points
-DEFAULT_MAX_SAMPLES = 1 << 24
 CONFIDENCE = 0.95
 INTERVAL_NOTE = ("Wilson score interval at 95 % (scipy): exact in its model for independent "
                  "draws, conservative in practice for scrambled Sobol points")
