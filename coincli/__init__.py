@@ -13,8 +13,9 @@ Names load on first use, so ``import coincli`` (and ``coin --help``) stays cheap
 
 from .version import __version__
 
-_API = ("Fractions", "FractionsOver", "Method", "Outcome", "Scene", "Status", "SweepEstimate",
-        "SweepPlan", "SweepProgress", "SweepReport", "SweepStart", "SweepTooLong", "Trajectory",
+_API = ("Certainty", "Fractions", "FractionsOver", "Method", "Outcome", "Scene", "Status",
+        "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport", "SweepStart", "SweepTooLong",
+        "Trajectory",
         "analyze", "basin", "basin_stats", "classify", "estimate_sweep", "fractions",
         "fractions_over", "load_preset", "open_basin", "open_fractions", "plan_sweep",
         "render_analysis", "render_basin", "render_fractions", "simulate", "stability", "sweep",

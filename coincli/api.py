@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .enums import Method, Status
+from .enums import Certainty, Method, Status
 from .grid import (
     DEFAULT_CHUNK,
     DEFAULT_RES,
@@ -654,8 +654,8 @@ def render_fractions(result: FractionsOver, out: str | os.PathLike, *,
     return plot_over(result, out, title=title, dpi=dpi)
 
 
-__all__ = ["Fractions", "FractionsOver", "FractionsPlan", "FractionsProgress", "Method",
-           "Outcome", "Status", "SweepPlan", "SweepProgress", "SweepReport", "Trajectory",
+__all__ = ["Certainty", "Fractions", "FractionsOver", "FractionsPlan", "FractionsProgress",
+           "Method", "Outcome", "Status", "SweepPlan", "SweepProgress", "SweepReport", "Trajectory",
            "basin", "basin_stats", "classify", "fractions", "fractions_over", "load_preset",
            "open_basin", "open_fractions", "plan_fractions", "plan_sweep", "render_basin",
            "render_fractions", "run_fractions", "simulate", "stability", "sweep"]

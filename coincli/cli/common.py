@@ -13,6 +13,7 @@ from rich.markup import escape
 
 from ..params import ParameterError, Scene, validate
 from ..presets import load
+from .text import keep_whole
 
 console = Console()
 err_console = Console(stderr=True)
@@ -104,7 +105,12 @@ JsonOpt = Annotated[bool, typer.Option("--json", metavar="", help="Print one JSO
 
 def fail(message: str) -> typer.Exit:
     """Print a one-line error and return the exit to raise (code 2, like a usage error)."""
-    err_console.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
+    text = f"[bold red]error:[/] {escape(message)}"
+    if err_console.is_terminal:
+        # A person reads it: break between phrases, not mid-word where the terminal would.
+        # Piped or captured it stays one line, for grep and logs.
+        text = keep_whole(text, err_console.width, indent=len("error: "))
+    err_console.print(text, highlight=False, soft_wrap=True)
     return typer.Exit(code=2)
 
 

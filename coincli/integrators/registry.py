@@ -98,8 +98,8 @@ METHODS: dict[Method, MethodInfo] = {
                    "Dormand-Prince 5(4) with error control; lands on the contact onsets and "
                    "lift-offs it sees (flight integrated: a dip under ~3 um can hide in a step)"),
         MethodInfo(Method.EVENT, 5, True, False,
-                   "dopri5 in contact, closed-form flight between contacts, certified early "
-                   "stop"),
+                   "dopri5 in contact, closed-form flight between contacts, stops once "
+                   "the outcome is decided (E < E_crit)"),
     )
 }
 

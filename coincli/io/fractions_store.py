@@ -210,7 +210,7 @@ def prepare(path, attrs: dict, layout: Layout, values: np.ndarray | None = None,
             diff = differences(stored, attrs)
             if diff:
                 raise ParameterError(f"{path} holds other samples: {'; '.join(diff[:4])}"
-                                     f"{' ...' if len(diff) > 4 else ''}. Rerun with the "
+                                     f"{' ...' if len(diff) > 4 else ''}. Run again with the "
                                      "store's settings to resume it, or --overwrite to "
                                      "replace it")
             names = set(group.array_keys())

@@ -567,7 +567,7 @@ def prepare(path: str | os.PathLike, attrs: dict, spec: SweepSpec,
     diff = differences(view.attrs, attrs)
     if diff:
         raise ParameterError(f"{path} holds a different sweep: {'; '.join(diff[:4])}"
-                             f"{' ...' if len(diff) > 4 else ''}. Rerun with the "
+                             f"{' ...' if len(diff) > 4 else ''}. Run again with the "
                              "store's parameters to resume it, or --overwrite to "
                              "replace it")
     _check_layout(view.group, spec.grid, path)
