@@ -145,6 +145,17 @@ def test_import_is_light_and_leaves_numba_alone():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
+def test_the_command_line_declares_its_options_without_numpy():
+    """`coin --help` and option parsing load the command modules only: no numpy, numba or
+    kernels (their import is most of a command's start-up)."""
+    code = ("import sys, coincli.cli\n"
+            "heavy = sorted(m for m in sys.modules if m.split('.')[0] in ('numpy', 'numba', "
+            "'zarr', 'xarray', 'scipy', 'matplotlib', 'rerun', 'dask') "
+            "or m.startswith(('coincli.integrators', 'coincli.montecarlo', 'coincli.io')))\n"
+            "assert not heavy, heavy")
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
 def test_worked_example_runs(tmp_path):
     """docs/example.py, the README's worked example, runs as it is."""
     example = Path(__file__).resolve().parent.parent / "docs" / "example.py"

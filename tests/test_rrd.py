@@ -317,6 +317,27 @@ def test_cli_writes_coin_rrd_by_default(tmp_path, monkeypatch):
     assert len(RrdReader(tmp_path / "coin.rrd").blueprints()) == 1
 
 
+def test_a_full_disk_leaves_no_recording_and_says_so(tmp_path, monkeypatch):
+    """Rerun's file sink does not report a failed write; the recording is read back before it
+    is renamed into place, so a file cut short (as on a full disk) is a one-line error and
+    leaves neither a truncated .rrd nor a temporary file."""
+    check = rrd_io._check_complete
+
+    def cut_short(path):
+        data = path.read_bytes()
+        path.write_bytes(data[: len(data) // 2])
+        check(path)
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(rrd_io, "_check_complete", cut_short)
+    result = runner.invoke(app, ["simulate", "--vy", "1.197", "--vphi", "3.508"])
+    assert result.exit_code == 2
+    err = result.stderr.strip()
+    assert err.startswith("error:") and len(err.splitlines()) == 1, err
+    assert "disk full" in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_cli_rrd_path_and_log_every(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "sub" / "throw.rrd"

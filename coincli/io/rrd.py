@@ -16,6 +16,7 @@ carries phi in radians), forces in newtons (drawn as arrows, see :func:`force_ar
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import shutil
@@ -30,7 +31,7 @@ from ..enums import Status
 from ..integrators.registry import setting_text
 from ..version import __version__
 from .frames import ARROW_PEAK_DIAMETERS, Frames, build_frames, force_arrows
-from .paths import check_connect_url, check_rrd_path
+from .paths import atomic_output, check_connect_url, check_rrd_path
 
 APPLICATION_ID = "coin"
 TIMELINE = "sim_time"
@@ -209,23 +210,45 @@ def write_recording(trajectory, *, rrd: str | os.PathLike | None = None, spawn: 
         frames = build_frames(trajectory)
     scene = trajectory.scene
 
-    rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
-    rec.set_sinks(*_sinks(rr, rec, rrd_path, spawn, connect, port))
-    init = scene.initial
-    rec.send_recording_name(f"coin simulate vy={init.vy:g} vphi={init.vphi:g} "
-                            f"phi0={init.phi0:g} ({scene.integration.method.label})")
-    rec.send_blueprint(blueprint(frames, scene), make_active=True, make_default=True)
-    _log_static(rec, rr, trajectory, frames, log_every)
-    if len(frames):
-        _send_scene(rec, rr, trajectory, frames)
-        _send_plots(rec, rr, trajectory, frames)
-    _send_text_log(rec, rr, trajectory, frames)
-    try:
-        rec.flush(timeout_sec=flush_timeout)
-    finally:
-        rec.disconnect()  # closes the file sink (writes its footer) and hangs up on viewers
+    with contextlib.ExitStack() as outputs:
+        # Written through a temporary file renamed into place: complete or absent.
+        file_out = outputs.enter_context(atomic_output(rrd_path)) if rrd_path else None
+        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
+        rec.set_sinks(*_sinks(rr, rec, file_out, spawn, connect, port))
+        init = scene.initial
+        rec.send_recording_name(f"coin simulate vy={init.vy:g} vphi={init.vphi:g} "
+                                f"phi0={init.phi0:g} ({scene.integration.method.label})")
+        rec.send_blueprint(blueprint(frames, scene), make_active=True, make_default=True)
+        _log_static(rec, rr, trajectory, frames, log_every)
+        if len(frames):
+            _send_scene(rec, rr, trajectory, frames)
+            _send_plots(rec, rr, trajectory, frames)
+        _send_text_log(rec, rr, trajectory, frames)
+        try:
+            rec.flush(timeout_sec=flush_timeout)
+        finally:
+            rec.disconnect()  # closes the file sink (writes its footer), hangs up on viewers
+        if file_out is not None:
+            _check_complete(file_out)
     return RecordingInfo(rrd=rrd_path, connect=connect, spawn=spawn, frames=len(frames),
                          events=len(frames.events), recording_id=str(rec.get_recording_id()))
+
+
+def _check_complete(path: Path) -> None:
+    """Raise OSError unless ``path`` reads back as a whole recording: Rerun's file sink does not
+    report a failed write (a full disk left a 0-byte or truncated file behind)."""
+    import warnings
+
+    from rerun.chunk import RrdReader
+
+    try:
+        with warnings.catch_warnings():  # a truncated file also warns: one line is enough
+            warnings.simplefilter("ignore")
+            complete = bool(RrdReader(path).recordings())
+    except (RuntimeError, ValueError) as exc:
+        raise OSError(f"the recording did not read back ({exc}); is the disk full?") from None
+    if not complete:
+        raise OSError("the recording did not read back whole; is the disk full?")
 
 
 def _log_static(rec, rr, trajectory, frames: Frames, log_every: float | None) -> None:
