@@ -47,6 +47,7 @@ import numpy as np
 
 from ..params import ParameterError
 from .schema import VARIABLES
+from .store import show_value
 
 FORMAT = 1
 MARK = "coin_fractions"
@@ -123,17 +124,9 @@ def differences(stored: dict, wanted: dict) -> list[str]:
     for key in sorted(set(a) | set(b)):
         if a.get(key, "absent") != b.get(key, "absent"):
             name = key.split(".", 1)[1] if key.startswith(("parameters.", "sampling.")) else key
-            out.append(f"{name} = {_show(a.get(key, 'absent'))} in the store, "
-                       f"{_show(b.get(key, 'absent'))} here")
+            out.append(f"{name} = {show_value(a.get(key, 'absent'))} in the store, "
+                       f"{show_value(b.get(key, 'absent'))} here")
     return out
-
-
-def _show(value) -> str:
-    if value is None:
-        return "none"
-    if isinstance(value, float):
-        return f"{value:.10g}"
-    return str(value)
 
 
 def _consolidate(path: Path) -> None:

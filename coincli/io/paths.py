@@ -119,12 +119,15 @@ def check_rrd_path(path: str | os.PathLike) -> Path:
 
 
 @contextlib.contextmanager
-def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
-    """Write ``path`` through a temporary file beside it (same suffix, so that writers that go
-    by the suffix still do), renamed into place on success and removed on any failure: an
-    output is complete or absent, never a truncated file or a leftover temporary one."""
+def atomic_output(path: str | os.PathLike, tmp: Path | None = None) -> Iterator[Path]:
+    """Write ``path`` through a temporary file beside it (``tmp``; by default a hidden name
+    with the same suffix, so that writers that go by the suffix still do), renamed into place
+    on success and removed on any failure: an output is complete or absent, never a truncated
+    file or a leftover temporary one."""
     target = Path(path)
-    tmp = target.with_name(f".{target.stem}.tmp-{os.getpid()}{target.suffix}")
+    target.parent.mkdir(parents=True, exist_ok=True)
+    if tmp is None:
+        tmp = target.with_name(f".{target.stem}.tmp-{os.getpid()}{target.suffix}")
     try:
         yield tmp
         os.replace(tmp, target)

@@ -65,6 +65,7 @@ import numpy as np
 from ..grid import Axis, Grid, SweepSpec, TileResult
 from ..params import ParameterError
 from .dataset import Basin
+from .paths import atomic_output
 from .schema import COMPARED_ATTRS, COORD_NOTE, DONE_ATTRS, FILLS, VARIABLES, tile_dims
 
 ARRAY_NAMES = SweepSpec.array_names  # the data arrays, in the order of the digest
@@ -126,7 +127,7 @@ def _display_name(key: str) -> str:
     return key
 
 
-def _show(value) -> str:
+def show_value(value) -> str:
     if value is None:
         return "none"
     if isinstance(value, float):
@@ -141,8 +142,8 @@ def differences(stored: dict, wanted: dict) -> list[str]:
     out = []
     for key in sorted(set(a) | set(b), key=lambda k: (k.split(".")[0] != "sweep", k)):
         if a.get(key, "absent") != b.get(key, "absent"):
-            out.append(f"{_display_name(key)} = {_show(a.get(key))} in the store, "
-                       f"{_show(b.get(key))} here")
+            out.append(f"{_display_name(key)} = {show_value(a.get(key))} in the store, "
+                       f"{show_value(b.get(key))} here")
     return out
 
 
@@ -409,15 +410,10 @@ def _compare_metadata(path: Path, files: dict[str, bytes]) -> list[str]:
 
 def _rewrite(path: Path, key: str, data: bytes) -> None:
     target = path / key
-    target.parent.mkdir(parents=True, exist_ok=True)
+    # "*.partial": the suffix by which the next writer of a tile finds a dead writer's file
     tmp = target.with_name(f"{target.name}.{socket.gethostname()}-{os.getpid()}.partial")
-    try:
-        tmp.write_bytes(data)
-        os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
+    with atomic_output(target, tmp) as out:
+        out.write_bytes(data)
 
 
 def _chunk_file(root: Path, name: str, tile: tuple[int, int]) -> Path:
@@ -636,15 +632,9 @@ def claims_dir(path: str | os.PathLike) -> Path:
 
 
 def _write_atomically(target: Path, text: str) -> None:
-    target.parent.mkdir(parents=True, exist_ok=True)
     tmp = target.with_name(f".{target.name}.{os.getpid()}.{threading.get_ident()}")
-    try:
-        tmp.write_text(text)
-        os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp.unlink()
-        raise
+    with atomic_output(target, tmp) as out:
+        out.write_text(text)
 
 
 def record_run(path: str | os.PathLike, run: dict) -> None:
