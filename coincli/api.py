@@ -572,7 +572,7 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
 def render_analysis(analysis, out: str | os.PathLike, *, title: str | None = None,
                     dpi: int = 150) -> Path:
     """Draw an analysis (of :func:`analyze`): f(eps) on log-log axes with the fits, and S_b,
-    S_bb and alpha by band; PNG or SVG by the file's extension."""
+    S_bb and alpha by band; PNG, SVG or PDF by the file's extension."""
     from .io.analysis_charts import plot_analysis
 
     return plot_analysis(analysis, Path(out), title=title, dpi=dpi)
@@ -648,7 +648,7 @@ def open_fractions(store: str | os.PathLike):
 def render_fractions(result: FractionsOver, out: str | os.PathLike, *,
                      title: str | None = None, dpi: int = 150) -> Path:
     """Plot P(outcome) against the parameter of a continuation, with 95 % interval bands (PNG
-    or SVG by the file's suffix)."""
+    SVG or PDF by the file's suffix)."""
     from .io.fractions_plot import plot_over
 
     return plot_over(result, out, title=title, dpi=dpi)

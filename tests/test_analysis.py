@@ -203,7 +203,7 @@ def test_cli_json_and_figures(store, tmp_path):
     (("--eps", "1e-3:1e-6"), "empty range"),
     (("--eps", "0:1e-3"), "0 < LO < HI"),
     (("--eps-values", "1"), "--eps-values"),
-    (("-o", "fig.pdf"), ".png or .svg"),
+    (("-o", "fig.jpg"), ".png, .svg or .pdf"),
     (("--bands", "999"), "--bands"),
 ])
 def test_cli_bad_options_are_one_line_errors(store, tmp_path, args, fragment):

@@ -108,6 +108,11 @@ def test_stats_and_render_take_a_dataset_or_a_store(tmp_path):
     assert sum(row["count"] for row in stats["outcomes"]) == 256
     out = coincli.render_basin(ds, tmp_path / "map.png")
     assert out.stat().st_size > 10_000
+    # the format is the file name's: PNG, SVG and PDF are what they say they are
+    magic = {".png": b"\x89PNG", ".svg": b"<?xml", ".pdf": b"%PDF"}
+    for suffix, head in magic.items():
+        path = coincli.render_basin(ds, tmp_path / f"map{suffix}", field="settle_time")
+        assert path.read_bytes().startswith(head), suffix
     # a store opened by xarray itself (quarter_turns masked to float) works too
     import xarray as xr
 

@@ -625,8 +625,7 @@ def analyze_command(
     from ..analysis import DEFAULT_POINTS
     from ..analysis import eps_values as make_eps
     from ..grid import parse_range
-    from ..io.analysis_charts import check_figure_path
-    from ..io.paths import check_rrd_path
+    from ..io.paths import check_figure_path, check_rrd_path
     from ..io.store import read_basin
 
     with user_errors():

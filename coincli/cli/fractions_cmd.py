@@ -115,7 +115,7 @@ def fractions_command(
         "unless --mass or --inertia is given.", rich_help_panel=OVER)] = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", metavar="FILE", help="With --over: draw P(outcome) against the parameter "
-        "with 95 % bands (.png or .svg).", rich_help_panel=OVER)] = None,
+        "with 95 % bands (.png, .svg or .pdf).", rich_help_panel=OVER)] = None,
     store: Annotated[Path | None, typer.Option(
         "--store", metavar="PATH", help="Keep the samples and labels in this Zarr store; the "
         "same command resumes it.", rich_help_panel=RUN)] = None,
@@ -157,8 +157,10 @@ def fractions_command(
                             verify=False if single_pass else None)
         if plot is not None and over is None:
             raise ParameterError("--plot draws a continuation: give --over NAME=LO:HI:STEPS")
-        if plot is not None and plot.suffix.lower() not in (".png", ".svg"):
-            raise ParameterError(f"--plot {plot}: the file name must end in .png or .svg")
+        if plot is not None:
+            from ..io.paths import check_figure_path
+
+            check_figure_path(plot, "--plot")
         keep = tuple(name for name, given in (("mass", mass), ("inertia", inertia))
                      if given is not None)
         plan = api.plan_fractions(

@@ -10,9 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from ..boundary import LOG2
-from ..params import ParameterError
+from .paths import check_figure_path, save_figure
 
-FORMATS = (".png", ".svg")
 WHOLE_COLOUR = "black"
 
 
@@ -44,11 +43,6 @@ def _alpha_text(exp) -> str:
     if math.isfinite(exp.alpha_low):
         return (rf"$\alpha$ = {exp.alpha:.2f} [{exp.alpha_low:.2f}, {exp.alpha_high:.2f}]")
     return rf"$\alpha$ = {exp.alpha:.2f} (2 points)"
-
-
-def check_figure_path(path: Path) -> None:
-    if path.suffix.lower() not in FORMATS:
-        raise ParameterError(f"{path}: the figure's file name must end in .png or .svg")
 
 
 def _plot_fractions(ax, analysis) -> None:
@@ -198,9 +192,7 @@ def plot_analysis(analysis, path: Path, title: str | None = None, dpi: int = 150
                           f"{a0['lo']:g}:{a0['hi']:g} {a0['units']} x {a1['name']} "
                           f"{a1['lo']:g}:{a1['hi']:g} {a1['units']}, "
                           f"{a0['n']} x {a1['n']} cells", fontsize=11)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi)
 
 
-__all__ = ["FORMATS", "check_figure_path", "plot_analysis"]
+__all__ = ["plot_analysis"]

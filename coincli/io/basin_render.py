@@ -22,7 +22,7 @@ from ..enums import Certainty, Status
 from ..grid import AXIS_INFO
 from ..integrators import NO_LABEL
 from .dataset import Basin
-from .paths import atomic_output
+from .paths import check_figure_path, save_figure
 
 WHITE = (1.0, 1.0, 1.0, 1.0)
 STANDING = (0.0, 0.0, 0.0, 1.0)
@@ -115,7 +115,6 @@ def _fixed_text(basin: Basin) -> str:
     return ", ".join(parts)
 
 
-FORMATS = (".png", ".svg", ".pdf")
 FIELDS = ("n", "settle_time")
 
 
@@ -131,9 +130,7 @@ def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
 
-    out = Path(out)
-    if out.suffix.lower() not in FORMATS:
-        raise ValueError(f"{out}: the file name must end in {', '.join(FORMATS)}")
+    out = check_figure_path(out, "picture")
     if field not in FIELDS:
         raise ValueError(f"unknown field {field!r}; one of {', '.join(FIELDS)}")
     if out.parent and not out.parent.exists():
@@ -193,11 +190,7 @@ def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
     ax.set_title(f"{_fixed_text(basin)}; k = {params['foundation']['k']:g} N/m, "
                  f"c = {params['foundation']['c']:g} N s/m; {method['name']} {setting}, "
                  f"$t_{{end}}$ = {method['t_end']:g} s", fontsize=8, color="#444444")
-    try:
-        with atomic_output(out) as tmp:  # complete or absent, never truncated
-            fig.savefig(tmp, dpi=dpi, format="png")
-    finally:
-        plt.close(fig)
+    save_figure(fig, out, dpi)
     return out
 
 
@@ -313,4 +306,4 @@ def log_rerun(basin: Basin, rrd: str | os.PathLike) -> Path:
     return rrd
 
 
-__all__ = ["DEFAULT_N_MAX", "FIELDS", "FORMATS", "basin_rgba", "log_rerun", "render_map"]
+__all__ = ["DEFAULT_N_MAX", "FIELDS", "basin_rgba", "log_rerun", "render_map"]

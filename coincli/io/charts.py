@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..enums import Method
 from ..version import __version__
-from .paths import atomic_output
+from .paths import atomic_output, save_figure
 
 COLOURS = {Method.SYMPLECTIC_EULER: "#d62728", Method.VERLET: "#ff7f0e", Method.RK4: "#2ca02c",
            Method.DOPRI5: "#1f77b4", Method.EVENT: "#9467bd"}
@@ -76,7 +76,7 @@ def plot_study(study, path: Path, title: str = "") -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, (ax_traj, ax_label) = plt.subplots(1, 2, figsize=(13, 5.2), constrained_layout=True)
+    fig, (ax_traj, ax_label) = plt.subplots(1, 2, figsize=(13, 6.0), layout="constrained")
     floor = 0.5 / max(study.robust_cells, 1)  # a label error of 0 is drawn here
     by_method: dict[str, list] = {}
     for p in study.points:
@@ -97,10 +97,10 @@ def plot_study(study, path: Path, title: str = "") -> None:
                                   xytext=(3, 3), fontsize=6, color=COLOURS.get(method))
         if at_floor:  # one note for the run of zeros, not a pile of labels on the floor
             first = min(at_floor, key=lambda p: p.cpu_per_trajectory)
+            below = 10 + 8 * len([m for m in by_method if m < method])
             ax_label.annotate(f"0 from {_knob_text(first)}", (first.cpu_per_trajectory * 1e3,
                                                               floor),
-                              textcoords="offset points", xytext=(0, -10 - 7 * len(
-                                  [m for m in by_method if m < method])), fontsize=6,
+                              textcoords="offset points", xytext=(0, -below), fontsize=7,
                               color=COLOURS.get(method), ha="center")
     if study.paper_point is not None:
         pp = study.paper_point
@@ -111,8 +111,8 @@ def plot_study(study, path: Path, title: str = "") -> None:
     if vp is not None:
         ax_label.plot([vp.cpu_per_trajectory * 1e3], [max(vp.label_error, floor)], marker="D",
                       ms=10, color="#9467bd", markeredgecolor="black", ls="none", zorder=6,
-                      label=f"default, verified ({vp.setting.label}): "
-                            f"{100 * vp.uncertain:.2g} % uncertain")
+                      label=f"the default, verified ({vp.setting.label.replace(' verified', '')}"
+                            f" and up): {100 * vp.uncertain:.2g} % of the cells uncertain")
     ax_label.axhline(0.01, color="grey", ls="--", lw=1, label="1 % label error")
     ax_label.axhline(floor, color="lightgrey", ls=":", lw=1, label="no wrong label (drawn here)")
     for ax in (ax_traj, ax_label):
@@ -126,12 +126,10 @@ def plot_study(study, path: Path, title: str = "") -> None:
     ax_label.set_ylabel(f"label error: fraction of the {study.robust_cells} robust cells "
                         "wrong [1]")
     ax_label.set_title("Basin label error vs cost")
-    ax_label.legend(loc="upper right", fontsize=7)
-    ax_traj.legend(loc="upper right", fontsize=7)
+    ax_label.set_ylim(bottom=floor / 5)  # room for the "0 from" notes above the ticks
+    # one legend for both panels, below them: it never covers a curve
+    handles, labels = ax_label.get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=8, frameon=False)
     if title:
         fig.suptitle(title, fontsize=10)
-    try:
-        with atomic_output(path) as tmp:
-            fig.savefig(tmp, dpi=130, format="png")
-    finally:
-        plt.close(fig)
+    save_figure(fig, path, 130)

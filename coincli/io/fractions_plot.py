@@ -1,5 +1,5 @@
 """P(outcome) against the parameter of a continuation, with 95 % interval bands (matplotlib,
-loaded lazily; PNG or SVG by the file's suffix)."""
+loaded lazily; PNG, SVG or PDF by the file's suffix)."""
 
 from __future__ import annotations
 
@@ -9,9 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..montecarlo import PARAMETER_UNITS, FractionsOver, pender_uhrin
-from ..params import ParameterError
-
-FORMATS = (".png", ".svg")
+from .paths import check_figure_path, save_figure
 
 
 def _band(ax, x, rows, label, colour, marker="o"):
@@ -28,8 +26,7 @@ def plot_over(result: FractionsOver, out, *, title: str | None = None, dpi: int 
     uncertain fraction and, for thickness or diameter, the planar-die formula of Pender and
     Uhrin; and P(n) of the most probable outcomes."""
     out = Path(out)
-    if out.suffix.lower() not in FORMATS:
-        raise ParameterError(f"{out}: the plot's file name must end in .png or .svg")
+    check_figure_path(out, "plot")
     import matplotlib
 
     matplotlib.use("Agg")
@@ -93,10 +90,7 @@ def plot_over(result: FractionsOver, out, *, title: str | None = None, dpi: int 
     count = f"{samples[0]:,}" if len(samples) == 1 else f"{samples[0]:,}-{samples[-1]:,}"
     fig.suptitle(title or f"Outcome probabilities against {name}: {count} samples a value,\n"
                  "the same points at every value; bands: 95 % Wilson intervals", fontsize=9)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=dpi)
-    plt.close(fig)
-    return out
+    return save_figure(fig, out, dpi)
 
 
 __all__ = ["plot_over"]

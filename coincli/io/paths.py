@@ -137,6 +137,33 @@ def atomic_output(path: str | os.PathLike, tmp: Path | None = None) -> Iterator[
         raise
 
 
+FIGURE_FORMATS = (".png", ".svg", ".pdf")
+
+
+def check_figure_path(path: str | os.PathLike, what: str = "figure") -> Path:
+    """``path`` as a Path, or ParameterError unless it ends in a format matplotlib writes."""
+    from ..params import ParameterError
+
+    path = Path(path)
+    if path.suffix.lower() not in FIGURE_FORMATS:
+        raise ParameterError(f"{path}: the {what}'s file name must end in .png, .svg or .pdf")
+    return path
+
+
+def save_figure(fig, path: str | os.PathLike, dpi: int) -> Path:
+    """Save a matplotlib figure in the format its file name ends in (.png, .svg, .pdf), through
+    :func:`atomic_output`, and close it."""
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    try:
+        with atomic_output(path) as tmp:
+            fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
+    finally:
+        plt.close(fig)
+    return path
+
+
 def check_connect_url(url: str) -> str:
     """Raise ValueError (one line) unless ``url`` looks like a Rerun gRPC proxy address."""
     if not url.startswith(("rerun://", "rerun+http://", "rerun+https://")):
@@ -161,6 +188,7 @@ def probe_viewer(url: str, timeout: float = 2.0) -> None:
                               "start one with `rerun` or use --spawn") from None
 
 
-__all__ = ["DEFAULT_CONNECT_URL", "DISK_ERRORS", "NotWritable", "atomic_output",
+__all__ = ["DEFAULT_CONNECT_URL", "DISK_ERRORS", "FIGURE_FORMATS", "NotWritable", "atomic_output",
+           "check_figure_path", "save_figure",
            "check_connect_url", "check_rrd_path", "check_writable", "describe", "probe_name",
            "probe_viewer"]
