@@ -26,6 +26,10 @@ COMMANDS = {
     "simulate": (["simulate", "--vy", "1.197", "--vphi", "3.508", "--no-rrd"],
                  ["vy0 = 1.197 m/s", "vphi0 = 3.508 rad/s", "y0 = 0.0100499 m",
                   "n = 6 quarter turns", "rtol = 1e-06: n = 6"]),
+    "accuracy": (["accuracy", "--quick", "--res", "2", "--methods", "symplectic_euler,event",
+                  "-o", "a.png"], ["symplectic_euler", "h=3e-05", "rtol=1e-05", "h=1e-6, 2 s"]),
+    "fractions": (["fractions", "--samples", "1024", "--batch", "512"],
+                  ["1,024 samples", "rtol = 1e-06"]),
 }
 
 

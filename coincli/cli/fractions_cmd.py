@@ -171,19 +171,20 @@ def fractions_command(
         api.check_where(threads, workers, scheduler)
     if plan.note and not json_out:
         say(err_console, f"[cyan]note:[/] {plan.note}")
+    wide = err_console.width >= 100  # at 80 columns the rate goes: the estimate matters more
     progress = Progress(
-        TextColumn("[bold]fractions[/]"), TextColumn("{task.fields[value]}"), BarColumn(),
+        TextColumn("{task.fields[value]}"), BarColumn(bar_width=20 if wide else 8),
         TextColumn("{task.completed:,.0f}/{task.total:,.0f}"),
         TextColumn("P(standing) {task.fields[estimate]}"),
-        TextColumn("{task.fields[width]}"), RateColumn("traj"), TimeElapsedColumn(),
-        console=err_console, disable=quiet, transient=False)
+        TextColumn("{task.fields[width]}"), *([RateColumn("traj")] if wide else []),
+        TimeElapsedColumn(), console=err_console, disable=quiet, transient=False)
     tasks: dict[int, int] = {}
 
     def show(update) -> None:
         v = update.value
         p, lo, hi = update.standing
         estimate = "-" if math.isnan(p) else \
-            f"{100 * p:.4g} % [{100 * lo:.4g}, {100 * hi:.4g}]"
+            f"{100 * p:.3g} % ({100 * lo:.2g}-{100 * hi:.2g})"
         width = "" if update.precision is None or math.isnan(update.widest) else \
             f"±{100 * update.widest:.2g}→{100 * update.precision:.2g} pp"
         label = "" if update.values == 1 else \
@@ -266,6 +267,9 @@ def _print_result(plan, r) -> None:
     summary.append(("all labelled", f"standing {percent(a['standing']['probability'])} (95 % CI "
                                      f"{interval(a['standing'])}) of {a['labelled']:,} "
                                      "labelled samples, uncertain ones included"))
+    from ..integrators.ladder import describe
+
+    summary.append(("method", describe(scene.integration)))
     cost = r.cost
     if cost.get("computed"):
         where = f"{cost['workers']} threads" if cost["mode"] == "threads" else "Dask"
@@ -287,6 +291,9 @@ def _print_over(plan, res) -> None:
                  f"the same samples at every value ({plan.sampling.sampler}, seed "
                  f"{plan.sampling.seed})")
     say(console, f"drawn: {plan.sampling.describe()}")
+    from ..integrators.ladder import describe
+
+    say(console, f"method: {describe(plan.scene.integration)}")
     if res.note:
         say(console, f"note: {res.note}")
     basis = "certain labels" if first.verified else "settled runs"

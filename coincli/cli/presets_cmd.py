@@ -38,5 +38,5 @@ def presets_command(json_out: JsonOpt = False) -> None:
     for p in found:
         integ = p.scene.integration
         run_to = "stop when decided" if integ.stop_on_settle else f"full {integ.t_end:g} s"
-        say(console, f"[bold]{p.name}[/]: {integ.method.label}, {describe(integ)}, {run_to}. "
+        say(console, f"[bold]{p.name}[/]: {describe(integ)}, {run_to}. "
                      f"{p.description}")

@@ -229,7 +229,7 @@ def print_summary(tr) -> None:
     rows.append(("energy", f"{tr.energy_initial * 1e3:.5g} mJ -> {tr.energy_final * 1e3:.5g} "
                            f"mJ ({lost * 1e3:.5g} mJ dissipated)"))
     run_to = "stop when decided" if integ.stop_on_settle else f"full {integ.t_end:g} s"
-    rows.append(("method", f"{integ.method.label}, {describe(integ)}, {run_to}"))
+    rows.append(("method", f"{describe(integ)}, {run_to}"))
     if len(tr.rungs) > 1:
         rows.append(("ladder", "; ".join(f"{r.setting}: n = {r.quarter_turns}".replace(" ", NBSP)
                                          for r in tr.rungs)))

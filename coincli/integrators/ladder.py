@@ -70,9 +70,11 @@ def ladder_of(integration: Integration) -> Ladder:
 
 
 def describe(integration: Integration) -> str:
-    """The setting of a run as a user reads it, with its verification."""
+    """The method and setting of a run as a user reads it, with its verification:
+    ``event, rtol = 1e-06, verified up to rtol = 1e-12``."""
     ladder = ladder_of(integration)
-    base = setting_text(integration.method, integration.dt, integration.rtol)
+    base = (f"{integration.method.label}, "
+            f"{setting_text(integration.method, integration.dt, integration.rtol)}")
     if not ladder.verified:
         return f"{base}, single pass"
     return f"{base}, verified up to {ladder.rung_text(len(ladder) - 1)}"

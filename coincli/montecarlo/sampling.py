@@ -240,11 +240,11 @@ class Sampling:
                             "fast-forwarded to each batch, or default_rng([seed, batch])"}
 
     def describe(self, scene: Scene | None = None) -> str:
-        """``y0 1r:5r (0.01005:0.05025 m), phi0 -3.14159:3.14159 rad, ...`` (multiples of r
+        """``y0 = 1r:5r (0.01005:0.05025 m), phi0 = -3.14159:3.14159 rad, ...`` (multiples of r
         also in metres if a scene is given)."""
         parts = []
         for name, d in self.dists:
-            text = f"{name} {d.text(UNITS[name])}"
+            text = f"{name} = {d.text(UNITS[name])}"
             if scene is not None and d.per_r:
                 text += f" ({d.scaled(scene.coin.r).text(UNITS[name])})"
             parts.append(text)
