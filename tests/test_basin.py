@@ -341,9 +341,12 @@ def test_render_rerun_recording(tmp_path):
 
 def test_render_and_stats_errors(tmp_path):
     result = coin("render", str(tmp_path / "missing.zarr"))
-    assert result.exit_code == 2 and "not a Zarr store" in result.output
+    assert result.exit_code == 2 and "missing.zarr does not exist" in result.output
     result = coin("stats", str(tmp_path / "missing.zarr"))
-    assert result.exit_code == 2
+    assert result.exit_code == 2 and "does not exist" in result.output
+    (tmp_path / "folder").mkdir()
+    result = coin("stats", str(tmp_path / "folder"))
+    assert result.exit_code == 2 and "not a Zarr store (it has no zarr.json)" in result.output
 
 
 def test_render_and_stats_of_an_empty_store(tmp_path):

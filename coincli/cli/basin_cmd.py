@@ -57,7 +57,7 @@ from .common import (
     print_json,
     user_errors,
 )
-from .text import TURN, command, percent, print_rows, say, share
+from .text import TURN, command, counted, percent, print_rows, say, share
 
 SWEEP = "Sweep"
 RUN = "Where it runs"
@@ -231,8 +231,8 @@ def sweep_command(
                              f"file(s) differed from the sweep's and were rewritten: "
                              f"{', '.join(start.repaired[:6])}")
         if start.damaged:
-            say(err_console, f"[yellow]damaged:[/] {len(start.damaged)} tile(s) of {path} "
-                             f"failed their check and are recomputed: "
+            say(err_console, f"[yellow]damaged:[/] {counted(len(start.damaged), 'tile')} of "
+                             f"{path} failed the integrity check, recomputed now: "
                              f"{_tile_list(start.damaged)}")
         est = start.estimate
         if est is not None and est.seconds > 60:
@@ -262,22 +262,24 @@ def sweep_command(
                       if disk and store_io.is_store(path) else "")) from None
     total = report.tiles_total
     if report.tiles_before == total:
-        say(console, f"{path}: all {total} tiles are done already ({grid.n_cells:,} cells). "
+        say(console, f"{path}: every tile is done already ({counted(total, 'tile')}, "
+                     f"{counted(grid.n_cells, 'cell')}). "
                      f"Next: {command('coin', 'basin', 'render', path)}; "
                      f"{command('coin', 'basin', 'stats', path)}")
         return
     rate = report.cells / report.wall_seconds if report.wall_seconds > 0 else math.nan
-    where = (f"{report.workers} threads" if report.mode == "threads"
+    where = (counted(report.workers, "thread") if report.mode == "threads"
              else f"Dask ({scheduler or f'{report.workers} local workers'})")
-    others = (f"; {report.tiles_elsewhere} tiles by other processes"
+    others = (f"; {counted(report.tiles_elsewhere, 'tile')} by other processes"
               if report.tiles_elsewhere else "")
     say(console, f"{path}: {report.tiles_done}/{total} tiles done; this run computed "
-                 f"{report.tiles_computed} tiles ({report.cells:,} cells) in "
+                 f"{counted(report.tiles_computed, 'tile')} "
+                 f"({counted(report.cells, 'cell')}) in "
                  f"{report.wall_seconds:.1f} s wall, {rate:,.0f} "
                  f"cells/s on {where}{others}.")
     if report.interrupted or not report.complete:
-        say(err_console, f"[yellow]stopped:[/] {total - report.tiles_done} tiles left; run the "
-                         "same command again to resume.")
+        say(err_console, f"[yellow]stopped:[/] {counted(total - report.tiles_done, 'tile')} "
+                         "left; run the same command again to resume.")
         raise typer.Exit(code=130)
     say(console, f"Next: {command('coin', 'basin', 'render', path, '-o', 'basin.png')}; "
                  f"{command('coin', 'basin', 'stats', path)}")
@@ -361,8 +363,9 @@ def verify_command(
                      + (f", {missing} not computed yet" if missing else "")
                      + f" ({found.seconds:.2f} s)")
     else:
-        say(console, f"{path}: DAMAGED: {len(found.damaged)} tile(s)"
-                     + (f" and {len(unrepaired)} metadata file(s)" if unrepaired else "")
+        say(console, f"{path}: DAMAGED: {counted(len(found.damaged), 'tile')}"
+                     + (f" and {counted(len(unrepaired), 'metadata file')}" if unrepaired
+                        else "")
                      + f"; {found.tiles_done} of {total} tiles intact ({found.seconds:.2f} s). "
                      "Rerun the sweep command to recompute the damaged tiles.")
         for tile, why in sorted(found.damaged.items()):
@@ -434,9 +437,9 @@ def render_command(
 
 def _damaged_note(path, damaged, treated: str) -> None:
     if damaged:
-        say(err_console, f"[yellow]damaged:[/] {len(damaged)} tile(s) of {path} failed their "
-                         f"check and are {treated}: {_tile_list(damaged)}; rerun the sweep "
-                         "command to recompute them")
+        say(err_console, f"[yellow]damaged:[/] {counted(len(damaged), 'tile')} of {path} "
+                         f"failed the integrity check, {treated}: {_tile_list(damaged)}; rerun "
+                         "the sweep command to recompute")
 
 
 
@@ -504,9 +507,9 @@ def stats_command(
                              f"{stats['not_computed']:,} not computed"))
     if stats["tiles_damaged"]:
         damaged = stats["tiles_damaged"]
-        summary.append(("damaged", f"{len(damaged)} tile(s) failed their check and count as "
-                                   f"not computed: {_tile_list(damaged)}; rerun the sweep "
-                                   "command to recompute them"))
+        summary.append(("damaged", f"{counted(len(damaged), 'tile')} failed the integrity "
+                                   f"check, counted as not computed: {_tile_list(damaged)}; "
+                                   "rerun the sweep command to recompute"))
     counts = ", ".join(f"{count:,} {name}" for name, count in stats["status"].items()
                        if count and name != "not computed")
     summary.append(("status", counts or "-"))

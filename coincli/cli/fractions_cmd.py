@@ -44,7 +44,7 @@ from .common import (
     print_json,
     user_errors,
 )
-from .text import TURN, interval, percent, print_rows, say, share
+from .text import TURN, counted, interval, percent, print_rows, say, share
 
 SAMPLING = "Sampling and stopping"
 OVER = "Continuation along a parameter"
@@ -272,7 +272,7 @@ def _print_result(plan, r) -> None:
     summary.append(("method", describe(scene.integration)))
     cost = r.cost
     if cost.get("computed"):
-        where = f"{cost['workers']} threads" if cost["mode"] == "threads" else "Dask"
+        where = counted(cost["workers"], "thread") if cost["mode"] == "threads" else "Dask"
         summary.append(("cost", f"{cost['computed']:,} trajectories in "
                                  f"{cost['wall_seconds']:.1f} s wall on {where} "
                                  f"({cost['trajectories_per_second']:,.0f} a second; "

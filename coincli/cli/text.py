@@ -66,6 +66,11 @@ def keep_whole(text: str, width: int, indent: int = 0) -> str:
     return "\n".join(lines).replace(NBSP, " ")
 
 
+def counted(count: int, noun: str, plural: str | None = None) -> str:
+    """'1 tile', '2 tiles', '1,024 cells'."""
+    return f"{count:,} {noun if count == 1 else plural or noun + 's'}"
+
+
 def command(*words) -> str:
     """A command to copy from the terminal: quoted for the shell, one phrase, never broken."""
     return NBSP.join(shlex.quote(str(word)).replace(" ", NBSP) for word in words)

@@ -47,7 +47,7 @@ import numpy as np
 
 from ..params import ParameterError
 from .schema import VARIABLES
-from .store import show_value
+from .store import check_is_store, is_store, show_value
 
 FORMAT = 1
 MARK = "coin_fractions"
@@ -96,10 +96,6 @@ class Layout:
 
 def cost_dir(path) -> Path:
     return Path(f"{os.fspath(path).rstrip(os.sep)}.cost")
-
-
-def _is_store(path: Path) -> bool:
-    return (path / "zarr.json").is_file()
 
 
 def _flatten(value, prefix: str = "") -> dict:
@@ -186,11 +182,11 @@ def prepare(path, attrs: dict, layout: Layout, values: np.ndarray | None = None,
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise ParameterError(f"{path} exists and is not a directory")
-    if path.is_dir() and not _is_store(path):
+    if path.is_dir() and not is_store(path):
         if any(path.iterdir()):
             raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
         path.rmdir()
-    if _is_store(path):
+    if is_store(path):
         if overwrite:
             shutil.rmtree(path)
             shutil.rmtree(cost_dir(path), ignore_errors=True)
@@ -308,8 +304,7 @@ def open_fractions(path):
     """The store as an xarray Dataset (lazy; cells of batches not written hold the fills)."""
     import xarray as xr
 
-    if not _is_store(Path(path)):
-        raise ParameterError(f"{path} is not a Zarr store (no zarr.json)")
+    check_is_store(path)
     return xr.open_zarr(str(path))
 
 

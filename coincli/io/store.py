@@ -88,7 +88,13 @@ def is_store(path: str | os.PathLike) -> bool:
     return (Path(path) / "zarr.json").is_file()
 
 
-_is_store = is_store
+def check_is_store(path: str | os.PathLike) -> None:
+    """ParameterError (one line) unless ``path`` is a Zarr store, saying what it is instead."""
+    p = Path(path)
+    if not p.exists():
+        raise ParameterError(f"{path} does not exist")
+    if not is_store(p):
+        raise ParameterError(f"{path} is not a Zarr store (it has no zarr.json)")
 
 
 # -- comparing parameters ------------------------------------------------------------------------
@@ -346,8 +352,7 @@ def open_view(path: str | os.PathLike, grid: Grid | None = None) -> StoreView:
     metadata cannot be read. ``grid``: the sweep's grid when known (else from the attributes)."""
     zarr = _zarr()
     p = Path(path)
-    if not is_store(p):
-        raise ParameterError(f"{path} is not a Zarr store (no zarr.json)")
+    check_is_store(p)
     try:
         group = zarr.open_group(str(p), mode="r")
         attrs = dict(group.attrs)
