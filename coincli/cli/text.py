@@ -97,10 +97,14 @@ TURN = {"none": "none", "clockwise": "cw", "counter-clockwise": "ccw"}  # table 
 
 
 def percent(x, digits: int = 3) -> str:
-    """0.00294 -> '0.294 %'; 0.999977 -> '99.998 %', never a rounded '100 %' or '0 %' for a
-    fraction that is not exactly 1 or 0; None or NaN -> '-'."""
+    """0.00294 -> '0.294 %'; 0.99711 -> '99.711 %' (above one half, the distance to 100 % gets
+    the digits), never a rounded '100 %' or '0 %' for a fraction that is not exactly 1 or 0;
+    None or NaN -> '-'."""
     if x is None or (isinstance(x, float) and math.isnan(x)):
         return "-"
+    if 0.5 < x < 1:  # near 100 %, the distance to 100 % gets the significant digits
+        decimals = max(0, digits - 1 - math.floor(math.log10(100 * (1 - x)) + 1e-9))
+        return f"{100 * x:.{decimals}f} %"
     text = f"{100 * x:.{digits}g}"
     while digits < 12 and ((text == "100" and x < 1) or (float(text) == 0 and x > 0)):
         digits += 1

@@ -112,7 +112,7 @@ def plot_study(study, path: Path, title: str = "") -> None:
         ax_label.plot([vp.cpu_per_trajectory * 1e3], [max(vp.label_error, floor)], marker="D",
                       ms=10, color="#9467bd", markeredgecolor="black", ls="none", zorder=6,
                       label=f"the default, verified ({vp.setting.label.replace(' verified', '')}"
-                            f" and up): {100 * vp.uncertain:.2g} % of the cells uncertain")
+                            f" and up): {100 * vp.uncertain:.2g} % of the robust cells uncertain")
     ax_label.axhline(0.01, color="grey", ls="--", lw=1, label="1 % label error")
     ax_label.axhline(floor, color="lightgrey", ls=":", lw=1, label="no wrong label (drawn here)")
     for ax in (ax_traj, ax_label):
