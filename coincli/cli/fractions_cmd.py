@@ -44,7 +44,7 @@ from .common import (
     print_json,
     user_errors,
 )
-from .text import TURN, counted, interval, percent, print_rows, say, share
+from .text import TURN, counted, interval, percent, print_rows, resolving, say, share
 
 SAMPLING = "Sampling and stopping"
 OVER = "Continuation along a parameter"
@@ -256,7 +256,7 @@ def _print_result(plan, r) -> None:
     for row in r.outcomes:
         style = "bold magenta" if row["pose"] == "standing" else None
         table.add_row(str(row["n"]), row["pose"], TURN[row["direction"]], f"{row['count']:,}",
-                      percent(row["probability"]), interval(row), style=style)
+                      percent(row["probability"], resolving(row)), interval(row), style=style)
     console.print(table)
     summary = []
     summary.append(("standing", share(r.standing)))

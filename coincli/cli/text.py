@@ -112,13 +112,24 @@ def percent(x, digits: int = 3) -> str:
     return f"{text} %"
 
 
+def resolving(p: dict, digits: int = 3) -> int:
+    """The significant digits that tell a proportion's interval ends apart (at least
+    ``digits``): '15.8 % to 15.8 %' becomes '15.75 % to 15.83 %'."""
+    while digits < 8 and percent(p["low"], digits) == percent(p["high"], digits) and \
+            p["low"] != p["high"]:
+        digits += 1
+    return digits
+
+
 def interval(p: dict, digits: int = 3) -> str:
     """A proportion's 95 % interval: '0.274 % to 0.315 %'."""
+    digits = resolving(p, digits)
     return f"{percent(p['low'], digits)} to {percent(p['high'], digits)}"
 
 
 def share(p: dict, digits: int = 3) -> str:
     """A proportion (see coincli.stats.proportion): '770 of 262,144 = 0.294 % (95 % CI 0.274 %
     to 0.315 %)'."""
+    digits = resolving(p, digits)
     return (f"{p['count']:,} of {p['of']:,} = {percent(p['probability'], digits)} "
             f"(95 % CI {interval(p, digits)})")
