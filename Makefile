@@ -46,7 +46,7 @@ docs: install
 	$(COIN) basin render $(OUT)/docs-basin.zarr --field settle_time -o docs/basin-settle-time.png
 	$(COIN) basin analyze $(OUT)/docs-basin.zarr -o docs/basin-analysis.png
 	$(COIN) fractions --y0 r:5r --phi0 -pi:pi --vx -0.5:0.5 --over thickness=0.001:0.02:20 \
-		--samples 64k --store $(OUT)/docs-thickness.zarr --plot docs/fractions-thickness.png
+		--samples 64k --store $(OUT)/docs-thickness.zarr --overwrite --plot docs/fractions-thickness.png
 	$(COIN) simulate --vy 1.197 --vphi 3.508 --rrd $(OUT)/fig2.rrd
 	xvfb-run -a -s '-screen 0 1600x1000x24' $(BIN)/rerun --window-size 1600x1000 \
 		--screenshot-to docs/simulate-fig2.png $(OUT)/fig2.rrd
