@@ -23,7 +23,7 @@ import numpy as np
 from .enums import Certainty, Method, Status
 from .grid import Grid, make_grid
 from .integrators import METHODS, final_state, label_states, warm_up
-from .integrators.batch import verified_labels
+from .integrators.batch import new_control, verified_labels
 from .integrators.ladder import ladder_of
 from .model import total_energy
 from .params import Scene, model_params, run_settings, state_array
@@ -131,19 +131,25 @@ def run_grid(scene: Scene, setting: Setting, grid: Grid, threads: int = 2,
     # interleave cells across threads so each gets a fair share of hard and easy cells
     parts = [np.arange(i, n, threads) for i in range(threads)]
 
+    control = new_control()
+
     def work(idx):
         start = time.thread_time()
         if setting.verify:
-            labels = verified_labels(p, settings, ladder, states[idx])
+            labels = verified_labels(p, settings, ladder, states[idx], control)
             certainty[idx] = labels.certainty
         else:
-            labels = label_states(p, settings, states[idx])
+            labels = label_states(p, settings, states[idx], control)
         n_out[idx], st_out[idx] = labels.quarter_turns, labels.status
         return time.thread_time() - start
 
     wall = time.perf_counter()
     with ThreadPoolExecutor(threads) as pool:
-        cpu = sum(pool.map(work, parts))
+        try:
+            cpu = sum(pool.map(work, parts))
+        except KeyboardInterrupt:  # stop the kernels in flight at once, not at their end
+            control[0] = 1
+            raise
     wall = time.perf_counter() - wall
     return GridRun(setting, n_out.reshape(grid.shape), st_out.reshape(grid.shape), cpu, wall,
                    certainty.reshape(grid.shape) if setting.verify else None)

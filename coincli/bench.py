@@ -21,7 +21,7 @@ from .accuracy import (
 from .enums import Method
 from .grid import Grid
 from .integrators import label_states, warm_up
-from .integrators.batch import verified_labels
+from .integrators.batch import interruptible, new_control, verified_labels
 from .integrators.ladder import ladder_of
 from .params import Scene, model_params, run_settings
 
@@ -51,12 +51,18 @@ def time_cells(scene: Scene, setting: Setting, states: np.ndarray, full_run: boo
     p = model_params(run_scene)
     settings = run_settings(run_scene.integration)
     warm_up(p, settings, states[0])  # load the compiled kernel first
-    start = time.thread_time()
-    if setting.verify:
-        verified_labels(p, settings, ladder_of(run_scene.integration), states)
-    else:
-        label_states(p, settings, states)
-    return (time.thread_time() - start) / states.shape[0]
+    control = new_control()
+    ladder = ladder_of(run_scene.integration)
+
+    def run() -> float:  # thread time of the thread that runs the kernels
+        start = time.thread_time()
+        if setting.verify:
+            verified_labels(p, settings, ladder, states, control)
+        else:
+            label_states(p, settings, states, control)
+        return time.thread_time() - start
+
+    return interruptible(run, control) / states.shape[0]
 
 
 def side_by_side(scene: Scene, cost_grid: Grid, repeats: int = 3,

@@ -19,7 +19,7 @@ import numpy as np
 
 from .enums import Certainty, Engine, Status
 from .integrators import check_step, integrate, new_control, warm_up
-from .integrators.batch import NO_LABEL, outcome_label, rungs_agree
+from .integrators.batch import NO_LABEL, interruptible, outcome_label, rungs_agree
 from .integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
 from .integrators.ladder import ladder_of
 from .jit import compiled, is_active, python
@@ -198,29 +198,10 @@ def _run(p, settings, state0, samples, events, final, control, engine: Engine):
             return result, time.perf_counter() - start, engine
     warm_up(p, settings._replace(sample_dt=0.0), state0)  # before the clock starts
     start = time.perf_counter()
-    result = _interruptible(compiled(integrate), (p, settings, state0, samples, events, final,
-                                                   control), control)
+    kernel = compiled(integrate)
+    result = interruptible(lambda: kernel(p, settings, state0, samples, events, final, control),
+                           control)
     return result, time.perf_counter() - start, Engine.NUMBA
-
-
-def _interruptible(kernel, args, control):
-    """Run a compiled kernel in a worker thread (it releases the GIL), so that this thread
-    still takes Ctrl-C: it then sets the control flag, the kernel returns within microseconds
-    (status INTERRUPTED) and KeyboardInterrupt goes on up."""
-    import threading
-
-    box = []
-    worker = threading.Thread(target=lambda: box.append(kernel(*args)), daemon=True,
-                              name="coin-kernel")
-    worker.start()
-    try:
-        while worker.is_alive():
-            worker.join(0.1)
-    except KeyboardInterrupt:
-        control[0] = 1
-        worker.join()
-        raise
-    return box[0]
 
 
 def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, record_events,

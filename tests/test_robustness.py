@@ -81,3 +81,22 @@ def test_ctrl_c_stops_a_long_simulation_within_two_seconds(tmp_path):
     assert "interrupted" in err and "Traceback" not in err
     assert "up to 1e+11 steps" in err  # announced before it started
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("args", [
+    ("accuracy", "--res", "16", "-o", "a.png"),  # its references run for a minute
+    ("bench", "--basin-res", "0"),  # its timing runs the paper's setting on the main thread
+])
+def test_ctrl_c_stops_accuracy_and_bench_within_two_seconds(tmp_path, args):
+    """The kernels of the long measurements poll a control flag that Ctrl-C sets."""
+    proc = subprocess.Popen([*COIN, *args], cwd=tmp_path, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(8.0)
+    assert proc.poll() is None, proc.communicate()
+    sent = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=60)
+    assert time.monotonic() - sent < 2.0, (out, err)
+    assert proc.returncode == 130, (out, err)
+    assert "Traceback" not in err
+    assert not list(tmp_path.glob("a.*"))  # no chart, no table

@@ -165,6 +165,26 @@ def new_control():
     return np.zeros(1, np.int64)
 
 
+def interruptible(run, control):
+    """``run()`` (compiled kernels, which release the GIL and poll ``control``) in a worker
+    thread, so that this thread still takes Ctrl-C: it then sets the control flag, the kernels
+    return within microseconds and KeyboardInterrupt goes on up. Returns what ``run`` returns."""
+    import threading
+
+    box = []
+    worker = threading.Thread(target=lambda: box.append(run()), daemon=True,
+                              name="coin-kernel")
+    worker.start()
+    try:
+        while worker.is_alive():
+            worker.join(0.1)
+    except KeyboardInterrupt:
+        control[0] = 1
+        worker.join()
+        raise
+    return box[0]
+
+
 def label_states(p, settings, states, control=None) -> Labels:
     """Run every row of ``states`` (compiled; releases the GIL)."""
     n = states.shape[0]
@@ -197,6 +217,6 @@ def warm_up(p, settings, state) -> None:
     mark_cached()
 
 
-__all__ = ["Labels", "NO_LABEL", "VerifiedLabels", "final_state", "integrate", "label_states",
-           "new_control", "outcome_label", "run_batch", "run_ladder", "rungs_agree",
+__all__ = ["Labels", "NO_LABEL", "VerifiedLabels", "final_state", "integrate", "interruptible",
+           "label_states", "new_control", "outcome_label", "run_batch", "run_ladder", "rungs_agree",
            "verified_labels", "warm_up"]
