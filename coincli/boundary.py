@@ -851,6 +851,17 @@ def pool_uncertain_fractions(parts) -> UncertainFraction:
         scale=first.scale.copy(), direction=first.direction, confidence=first.confidence)
 
 
+def _curve(eps, fraction, who: str) -> tuple[np.ndarray, np.ndarray]:
+    """eps and f(eps) as two 1-D float arrays of one length, or the error that says why not."""
+    if fraction is None:
+        raise TypeError(f"{who} needs the fractions (or an UncertainFraction)")
+    e = np.atleast_1d(np.asarray(eps, dtype=float))
+    f = np.atleast_1d(np.asarray(fraction, dtype=float))
+    if e.shape != f.shape or e.ndim != 1:
+        raise ValueError(f"eps {e.shape} and fraction {f.shape} must be 1-D of the same length")
+    return e, f
+
+
 def fit_uncertainty_exponent(eps, fraction=None, *, uncertain=None, evidence=None, dim=2,
                              confidence=0.95) -> UncertaintyExponent:
     """Fit log f = alpha log eps + c; the boundary dimension is dim - alpha.
@@ -877,12 +888,7 @@ def fit_uncertainty_exponent(eps, fraction=None, *, uncertain=None, evidence=Non
         res = eps
         eps, fraction = res.eps, res.fraction
         uncertain, evidence, dim = res.uncertain, res.evidence, res.dim
-    if fraction is None:
-        raise TypeError("fit_uncertainty_exponent needs the fractions (or an UncertainFraction)")
-    e = np.atleast_1d(np.asarray(eps, dtype=float))
-    f = np.atleast_1d(np.asarray(fraction, dtype=float))
-    if e.shape != f.shape or e.ndim != 1:
-        raise ValueError(f"eps {e.shape} and fraction {f.shape} must be 1-D of the same length")
+    e, f = _curve(eps, fraction, "fit_uncertainty_exponent")
     ok = np.isfinite(e) & (e > 0) & np.isfinite(f) & (f > 0)
     weighted = uncertain is not None and evidence is not None
     if weighted:
@@ -917,12 +923,7 @@ def local_exponents(eps, fraction=None) -> np.ndarray:
     coarse scales and smooth, alpha -> 1, at fine ones)."""
     if isinstance(eps, UncertainFraction):
         eps, fraction = eps.eps, eps.fraction
-    if fraction is None:
-        raise TypeError("local_exponents needs the fractions (or an UncertainFraction)")
-    e = np.atleast_1d(np.asarray(eps, dtype=float))
-    f = np.atleast_1d(np.asarray(fraction, dtype=float))
-    if e.shape != f.shape or e.ndim != 1:
-        raise ValueError(f"eps {e.shape} and fraction {f.shape} must be 1-D of the same length")
+    e, f = _curve(eps, fraction, "local_exponents")
     with np.errstate(divide="ignore", invalid="ignore"):
         lf = np.where(np.isfinite(f) & (f > 0), np.log(np.where(f > 0, f, 1.0)), np.nan)
         return np.diff(lf) / np.diff(np.log(e))

@@ -34,7 +34,6 @@ the largest budget asked for (whole batches); asking for more later lengthens it
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import shutil
@@ -47,7 +46,15 @@ import numpy as np
 
 from ..params import ParameterError
 from .schema import VARIABLES
-from .store import check_is_store, is_store, show_value
+from .store import (
+    check_is_store,
+    cost_dir,
+    flatten_attrs,
+    is_store,
+    read_runs,
+    record_run,
+    show_value,
+)
 
 FORMAT = 1
 MARK = "coin_fractions"
@@ -94,25 +101,10 @@ class Layout:
         return () if self.values is None else (value,)
 
 
-def cost_dir(path) -> Path:
-    return Path(f"{os.fspath(path).rstrip(os.sep)}.cost")
-
-
-def _flatten(value, prefix: str = "") -> dict:
-    if isinstance(value, dict):
-        out = {}
-        for key, sub in value.items():
-            out.update(_flatten(sub, f"{prefix}.{key}" if prefix else str(key)))
-        return out
-    if isinstance(value, list):
-        return {prefix: json.dumps(value)}
-    return {prefix: value}
-
-
 def differences(stored: dict, wanted: dict) -> list[str]:
     """'parameters.foundation.k = 10000 in the store, 5000 here', one per difference."""
-    a = _flatten({k: stored.get(k) for k in COMPARED})
-    b = _flatten({k: wanted.get(k) for k in COMPARED})
+    a = flatten_attrs({k: stored.get(k) for k in COMPARED})
+    b = flatten_attrs({k: wanted.get(k) for k in COMPARED})
     for flat in (a, b):  # explanations, not what was computed
         for key in [k for k in flat if k.endswith((".note", ".sample_i"))]:
             del flat[key]
@@ -272,25 +264,6 @@ def read_initial(path, layout: Layout, value: int, batch: int, count: int) -> np
     group = _zarr().open_group(str(path), mode="r")
     lo = batch * layout.batch
     return np.asarray(group["initial"][(*layout.at(value), slice(lo, lo + count))])
-
-
-def record_run(path, run: dict) -> None:
-    target = cost_dir(path) / "runs.jsonl"
-    target.parent.mkdir(parents=True, exist_ok=True)
-    with open(target, "a") as fh:
-        fh.write(json.dumps(run) + "\n")
-
-
-def read_runs(path) -> list[dict]:
-    log = cost_dir(path) / "runs.jsonl"
-    runs = []
-    if log.is_file():
-        for line in log.read_text().splitlines():
-            try:
-                runs.append(json.loads(line))
-            except ValueError:
-                continue
-    return runs
 
 
 def run_record(started: float, wall: float, cpu: float, samples: int, mode: str, workers: int,

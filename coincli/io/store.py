@@ -98,18 +98,18 @@ def check_is_store(path: str | os.PathLike) -> None:
 
 
 # -- comparing parameters ------------------------------------------------------------------------
-def _flatten(value, prefix: str = "") -> dict:
+def flatten_attrs(value, prefix: str = "") -> dict:
     """Nested attribute dicts -> {'parameters.foundation.k': 1e4, 'sweep.axes.vy.lo': 0.05}."""
     if isinstance(value, dict):
         out = {}
         for key, sub in value.items():
-            out.update(_flatten(sub, f"{prefix}.{key}" if prefix else str(key)))
+            out.update(flatten_attrs(sub, f"{prefix}.{key}" if prefix else str(key)))
         return out
     if isinstance(value, list) and value and all(isinstance(v, dict) and "name" in v
                                                 for v in value):
         out = {}
         for sub in value:
-            out.update(_flatten({k: v for k, v in sub.items() if k != "name"},
+            out.update(flatten_attrs({k: v for k, v in sub.items() if k != "name"},
                                 f"{prefix}.{sub['name']}"))
         return out
     if isinstance(value, list):
@@ -143,8 +143,8 @@ def show_value(value) -> str:
 
 def differences(stored: dict, wanted: dict) -> list[str]:
     """One phrase per differing parameter: 'k = 10000 in the store, 5000 here'."""
-    a = _flatten({k: stored.get(k) for k in COMPARED_ATTRS})
-    b = _flatten({k: wanted.get(k) for k in COMPARED_ATTRS})
+    a = flatten_attrs({k: stored.get(k) for k in COMPARED_ATTRS})
+    b = flatten_attrs({k: wanted.get(k) for k in COMPARED_ATTRS})
     out = []
     for key in sorted(set(a) | set(b), key=lambda k: (k.split(".")[0] != "sweep", k)):
         if a.get(key, "absent") != b.get(key, "absent"):
@@ -664,15 +664,20 @@ def read_costs(path: str | os.PathLike, tile_grid: tuple[int, int]) -> tuple[np.
                     seconds[i, j] = json.loads(f.read_text())["cpu_seconds"]
             except (ValueError, KeyError, TypeError, OSError):
                 pass  # a damaged cost record loses the cost, never the results
+    return seconds, read_runs(path)
+
+
+def read_runs(path: str | os.PathLike) -> list[dict]:
+    """The run records of ``out.zarr.cost/runs.jsonl`` (a damaged line is skipped)."""
     runs = []
-    log = folder / "runs.jsonl"
+    log = cost_dir(path) / "runs.jsonl"
     if log.is_file():
         for line in log.read_text().splitlines():
             try:
                 runs.append(json.loads(line))
             except ValueError:
                 continue
-    return seconds, runs
+    return runs
 
 
 # -- reading -------------------------------------------------------------------------------------
@@ -724,7 +729,7 @@ def check_store_writable(path: str | os.PathLike) -> None:
 
 
 __all__ = ["ARRAY_NAMES", "StoreCheck", "StoreDamaged", "StoreView", "Tile", "check",
-           "check_store_writable", "claims_dir", "cost_dir", "differences", "grid_of",
-           "has_digest", "is_store", "open_view", "prepare", "read_basin", "read_costs",
-           "read_done", "record_run", "run_record", "scan", "template", "tidy", "tile_digest",
-           "tile_done", "write_tile"]
+           "check_is_store", "check_store_writable", "claims_dir", "cost_dir", "differences",
+           "flatten_attrs", "grid_of", "has_digest", "is_store", "open_view", "prepare",
+           "read_basin", "read_costs", "read_done", "read_runs", "record_run", "run_record",
+           "scan", "show_value", "template", "tidy", "tile_digest", "tile_done", "write_tile"]
