@@ -11,6 +11,11 @@ output and reused when the same grid is asked again.
 
     python benchmarks/ladder_design.py --preset paper --res 64     # about 30 min on 2 cores
     python benchmarks/ladder_design.py --preset thick --res 32     # about an hour
+    python benchmarks/ladder_design.py --preset paper --box 1024   # throws of the 5-D box
+
+``--box N`` replaces the grid by N seeded random throws over the README's five-dimensional box
+of ``coin fractions`` (y0 r:5r, phi0 over a full turn, vx within 0.5 m/s, the default vy0 and
+vphi0 ranges): throws no design was chosen on.
 
 Prints the table the README's "Verified labels" section quotes, and writes it to
 benchmarks/ladder-<preset>-<res>.json.
@@ -29,13 +34,17 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
-DESIGNS = [  # (first rung, floor, change tolerance in s; inf: labels alone)
-    (1e-6, 1e-10, np.inf), (1e-6, 1e-10, 1e-3), (1e-6, 1e-12, np.inf), (1e-6, 1e-12, 1e-2),
-    (1e-6, 1e-12, 1e-3), (1e-6, 1e-12, 1e-4), (1e-5, 1e-12, 1e-3)]
+DESIGNS = [  # (first rung, floor, change tolerance, settle tolerance in s; inf: not compared)
+    (1e-6, 1e-10, np.inf, np.inf), (1e-6, 1e-10, 1e-3, np.inf), (1e-6, 1e-12, np.inf, np.inf),
+    (1e-6, 1e-12, 1e-2, np.inf), (1e-6, 1e-12, 1e-3, np.inf), (1e-6, 1e-12, 1e-4, np.inf),
+    (1e-5, 1e-12, 1e-3, np.inf), (1e-6, 1e-12, 1e-3, 1e-2), (1e-6, 1e-12, 1e-3, 1e-3),
+    (1e-6, 1e-12, np.inf, 1e-3)]
+BOX = {"y0": "r:5r", "phi0": "-pi:pi", "vx": "-0.5:0.5"}  # the README's 5-D fractions box
 
 
 def runs(scene, states):
-    """Per rung and cell: label, status, steps, last change of well (one compiled call each)."""
+    """Per rung and cell: label, status, steps, last change of well, settle time (one compiled
+    call each)."""
     from coincli.integrators import integrate, new_control
     from coincli.integrators.batch import outcome_label
     from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
@@ -46,7 +55,7 @@ def runs(scene, states):
     kernel = compiled(integrate)
     no_samples, no_events, control = (np.empty((0, SAMPLE_COLUMNS)),
                                       np.empty((0, EVENT_COLUMNS)), new_control())
-    out = {name: np.empty((len(RTOLS), len(states))) for name in ("q", "st", "steps", "tc")}
+    out = {name: np.empty((len(RTOLS), len(states))) for name in ("q", "st", "steps", "tc", "ts")}
     final = np.empty(6)
     for k, rtol in enumerate(RTOLS):
         settings = base._replace(rtol=rtol)
@@ -54,12 +63,13 @@ def runs(scene, states):
             r = kernel(p, settings, state, no_samples, no_events, final, control)
             out["q"][k, i] = outcome_label(r.status, r.n_well, final[2])
             out["st"][k, i], out["steps"][k, i], out["tc"][k, i] = r.status, r.steps, r.last_change
+            out["ts"][k, i] = r.settle_time
     return out
 
 
-def replay(data, robust, rk4, first, floor, tolerance):
+def replay(data, robust, rk4, first, floor, tolerance, settle_tolerance):
     """A design replayed on the saved runs: its verdicts and cost."""
-    q, st, tc, steps = data["q"], data["st"], data["tc"], data["steps"]
+    q, st, tc, ts, steps = data["q"], data["st"], data["tc"], data["ts"], data["steps"]
     k0, k1 = RTOLS.index(first), RTOLS.index(floor)
     n = q.shape[1]
     certain, open_ = np.zeros(n, bool), np.ones(n, bool)
@@ -68,16 +78,46 @@ def replay(data, robust, rk4, first, floor, tolerance):
         cost += np.where(open_, steps[k], 0)
         gap = np.abs(tc[k] - tc[k - 1])
         gap[np.isnan(tc[k]) & np.isnan(tc[k - 1])] = 0.0  # neither ever changed well
-        agree = (q[k] == q[k - 1]) & (st[k] == 0) & (st[k - 1] == 0) & (gap <= tolerance)
+        agree = ((q[k] == q[k - 1]) & (st[k] == 0) & (st[k - 1] == 0) & (gap <= tolerance)
+                 & (np.abs(ts[k] - ts[k - 1]) <= settle_tolerance))
         label = np.where(open_, q[k], label)
         certain |= open_ & agree
         open_ &= ~agree
     return {"first": first, "floor": floor, "change_tolerance": tolerance,
+            "settle_tolerance": settle_tolerance,
             "certain_and_wrong_robust": float((certain & (label != rk4) & robust).sum()
                                               / robust.sum()),
             "uncertain_robust": float((~certain & robust).sum() / robust.sum()),
             "uncertain_all": float((~certain).mean()), "steps_per_cell": float(cost.mean()),
             "single_pass_steps": float(steps[RTOLS.index(first)].mean())}
+
+
+def box_states(scene, n):
+    """n seeded random throws over the 5-D box BOX (the default vy0 and vphi0 ranges)."""
+    from coincli.montecarlo.sampling import initial_states, make_sampling
+
+    sampling = make_sampling(scene, sampler="random", **BOX)
+    u = np.random.default_rng(20261122).random((n, len(sampling.random_names)))
+    return initial_states(scene, sampling, u)
+
+
+def reference_labels(scene, states, threads):
+    """RK4 at h = 2.5e-7 (REFERENCE_B), on ``threads`` threads: (labels, statuses)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from coincli.accuracy import REFERENCE_B
+    from coincli.integrators.batch import label_states
+    from coincli.params import model_params, run_settings
+
+    run_scene = REFERENCE_B.apply(scene, stop_on_settle=True, t_end=None)
+    p, settings = model_params(run_scene), run_settings(run_scene.integration)
+    parts = [np.arange(i, len(states), threads) for i in range(threads)]
+    q, st = np.empty(len(states), np.int16), np.empty(len(states), np.uint8)
+    with ThreadPoolExecutor(threads) as pool:
+        for idx, out in zip(parts, pool.map(lambda i: label_states(p, settings, states[i]),
+                                            parts)):
+            q[idx], st[idx] = out.quarter_turns, out.status
+    return q, st
 
 
 def main() -> None:
@@ -87,17 +127,27 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--preset", default="paper")
     parser.add_argument("--res", type=int, default=64)
+    parser.add_argument("--box", type=int, default=0, metavar="N",
+                        help="N random throws of the 5-D box instead of the grid")
     parser.add_argument("--threads", type=int, default=2, help="for the RK4 reference")
     args = parser.parse_args()
     here = Path(__file__).resolve().parent
     scene = coincli.load_preset(args.preset)
-    grid = vy_vphi_grid(scene, res=(args.res, args.res))
+    name = f"{args.preset}-box{args.box}" if args.box else f"{args.preset}-{args.res}"
+    if args.box:
+        states = box_states(scene, args.box)
+    else:
+        grid = vy_vphi_grid(scene, res=(args.res, args.res))
+        states = grid.states()
     started = time.time()
-    data = runs(scene, grid.states())
-    cache = here / f"rk4-{args.preset}-{args.res}.npz"
+    data = runs(scene, states)
+    cache = here / f"rk4-{name}.npz"
     if cache.exists():
         saved = np.load(cache)
         rk4_q, rk4_st = saved["q"], saved["st"]
+    elif args.box:
+        rk4_q, rk4_st = reference_labels(scene, states, args.threads)
+        np.savez(cache, q=rk4_q, st=rk4_st)
     else:
         ref = run_grid(scene, REFERENCE_B, grid, args.threads)
         rk4_q, rk4_st = ref.quarter_turns.ravel(), ref.status.ravel()
@@ -107,21 +157,26 @@ def main() -> None:
     rows = [replay(data, robust, rk4_q, *design) for design in DESIGNS]
     single = {f"{r:g}": float(((data["q"][k] != rk4_q) & robust).sum() / robust.sum())
               for k, r in enumerate(RTOLS)}
-    result = {"preset": args.preset, "res": args.res, "robust_cells": int(robust.sum()),
+    result = {"preset": args.preset, "res": args.res, "box": dict(BOX, n=args.box) if args.box
+              else None, "robust_cells": int(robust.sum()),
               "cells": int(robust.size), "single_pass_wrong_robust": single, "designs": rows,
               "seconds": time.time() - started, "command": " ".join(sys.argv)}
-    (here / f"ladder-{args.preset}-{args.res}.json").write_text(json.dumps(result, indent=2))
-    print(f"{args.preset}, {args.res} x {args.res} over the default ranges: "
-          f"{robust.sum()} robust cells of {robust.size}")
+    (here / f"ladder-{name}.json").write_text(json.dumps(result, indent=2))
+    where = (f"{args.box} throws of the 5-D box" if args.box
+             else f"{args.res} x {args.res} over the default ranges")
+    print(f"{args.preset}, {where}: {robust.sum()} robust cells of {robust.size}")
     print("single pass, wrong on robust cells: "
           + ", ".join(f"rtol {k} {v:.2%}" for k, v in single.items()))
-    print("| first rung | floor | last change within | certain and wrong | uncertain (robust) "
-          "| uncertain (all) | steps a cell |")
-    print("|---|---|---|---|---|---|---|")
+    print("| first rung | floor | last change within | settled within | certain and wrong "
+          "| uncertain (robust) | uncertain (all) | steps a cell |")
+    print("|---|---|---|---|---|---|---|---|")
+
+    def within(seconds):
+        return f"{seconds * 1e3:g} ms" if np.isfinite(seconds) else "-"
+
     for r in rows:
-        tol = "labels only" if not np.isfinite(r["change_tolerance"]) else \
-            f"{r['change_tolerance'] * 1e3:g} ms"
-        print(f"| {r['first']:g} | {r['floor']:g} | {tol} | {r['certain_and_wrong_robust']:.2%} "
+        print(f"| {r['first']:g} | {r['floor']:g} | {within(r['change_tolerance'])} "
+              f"| {within(r['settle_tolerance'])} | {r['certain_and_wrong_robust']:.2%} "
               f"| {r['uncertain_robust']:.2%} | {r['uncertain_all']:.1%} "
               f"| {r['steps_per_cell']:.0f} |")
 

@@ -177,9 +177,9 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
                           float(result.last_change)))
         if result.status in (Status.BUDGET, Status.INTERRUPTED):
             break  # a tighter rung would need more steps still, or was told to stop
-        if previous is not None and rungs_agree(previous[1], previous[0].status,
-                                                previous[0].last_change, label, result.status,
-                                                result.last_change, ladder.change_tolerance):
+        if previous is not None and rungs_agree(previous[1], previous[0], label, result,
+                                                ladder.change_tolerance,
+                                                ladder.settle_tolerance):
             certainty = Certainty.CERTAIN
             break
         previous = (result, label)

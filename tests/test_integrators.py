@@ -13,7 +13,7 @@ import pytest
 from conftest import run_kernel
 
 from coincli import simulate
-from coincli.enums import Status
+from coincli.enums import Certainty, Status
 from coincli.integrators import METHODS, info
 from coincli.model import energies, rounded_quarter_turns, well_index
 from coincli.params import ParameterError, model_params, state_array
@@ -215,6 +215,63 @@ def test_no_impact_is_skipped_in_flight(name):
     assert len(tr.events) >= n
     np.testing.assert_array_equal(tr.events[:n, 1:3], ref.events[:n, 1:3])
     np.testing.assert_allclose(tr.events[:n, 0], ref.events[:n, 0], rtol=0, atol=1e-9)
+
+
+# A throw of the five-dimensional box (benchmarks/ladder_design.py --box 2048, throw 946): the
+# coin lands on corner 0 spinning up to 245 rad/s, and corner 3 touches the surface for 38 us
+# in between. Both ends of a step at rtol 1e-6 or 1e-7 have corner 3 above the surface; missing
+# the touch made the two rungs agree, to 50 us, on the wrong well (8 instead of 4).
+GRAZING_IN_CONTACT = dict(y0=0.018554951274944127, phi0=-0.897847025567009,
+                          vx=-0.13035263419955745, vy=1.7992228603238984,
+                          vphi=-17.64445816765122)
+
+
+@pytest.fixture(scope="module")
+def grazing_reference(paper):
+    scene = paper.with_overrides(stop_on_settle=False, t_end=0.38, **GRAZING_IN_CONTACT)
+    P = R.Params.from_scene(scene)
+    return R.solve_ivp_reference(P, state_array(scene), 0.38)[2]
+
+
+@pytest.mark.parametrize("name", ADAPTIVE)
+@pytest.mark.parametrize("rtol", [1e-6, 1e-7])
+def test_a_corner_grazing_in_contact_is_not_skipped(paper, grazing_reference, name, rtol):
+    """A corner that touches and leaves within one step, while another is in contact, is seen
+    (its lowest point located on the step's continuous extension): the same events, at the same
+    times, as the independent reference (which caps its contact steps at 1 us)."""
+    assert [e[1:] for e in grazing_reference] == [(0, 1), (3, 1), (3, -1), (0, -1)]
+    scene = paper.with_overrides(method=name, rtol=rtol, verify=False, stop_on_settle=False,
+                                 t_end=0.38, **GRAZING_IN_CONTACT)
+    events = simulate(scene, record_events=True).events
+    assert [(int(e[1]), int(e[2])) for e in events] == [e[1:] for e in grazing_reference]
+    np.testing.assert_allclose(events[:, 0], [e[0] for e in grazing_reference], rtol=0,
+                               atol=1e-7)
+
+
+def test_the_grazing_throw_gets_its_converged_label(paper):
+    """The verified label of that throw is the one every run from rtol 1e-8 to 1e-12 and RK4 at
+    h = 2.5e-7 give."""
+    tr = simulate(paper.with_overrides(verify=True, **GRAZING_IN_CONTACT))
+    assert tr.certainty == Certainty.CERTAIN and tr.quarter_turns == 4
+
+
+# Throw 1898 of the same box: the runs at rtol 1e-6 and 1e-7 enter well 10 within 0.12 ms of
+# each other, then bounce apart (settling 64 ms apart); every run from 1e-8 on leaves well 10
+# for well 8 at 0.89-0.90 s, as RK4 at h = 2.5e-7 does.
+ENTERED_TOGETHER_SETTLED_APART = dict(y0=0.012656838324757513, phi0=-1.694657607369702,
+                                      vx=-0.14947430007277496, vy=1.9266072205995137,
+                                      vphi=6.577372584738768)
+
+
+def test_rungs_that_settle_apart_do_not_agree(paper):
+    """Agreeing on the well and the moment of entering it is not enough while the coin can
+    still leave it: the two rungs must also settle at the same moment (within 10 ms)."""
+    tr = simulate(paper.with_overrides(verify=True, **ENTERED_TOGETHER_SETTLED_APART))
+    first, second = tr.rungs[:2]
+    assert first.quarter_turns == second.quarter_turns == 10
+    assert abs(first.last_change - second.last_change) < 1e-3
+    assert abs(first.settle_time - second.settle_time) > 1e-2
+    assert tr.certainty == Certainty.CERTAIN and tr.quarter_turns == 8
 
 
 # -- exact flight --------------------------------------------------------------------------------

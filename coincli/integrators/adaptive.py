@@ -8,7 +8,13 @@ extended smoothly beyond the surface), and after each accepted step it checks ev
 height. If a corner left its side of the surface, the crossing is located on the step's
 continuous extension, the state there is taken from it, the mode is switched, and integration
 restarts exactly at the event. No step straddles a jump, so the method keeps its order, and no
-step is rejected because of one.
+step is rejected because of one. A corner can also cross and come back within one step (a free
+corner grazing the surface for a few microseconds while the coin spins on another corner): both
+ends of the step then lie on the same side, and the sign of its height alone would miss the
+contact. So the corners' vertical speeds are checked too; a free corner that starts the step (or
+a scanned piece of it) going down and ends it going up has its lowest point located on the
+continuous extension, and touches there if that point is below the surface (likewise the highest
+point of a contact corner, for a lift-off).
 
 Hysteresis of ``EVENT_BAND`` metres keeps a corner that sits exactly on the surface from
 toggling back and forth: a contact corner lifts off when it rises above +EVENT_BAND, a free corner
@@ -31,6 +37,7 @@ from ..enums import Method, Status
 from ..jit import kernel
 from ..model import (
     below,
+    corner_offset,
     corner_heights,
     energy_with_heights,
     last_boundary,
@@ -65,6 +72,49 @@ def dense_heights(p, rc, theta, c, s):
     point = dense_point(rc, theta)
     cp, sp = rotate(c, s, point[2] - rc[0][2])
     return corner_heights(p, point[1], cp, sp)
+
+
+@kernel(inline=True)
+def corner_rates(p, vy, vphi, c, s):
+    """Vertical speeds vy + vphi d_xi of the four corners (c, s: trig of the angle)."""
+    return (vy + vphi * corner_offset(p, 0, c, s)[0], vy + vphi * corner_offset(p, 1, c, s)[0],
+            vy + vphi * corner_offset(p, 2, c, s)[0], vy + vphi * corner_offset(p, 3, c, s)[0])
+
+
+@kernel(inline=True)
+def dense_corners(p, rc, theta, c, s):
+    """(heights, vertical speeds) of the corners at fraction theta of the step."""
+    point = dense_point(rc, theta)
+    cp, sp = rotate(c, s, point[2] - rc[0][2])
+    return corner_heights(p, point[1], cp, sp), corner_rates(p, point[4], point[5], cp, sp)
+
+
+@kernel(inline=True)
+def locate_turn(p, rc, i, lo, hi, v_lo, v_hi, c, s):
+    """Fraction theta in [lo, hi] where corner i's vertical speed changes sign (v_lo, v_hi: its
+    speeds at lo and hi, of opposite signs), its extreme height: Illinois regula falsi."""
+    side = 0
+    theta = 0.5 * (lo + hi)
+    for _ in range(60):
+        theta = (lo * v_hi - hi * v_lo) / (v_hi - v_lo)
+        if not (lo < theta < hi):
+            theta = 0.5 * (lo + hi)
+        v = dense_corners(p, rc, theta, c, s)[1][i]
+        if v == 0.0:
+            return theta
+        if (v > 0.0) == (v_hi > 0.0):
+            hi, v_hi = theta, v
+            if side == 1:
+                v_lo *= 0.5
+            side = 1
+        else:
+            lo, v_lo = theta, v
+            if side == -1:
+                v_hi *= 0.5
+            side = -1
+        if hi - lo < 1e-12:
+            break
+    return theta
 
 
 @kernel(inline=True)
@@ -106,23 +156,41 @@ def scan_pieces(start, end):
 
 
 @kernel(inline=True)
-def crossing_in(p, rc, h, mode, lo, hi, before, after, c, s):
+def turns_back(in_contact, v_before, v_after):
+    """Whether a corner's height has its extreme inside a piece on the side where it would
+    cross: a free corner going down then up (a lowest point), a contact corner up then down."""
+    if in_contact:
+        return v_before > 0.0 and v_after < 0.0
+    return v_before < 0.0 and v_after > 0.0
+
+
+@kernel(inline=True)
+def crossing_in(p, rc, h, mode, lo, hi, before, after, v_before, v_after, c, s):
     """Earliest event in the piece [lo, hi] of the step, whose ends have corner heights
-    ``before`` and ``after``: (theta, mask of the corners that switch there), or (NO_EVENT, 0)."""
+    ``before`` and ``after`` and vertical speeds ``v_before`` and ``v_after``: (theta, mask of
+    the corners that switch there), or (NO_EVENT, 0)."""
     theta_event = NO_EVENT
     event_mask = 0
     for i in range(4):
         in_contact = (mode >> i) & 1
         level = EVENT_BAND if in_contact else 0.0
         crossed = after[i] > level if in_contact else after[i] < level
-        if not crossed:
-            continue
         g0 = before[i] - level
-        g1 = after[i] - level
+        if crossed:
+            g1 = after[i] - level
+            end = hi
+        elif turns_back(in_contact, v_before[i], v_after[i]):
+            # both ends on the same side: does the extreme between them cross?
+            end = locate_turn(p, rc, i, lo, hi, v_before[i], v_after[i], c, s)
+            g1 = dense_heights(p, rc, end, c, s)[i] - level
+            if (g1 > 0.0) == (g0 > 0.0) or g1 == 0.0:
+                continue
+        else:
+            continue
         if (g0 > 0.0) == (g1 > 0.0):
             theta = lo  # already across at the start (only by rounding)
         else:
-            theta = locate_crossing(p, rc, h, i, level, lo, hi, g0, g1, c, s)
+            theta = locate_crossing(p, rc, h, i, level, lo, end, g0, g1, c, s)
         if theta < theta_event - 1e-12:
             theta_event = theta
             event_mask = 1 << i
@@ -132,35 +200,43 @@ def crossing_in(p, rc, h, mode, lo, hi, before, after, c, s):
 
 
 @kernel(inline=True)
-def find_event(p, rc, h, mode, pieces, heights_start, heights_end, c, s):
+def find_event(p, rc, h, mode, pieces, heights_start, heights_end, rates_start, rates_end, c,
+               s):
     """Earliest contact event inside an accepted step, scanned in ``pieces``: (theta, mask of
-    the corners that switch there), or (NO_EVENT, 0). The heights at the step's ends are the
-    exact ones; inside, those of the continuous extension."""
+    the corners that switch there), or (NO_EVENT, 0). The heights and speeds at the step's ends
+    are the exact ones; inside, those of the continuous extension."""
     before = heights_start
+    v_before = rates_start
     lo = 0.0
     for piece in range(1, pieces + 1):
         if piece == pieces:
             hi = 1.0
             after = heights_end
+            v_after = rates_end
         else:
             hi = piece / pieces
-            after = dense_heights(p, rc, hi, c, s)
-        theta, mask = crossing_in(p, rc, h, mode, lo, hi, before, after, c, s)
+            after, v_after = dense_corners(p, rc, hi, c, s)
+        theta, mask = crossing_in(p, rc, h, mode, lo, hi, before, after, v_before, v_after, c, s)
         if mask != 0:
             return theta, mask
         lo = hi
         before = after
+        v_before = v_after
     return NO_EVENT, 0
 
 
 @kernel(inline=True)
-def may_cross(mode, heights_end):
-    """Whether any corner ends a step on the other side of its event level."""
+def may_cross(mode, heights_end, rates_start, rates_end):
+    """Whether any corner ends a step on the other side of its event level, or turns back
+    within it towards that side (so that it may have crossed and returned)."""
     for i in range(4):
-        if (mode >> i) & 1:
+        in_contact = (mode >> i) & 1
+        if in_contact:
             if heights_end[i] > EVENT_BAND:
                 return True
         elif heights_end[i] < 0.0:
+            return True
+        if turns_back(in_contact, rates_start[i], rates_end[i]):
             return True
     return False
 
@@ -259,13 +335,17 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             continue
         steps += 1
         heights_end = corner_heights(p, end[1], c7, s7)
+        rates = corner_rates(p, st[4], st[5], c, s)
+        rates_end = corner_rates(p, end[4], end[5], c7, s7)
         pieces = scan_pieces(st, end)
         theta = NO_EVENT
         event_mask = 0
-        dense = pieces > 1 or may_cross(mode, heights_end) or (record and next_sample <= t + h)
+        dense = (pieces > 1 or may_cross(mode, heights_end, rates, rates_end)
+                 or (record and next_sample <= t + h))
         if dense:
             rc = dense_coefficients(st, end, h, stages)
-            theta, event_mask = find_event(p, rc, h, mode, pieces, heights, heights_end, c, s)
+            theta, event_mask = find_event(p, rc, h, mode, pieces, heights, heights_end, rates,
+                                           rates_end, c, s)
             t_new = t + theta * h if event_mask != 0 else t + h
             if record:
                 while next_sample <= t_new and n_samples < samples.shape[0]:

@@ -69,25 +69,32 @@ def rung_settings(settings, rtols, dts, k):
 
 
 @kernel
-def rungs_agree(label_a, status_a, change_a, label_b, status_b, change_b, change_tolerance):
-    """The ladder's rule: two runs agree when both settled with the same count of quarter
-    turns, and passed into their final well at the same moment, within ``change_tolerance``
-    seconds (their last change of well; NaN, never changed, matches NaN). The label is decided
-    there; afterwards the coin only rocks inside its well, and that rocking is chaotic, so
-    neither the final states nor the settle times of two converged runs need agree. Labels
-    alone are weak evidence where outcomes are nearly random among a few wells: two runs that
-    took different paths often end in the same well by chance, and pass into it at clearly
-    different times."""
-    if not (status_a == Status.SETTLED and status_b == Status.SETTLED and label_a == label_b):
+def rungs_agree(label_a, run_a, label_b, run_b, change_tolerance, settle_tolerance):
+    """The ladder's rule: two runs (RunResults, with their labels) agree when both settled with
+    the same count of quarter turns, passed into their final well at the same moment, within
+    ``change_tolerance`` seconds (their last change of well; NaN, never changed, matches NaN),
+    and settled at the same moment, within ``settle_tolerance`` seconds. The label is decided
+    when the energy falls below E_crit, not when the coin enters its final well: two runs that
+    entered it together can still bounce apart while they have the energy to leave it, and the
+    true trajectory may then leave where neither did. Afterwards the coin only rocks inside its
+    well, chaotically, so their final states need not agree. Labels alone are weak evidence
+    where outcomes are nearly random among a few wells: two runs that took different paths
+    often end in the same well by chance, and pass into it at clearly different times."""
+    if not (run_a.status == Status.SETTLED and run_b.status == Status.SETTLED
+            and label_a == label_b):
         return False
+    if abs(run_a.settle_time - run_b.settle_time) > settle_tolerance:
+        return False
+    change_a = run_a.last_change
+    change_b = run_b.last_change
     if change_a != change_a or change_b != change_b:  # NaN: no change of well at all
         return change_a != change_a and change_b != change_b
     return abs(change_a - change_b) <= change_tolerance
 
 
 @kernel
-def run_ladder(p, settings, rtols, dts, change_tolerance, states, quarter_turns, status,
-               settle_time, steps, certainty, rung, control):
+def run_ladder(p, settings, rtols, dts, change_tolerance, settle_tolerance, states, quarter_turns,
+               status, settle_time, steps, certainty, rung, control):
     """Verified labels: each row of ``states`` is run at rung 0, 1, ... of the ladder (rtols,
     dts: the rungs' settings, coarse to fine) until two successive rungs agree
     (:func:`rungs_agree`). Writes the finest run's outcome, the total steps, the certainty
@@ -112,8 +119,8 @@ def run_ladder(p, settings, rtols, dts, change_tolerance, states, quarter_turns,
             finer_label = outcome_label(finer.status, finer.n_well, final[2])
             total += finer.steps
             last = k
-            agree = rungs_agree(label, result.status, result.last_change, finer_label,
-                                finer.status, finer.last_change, change_tolerance)
+            agree = rungs_agree(label, result, finer_label, finer, change_tolerance,
+                                settle_tolerance)
             result = finer
             label = finer_label
             if agree:
@@ -154,7 +161,7 @@ def verified_labels(p, settings, ladder, states, control=None) -> VerifiedLabels
                          np.empty(n, np.int64), np.empty(n, np.uint8), np.empty(n, np.int8))
     compiled(run_ladder)(p, settings, np.asarray(ladder.rtols, dtype=np.float64),
                          np.asarray(ladder.dts, dtype=np.float64),
-                         float(ladder.change_tolerance),
+                         float(ladder.change_tolerance), float(ladder.settle_tolerance),
                          np.ascontiguousarray(states, dtype=np.float64), *out,
                          new_control() if control is None else control)
     return out

@@ -2,7 +2,8 @@
 
 Every initial condition is computed at rung 0, 1, ... until two successive rungs agree (both
 runs settled, with the same count of quarter turns, having entered that final well at the same
-moment to within CHANGE_TOLERANCE, see :func:`coincli.integrators.batch.rungs_agree`): the
+moment to within CHANGE_TOLERANCE and settled at the same moment to within SETTLE_TOLERANCE, see
+:func:`coincli.integrators.batch.rungs_agree`): the
 label is then *certain*, converged at that rung. A cell whose label has not converged by the
 last rung is *uncertain*. Cells that agree at once cost two runs; only the disagreeing ones
 climb.
@@ -22,6 +23,7 @@ from .registry import info, setting_text
 RTOL_FLOOR = 1e-12  # the tightest tolerance a ladder climbs to (README: "Verified labels")
 FIXED_RUNGS = 3
 CHANGE_TOLERANCE = 1e-3  # s: two agreeing runs enter their final well this close in time
+SETTLE_TOLERANCE = 1e-2  # s: and fall below E_crit this close in time
 
 
 @dataclass(frozen=True)
@@ -32,6 +34,7 @@ class Ladder:
     dts: tuple[float, ...]
     adaptive: bool
     change_tolerance: float = CHANGE_TOLERANCE
+    settle_tolerance: float = SETTLE_TOLERANCE
 
     @property
     def verified(self) -> bool:
@@ -49,10 +52,11 @@ class Ladder:
         return {"rungs": [{knob: (self.rtols if self.adaptive else self.dts)[k]}
                           for k in range(len(self))],
                 "change_tolerance": self.change_tolerance,
+                "settle_tolerance": self.settle_tolerance,
                 "rule": "a label is certain when two successive rungs both settle with the "
                         "same count of quarter turns, having passed into that final well "
-                        "within change_tolerance seconds of each other; uncertain if no two "
-                        "do"}
+                        "within change_tolerance seconds of each other and settled within "
+                        "settle_tolerance seconds of each other; uncertain if no two do"}
 
 
 def ladder_of(integration: Integration) -> Ladder:
