@@ -1,7 +1,5 @@
 """`coin accuracy`: the work-precision chart, and where each fixed-step method fails."""
 
-from __future__ import annotations
-
 import os
 from pathlib import Path
 from typing import Annotated

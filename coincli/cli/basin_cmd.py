@@ -5,8 +5,6 @@ Zarr store; `coin basin render` draws one, `coin basin stats` summarises one.
 routes any first argument that is not a subcommand name to `sweep`.
 """
 
-from __future__ import annotations
-
 import math
 import signal
 import threading

@@ -1,7 +1,5 @@
 """`coin bench`: per-trajectory cost side by side, label agreement, and the full default basin."""
 
-from __future__ import annotations
-
 import json
 import os
 import resource

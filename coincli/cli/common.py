@@ -1,7 +1,5 @@
 """Options shared by every command, the scene they build, and one-line error reporting."""
 
-from __future__ import annotations
-
 import contextlib
 import json
 import sys

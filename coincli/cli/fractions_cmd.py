@@ -2,8 +2,6 @@
 initial conditions, with 95 % intervals; resumable in a Zarr store; continuation along a
 physical parameter (--over) with a plot."""
 
-from __future__ import annotations
-
 import math
 from pathlib import Path
 from typing import Annotated

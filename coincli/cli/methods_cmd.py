@@ -1,7 +1,5 @@
 """`coin methods`: the integration methods with their properties for the current parameters."""
 
-from __future__ import annotations
-
 from rich import box
 from rich.table import Table
 

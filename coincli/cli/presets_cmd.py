@@ -1,7 +1,5 @@
 """`coin presets`: list the shipped presets with their values."""
 
-from __future__ import annotations
-
 from rich import box
 from rich.table import Table
 

@@ -1,7 +1,5 @@
 """`coin simulate`: one trajectory, summarised."""
 
-from __future__ import annotations
-
 import math
 from pathlib import Path
 from typing import Annotated

@@ -1,7 +1,5 @@
 """`coin stability`: the static energy table and the critical stiffnesses (paper, section 3)."""
 
-from __future__ import annotations
-
 import math
 
 from rich.table import Table

@@ -156,12 +156,37 @@ def scan_pieces(start, end):
 
 
 @kernel(inline=True)
-def turns_back(in_contact, v_before, v_after):
-    """Whether a corner's height has its extreme inside a piece on the side where it would
-    cross: a free corner going down then up (a lowest point), a contact corner up then down."""
-    if in_contact:
-        return v_before > 0.0 and v_after < 0.0
-    return v_before < 0.0 and v_after > 0.0
+def dips_across(in_contact, height_0, height_1, rate_0, rate_1, span):
+    """Whether a corner on its side of its event level at both ends of ``span`` seconds may
+    have crossed the level and come back in between: its distance from the level falls, then
+    rises, and the cubic through the ends' distances and rates (Hermite) comes within half the
+    nearer end's distance of the level. The step was accepted, so that cubic is within a tiny
+    fraction of the height change of the true curve: a dip that reaches the level is never
+    dismissed, and a corner rocking well clear of the surface costs no search."""
+    if in_contact:  # a contact corner's distance below its lift-off level
+        f0 = EVENT_BAND - height_0
+        f1 = EVENT_BAND - height_1
+        d0 = -rate_0 * span
+        d1 = -rate_1 * span
+    else:
+        f0 = height_0
+        f1 = height_1
+        d0 = rate_0 * span
+        d1 = rate_1 * span
+    if not (d0 < 0.0 and d1 > 0.0):
+        return False
+    # the cubic's slope a u^2 + b u + d0 on [0, 1] goes from d0 < 0 to d1 > 0: one root there
+    a = 6.0 * (f0 - f1) + 3.0 * (d0 + d1)
+    b = 6.0 * (f1 - f0) - 4.0 * d0 - 2.0 * d1
+    q = -0.5 * (b + math.copysign(math.sqrt(max(b * b - 4.0 * a * d0, 0.0)), b))
+    u = d0 / q if q != 0.0 else 0.5
+    if not (0.0 <= u <= 1.0) and a != 0.0:
+        u = q / a
+    u = min(max(u, 0.0), 1.0)
+    w = 1.0 - u
+    lowest = (f0 * (1.0 + 2.0 * u) * w * w + d0 * u * w * w + f1 * u * u * (3.0 - 2.0 * u)
+              - d1 * u * u * w)
+    return lowest < 0.5 * min(f0, f1)
 
 
 @kernel(inline=True)
@@ -179,7 +204,8 @@ def crossing_in(p, rc, h, mode, lo, hi, before, after, v_before, v_after, c, s):
         if crossed:
             g1 = after[i] - level
             end = hi
-        elif turns_back(in_contact, v_before[i], v_after[i]):
+        elif dips_across(in_contact, before[i], after[i], v_before[i], v_after[i],
+                         (hi - lo) * h):
             # both ends on the same side: does the extreme between them cross?
             end = locate_turn(p, rc, i, lo, hi, v_before[i], v_after[i], c, s)
             g1 = dense_heights(p, rc, end, c, s)[i] - level
@@ -226,9 +252,9 @@ def find_event(p, rc, h, mode, pieces, heights_start, heights_end, rates_start, 
 
 
 @kernel(inline=True)
-def may_cross(mode, heights_end, rates_start, rates_end):
-    """Whether any corner ends a step on the other side of its event level, or turns back
-    within it towards that side (so that it may have crossed and returned)."""
+def may_cross(mode, heights_start, heights_end, rates_start, rates_end, h):
+    """Whether any corner ends a step of h seconds on the other side of its event level, or
+    may have crossed it and come back within the step."""
     for i in range(4):
         in_contact = (mode >> i) & 1
         if in_contact:
@@ -236,7 +262,8 @@ def may_cross(mode, heights_end, rates_start, rates_end):
                 return True
         elif heights_end[i] < 0.0:
             return True
-        if turns_back(in_contact, rates_start[i], rates_end[i]):
+        if dips_across(in_contact, heights_start[i], heights_end[i], rates_start[i],
+                       rates_end[i], h):
             return True
     return False
 
@@ -340,7 +367,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
         pieces = scan_pieces(st, end)
         theta = NO_EVENT
         event_mask = 0
-        dense = (pieces > 1 or may_cross(mode, heights_end, rates, rates_end)
+        dense = (pieces > 1 or may_cross(mode, heights, heights_end, rates, rates_end, h)
                  or (record and next_sample <= t + h))
         if dense:
             rc = dense_coefficients(st, end, h, stages)
