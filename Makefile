@@ -13,8 +13,11 @@ $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 
+# An editable install leaves the package uncompiled; where PYTHONDONTWRITEBYTECODE is set (as in
+# some containers) Python would then compile every module from source on each start (0.1 s).
 $(VENV)/.installed: pyproject.toml $(BIN)/activate
 	$(BIN)/pip install --quiet -e ".[test]"
+	$(BIN)/python -m compileall -q coincli
 	touch $@
 
 install: $(VENV)/.installed

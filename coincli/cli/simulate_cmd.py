@@ -84,7 +84,7 @@ def simulate_command(
 
     Example, the throw of the paper's fig. 2 (lying after six quarter turns here; from vy0 = 1.1974 m/s on it stands after seven, as the paper says): coin simulate --vy 1.197 --vphi 3.508
     """  # noqa: E501
-    from .. import api
+    from ..throw import simulate  # coincli.simulate, without the rest of the API's imports
 
     rrd_path = None if no_rrd else rrd
     recording = rrd_path is not None or spawn or connect is not None
@@ -98,7 +98,7 @@ def simulate_command(
             _check_recording_options(scene, rrd_path, connect, log_every)
         _announce(scene)
         try:
-            trajectory = api.simulate(scene, sample_dt=log_every if recording else None,
+            trajectory = simulate(scene, sample_dt=log_every if recording else None,
                                       record_events=recording, force=force)
         except KeyboardInterrupt:
             err_console.print("[yellow]interrupted[/]: no outcome, nothing written")
