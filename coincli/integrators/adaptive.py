@@ -90,48 +90,21 @@ def dense_corners(p, rc, theta, c, s):
 
 
 @kernel(inline=True)
-def locate_turn(p, rc, i, lo, hi, v_lo, v_hi, c, s):
-    """Fraction theta in [lo, hi] where corner i's vertical speed changes sign (v_lo, v_hi: its
-    speeds at lo and hi, of opposite signs), its extreme height: Illinois regula falsi."""
+def illinois(p, rc, c, s, i, speed, level, lo, hi, f_lo, f_hi, h, tolerance):
+    """Illinois regula falsi on the continuous extension for a sign change, on [lo, hi], of
+    corner i's height minus ``level`` (or, if ``speed``, of its vertical speed), whose values
+    at lo and hi are f_lo and f_hi, until the bracket is shorter than ``tolerance`` / h.
+    Returns (the last point tried, the far end of the final bracket)."""
     side = 0
     theta = 0.5 * (lo + hi)
-    for _ in range(60):
-        theta = (lo * v_hi - hi * v_lo) / (v_hi - v_lo)
-        if not (lo < theta < hi):
-            theta = 0.5 * (lo + hi)
-        v = dense_corners(p, rc, theta, c, s)[1][i]
-        if v == 0.0:
-            return theta
-        if (v > 0.0) == (v_hi > 0.0):
-            hi, v_hi = theta, v
-            if side == 1:
-                v_lo *= 0.5
-            side = 1
-        else:
-            lo, v_lo = theta, v
-            if side == -1:
-                v_hi *= 0.5
-            side = -1
-        if hi - lo < 1e-12:
-            break
-    return theta
-
-
-@kernel(inline=True)
-def locate_crossing(p, rc, h, i, level, lo, hi, g0, g1, c, s):
-    """Fraction theta of the step in [lo, hi] where corner i's height crosses ``level`` (g0,
-    g1: height minus level at lo and hi, of opposite signs): Illinois regula falsi on the
-    continuous extension. Returns the far end of the final bracket, where the event has
-    certainly happened."""
-    f_lo, f_hi = g0, g1
-    side = 0
     for _ in range(100):
         theta = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
         if not (lo < theta < hi):
             theta = 0.5 * (lo + hi)
-        f = dense_heights(p, rc, theta, c, s)[i] - level
+        heights, rates = dense_corners(p, rc, theta, c, s)
+        f = rates[i] if speed else heights[i] - level
         if f == 0.0:
-            return theta
+            return theta, theta
         if (f > 0.0) == (f_hi > 0.0):
             hi, f_hi = theta, f
             if side == 1:
@@ -142,9 +115,24 @@ def locate_crossing(p, rc, h, i, level, lo, hi, g0, g1, c, s):
             if side == -1:
                 f_hi *= 0.5
             side = -1
-        if (hi - lo) * h < ROOT_TIME_TOL:
+        if (hi - lo) * h < tolerance:
             break
-    return hi
+    return theta, hi
+
+
+@kernel(inline=True)
+def locate_turn(p, rc, i, lo, hi, v_lo, v_hi, c, s):
+    """Fraction theta in [lo, hi] where corner i's vertical speed changes sign (v_lo, v_hi: its
+    speeds at lo and hi, of opposite signs), its extreme height."""
+    return illinois(p, rc, c, s, i, True, 0.0, lo, hi, v_lo, v_hi, 1.0, 1e-12)[0]
+
+
+@kernel(inline=True)
+def locate_crossing(p, rc, h, i, level, lo, hi, g0, g1, c, s):
+    """Fraction theta of the step in [lo, hi] where corner i's height crosses ``level`` (g0,
+    g1: height minus level at lo and hi, of opposite signs). Returns the far end of the final
+    bracket, where the event has certainly happened."""
+    return illinois(p, rc, c, s, i, False, level, lo, hi, g0, g1, h, ROOT_TIME_TOL)[1]
 
 
 @kernel(inline=True)
