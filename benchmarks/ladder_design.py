@@ -115,7 +115,7 @@ def reference_labels(scene, states, threads):
     q, st = np.empty(len(states), np.int16), np.empty(len(states), np.uint8)
     with ThreadPoolExecutor(threads) as pool:
         for idx, out in zip(parts, pool.map(lambda i: label_states(p, settings, states[i]),
-                                            parts)):
+                                            parts), strict=True):
             q[idx], st[idx] = out.quarter_turns, out.status
     return q, st
 

@@ -1,8 +1,7 @@
 """The `coin` command line: typer app assembled from one module per command.
 
 The command modules do without ``from __future__ import annotations``: with it, typer has to
-compile and evaluate every option's annotation string, twice, on each start (a third of the
-time `coin --help` spends in Python)."""
+evaluate every option's annotation string, twice, on each start."""
 
 from typing import Annotated
 

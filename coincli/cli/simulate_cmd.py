@@ -99,7 +99,7 @@ def simulate_command(
         _announce(scene)
         try:
             trajectory = simulate(scene, sample_dt=log_every if recording else None,
-                                      record_events=recording, force=force)
+                                  record_events=recording, force=force)
         except KeyboardInterrupt:
             err_console.print("[yellow]interrupted[/]: no outcome, nothing written")
             raise typer.Exit(code=130) from None

@@ -11,10 +11,11 @@ restarts exactly at the event. No step straddles a jump, so the method keeps its
 step is rejected because of one. A corner can also cross and come back within one step (a free
 corner grazing the surface for a few microseconds while the coin spins on another corner): both
 ends of the step then lie on the same side, and the sign of its height alone would miss the
-contact. So the corners' vertical speeds are checked too; a free corner that starts the step (or
-a scanned piece of it) going down and ends it going up has its lowest point located on the
-continuous extension, and touches there if that point is below the surface (likewise the highest
-point of a contact corner, for a lift-off).
+contact. So the corners' vertical speeds are checked too: a free corner that starts the step (or
+a scanned piece of it) going down and ends it going up, and whose height the Hermite cubic of its
+ends brings near the surface in between, has its lowest point located on the continuous
+extension, and touches there if that point is below the surface (likewise the highest point of
+a contact corner, for a lift-off).
 
 Hysteresis of ``EVENT_BAND`` metres keeps a corner that sits exactly on the surface from
 toggling back and forth: a contact corner lifts off when it rises above +EVENT_BAND, a free corner
@@ -37,8 +38,8 @@ from ..enums import Method, Status
 from ..jit import kernel
 from ..model import (
     below,
-    corner_offset,
     corner_heights,
+    corner_offset,
     energy_with_heights,
     last_boundary,
     rotate,
@@ -148,9 +149,10 @@ def dips_across(in_contact, height_0, height_1, rate_0, rate_1, span):
     """Whether a corner on its side of its event level at both ends of ``span`` seconds may
     have crossed the level and come back in between: its distance from the level falls, then
     rises, and the cubic through the ends' distances and rates (Hermite) comes within half the
-    nearer end's distance of the level. The step was accepted, so that cubic is within a tiny
-    fraction of the height change of the true curve: a dip that reaches the level is never
-    dismissed, and a corner rocking well clear of the surface costs no search."""
+    nearer end's distance of the level. The step was accepted, so that cubic follows the true
+    curve far closer than that margin (at 245 rad/s and a 50 us step, to about 1e-12 m against a
+    height change of 1e-4 m): a dip that reaches the level is not dismissed, and a corner rocking
+    well clear of the surface costs no search."""
     if in_contact:  # a contact corner's distance below its lift-off level
         f0 = EVENT_BAND - height_0
         f1 = EVENT_BAND - height_1
