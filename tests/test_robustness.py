@@ -64,12 +64,27 @@ def test_a_coin_resting_in_the_foundation_is_a_valid_start():
         coincli.classify(scene.with_overrides(y0=scene.coin.r_t - 0.01))
 
 
+def test_an_error_in_the_kernels_thread_reaches_the_caller():
+    """What the worker thread of interruptible() raises is raised in the caller's thread, as
+    itself (not as a missing result)."""
+    from coincli.integrators import new_control
+    from coincli.integrators.batch import interruptible
+
+    def fails():
+        raise ParameterError("from the kernel's thread")
+
+    with pytest.raises(ParameterError, match="kernel's thread"):
+        interruptible(fails, new_control())
+    assert interruptible(lambda: 42, new_control()) == 42
+
+
 def test_ctrl_c_stops_a_long_simulation_within_two_seconds(tmp_path):
     # compile (or load) the fixed-step kernels first, so that the SIGINT hits a running kernel
     subprocess.run([*COIN, "simulate", "--method", "symplectic_euler", "--t-end", "0.001",
                     "--single-pass", "--no-rrd"], check=True, capture_output=True, cwd=tmp_path)
     proc = subprocess.Popen([*COIN, "simulate", "--method", "symplectic_euler", "--dt", "1e-9",
-                             "--t-end", "100", "--single-pass", "--no-rrd"], cwd=tmp_path,
+                             "--t-end", "100", "--full", "--single-pass", "--no-rrd"],
+                            cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(3.0)
     assert proc.poll() is None, proc.communicate()

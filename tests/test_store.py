@@ -396,12 +396,18 @@ def test_keyboard_interrupt_in_the_api_stops_the_tiles_in_flight(tmp_path):
     plan = coincli.plan_sweep(scene, res=2, chunk=(1, 2), vy=(0.05, 2.0), vphi=(-1.0, 1.0))
     path = tmp_path / "s.zarr"
 
-    def interrupt(update):  # as a notebook's interrupt arrives in the main thread
-        threading.Timer(0.3, signal.raise_signal, (signal.SIGINT,)).start()
+    sent = []
 
-    t0 = time.monotonic()
+    def send():
+        sent.append(time.monotonic())
+        signal.raise_signal(signal.SIGINT)
+
+    def interrupt(update):  # as a notebook's interrupt arrives in the main thread
+        threading.Timer(0.3, send).start()
+
     report = coincli.sweep(plan, path, threads=1, progress=interrupt)
-    assert time.monotonic() - t0 < 3.0  # not the seconds the slow tile takes
+    # timed from the interrupt, not from the start (loading the kernels varies with the load)
+    assert time.monotonic() - sent[0] < 1.5  # not the seconds the slow tile takes
     assert report.interrupted and report.tiles_done == 1
     assert store.read_done(path).tolist() == [[1], [0]]
     assert [p for p in path.rglob("*") if p.match("*/c/1/0*")] == []

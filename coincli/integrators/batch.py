@@ -175,12 +175,19 @@ def new_control():
 def interruptible(run, control):
     """``run()`` (compiled kernels, which release the GIL and poll ``control``) in a worker
     thread, so that this thread still takes Ctrl-C: it then sets the control flag, the kernels
-    return within microseconds and KeyboardInterrupt goes on up. Returns what ``run`` returns."""
+    return within microseconds and KeyboardInterrupt goes on up. Returns what ``run`` returns,
+    or raises what it raised."""
     import threading
 
     box = []
-    worker = threading.Thread(target=lambda: box.append(run()), daemon=True,
-                              name="coin-kernel")
+
+    def target():
+        try:
+            box.append((True, run()))
+        except BaseException as exc:  # handed to the caller's thread
+            box.append((False, exc))
+
+    worker = threading.Thread(target=target, daemon=True, name="coin-kernel")
     worker.start()
     try:
         while worker.is_alive():
@@ -189,7 +196,10 @@ def interruptible(run, control):
         control[0] = 1
         worker.join()
         raise
-    return box[0]
+    ok, value = box[0]
+    if not ok:
+        raise value
+    return value
 
 
 def label_states(p, settings, states, control=None) -> Labels:
