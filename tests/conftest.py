@@ -3,6 +3,8 @@ contract (ModelParams and RunSettings in, a RunResult and the final state out)."
 
 from __future__ import annotations
 
+import contextlib
+import signal
 from typing import NamedTuple
 
 import numpy as np
@@ -53,3 +55,20 @@ def run_kernel(scene, state, *, method: Method | str, t_end: float, dt: float = 
                                  np.ascontiguousarray(state, dtype=np.float64), samples, events,
                                  final, new_control())
     return KernelRun(result, final, samples[:result.n_samples], events[:result.n_events])
+
+
+def reset_sigint():
+    """Popen's preexec_fn for a child that must take Ctrl-C: children of a non-interactive
+    shell's background job (or of a test runner started as one) inherit SIGINT as ignored."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+@contextlib.contextmanager
+def sigint_raises():
+    """SIGINT raises KeyboardInterrupt in this process for the block, as at an interactive
+    prompt, whatever the test runner inherited."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)

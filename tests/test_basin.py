@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import reset_sigint
 from typer.testing import CliRunner
 
 from coincli.cli import app
@@ -76,15 +77,10 @@ def done_tiles(path: Path) -> int:
     return sum(len(files) for _, _, files in os.walk(root)) if root.exists() else 0
 
 
-def _reset_sigint():
-    # children of a non-interactive shell inherit SIGINT as ignored
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
 def start_sweep(*args: str) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "coincli", "basin", *args],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            preexec_fn=_reset_sigint, cwd=Path(__file__).parent.parent)
+                            preexec_fn=reset_sigint, cwd=Path(__file__).parent.parent)
 
 
 def wait_for_tiles(proc: subprocess.Popen, path: Path, n: int, timeout: float = 60) -> None:
