@@ -125,7 +125,7 @@ def main() -> None:
     from coincli.accuracy import REFERENCE_B, run_grid, vy_vphi_grid
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--preset", default="paper")
+    parser.add_argument("--preset", default="paper", help="a preset name or TOML file")
     parser.add_argument("--res", type=int, default=64)
     parser.add_argument("--box", type=int, default=0, metavar="N",
                         help="N random throws of the 5-D box instead of the grid")
@@ -133,7 +133,8 @@ def main() -> None:
     args = parser.parse_args()
     here = Path(__file__).resolve().parent
     scene = coincli.load_preset(args.preset)
-    name = f"{args.preset}-box{args.box}" if args.box else f"{args.preset}-{args.res}"
+    preset = Path(args.preset).stem  # a preset's name, or a TOML file's
+    name = f"{preset}-box{args.box}" if args.box else f"{preset}-{args.res}"
     if args.box:
         states = box_states(scene, args.box)
     else:
