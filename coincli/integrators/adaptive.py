@@ -68,14 +68,6 @@ NO_EVENT = 2.0  # theta of a step without an event
 
 
 @kernel(inline=True)
-def dense_heights(p, rc, theta, c, s):
-    """Corner heights at fraction theta of the step (c, s: trig of the angle at its start)."""
-    point = dense_point(rc, theta)
-    cp, sp = rotate(c, s, point[2] - rc[0][2])
-    return corner_heights(p, point[1], cp, sp)
-
-
-@kernel(inline=True)
 def corner_rates(p, vy, vphi, c, s):
     """Vertical speeds vy + vphi d_xi of the four corners (c, s: trig of the angle)."""
     return (vy + vphi * corner_offset(p, 0, c, s)[0], vy + vphi * corner_offset(p, 1, c, s)[0],
@@ -84,7 +76,8 @@ def corner_rates(p, vy, vphi, c, s):
 
 @kernel(inline=True)
 def dense_corners(p, rc, theta, c, s):
-    """(heights, vertical speeds) of the corners at fraction theta of the step."""
+    """(heights, vertical speeds) of the corners at fraction theta of the step (c, s: trig of
+    the angle at its start)."""
     point = dense_point(rc, theta)
     cp, sp = rotate(c, s, point[2] - rc[0][2])
     return corner_heights(p, point[1], cp, sp), corner_rates(p, point[4], point[5], cp, sp)
@@ -198,7 +191,7 @@ def crossing_in(p, rc, h, mode, lo, hi, before, after, v_before, v_after, c, s):
                          (hi - lo) * h):
             # both ends on the same side: does the extreme between them cross?
             end = locate_turn(p, rc, i, lo, hi, v_before[i], v_after[i], c, s)
-            g1 = dense_heights(p, rc, end, c, s)[i] - level
+            g1 = dense_corners(p, rc, end, c, s)[0][i] - level
             if (g1 > 0.0) == (g0 > 0.0) or g1 == 0.0:
                 continue
         else:
@@ -275,6 +268,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
     c = math.cos(st[2])
     s = math.sin(st[2])
     heights = corner_heights(p, st[1], c, s)
+    rates = corner_rates(p, st[4], st[5], c, s)  # kept with heights: the next step's start
     mode = below(heights)
     n_samples = 0
     n_events = 0
@@ -323,6 +317,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             c = math.cos(st[2])
             s = math.sin(st[2])
             heights = corner_heights(p, st[1], c, s)
+            rates = corner_rates(p, st[4], st[5], c, s)
             t = t + tau if touching != 0 else t_end
             steps += 1
             if touching != 0:
@@ -352,7 +347,6 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             continue
         steps += 1
         heights_end = corner_heights(p, end[1], c7, s7)
-        rates = corner_rates(p, st[4], st[5], c, s)
         rates_end = corner_rates(p, end[4], end[5], c7, s7)
         pieces = scan_pieces(st, end)
         theta = NO_EVENT
@@ -375,6 +369,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
                 c7 = math.cos(end[2])
                 s7 = math.sin(end[2])
                 heights_end = corner_heights(p, end[1], c7, s7)
+                rates_end = corner_rates(p, end[4], end[5], c7, s7)
         else:
             t_new = t + h
         crossed = last_boundary(p, st[2], end[2])
@@ -385,6 +380,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
         c = c7
         s = s7
         heights = heights_end
+        rates = rates_end
         if not is_finite_state(st[0], st[1], st[2], st[3], st[4], st[5]):
             status = Status.NONFINITE
             break
