@@ -444,7 +444,7 @@ def analyze_basin(quarter_turns, status, certainty, attrs: dict, *,
         ladder = ladder_of(scene.integration)
         base = base_state_of(attrs)
         indices = [IC_NAMES.index(a["name"]) for a in axes]
-        warm_up(params, settings, base)
+        warm_up(params, settings, base, (verified_labels,))
         eps = np.asarray(opts.eps, dtype=float)
         rng = np.random.default_rng(opts.seed)
         ranges = np.array([a["hi"] - a["lo"] for a in axes], dtype=float)

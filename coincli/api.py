@@ -436,7 +436,8 @@ def _basin_in_memory(plan: SweepPlan, threads, progress, stop):
 
 def _load_kernels(spec: SweepSpec) -> None:
     """Load the compiled kernels before the clock starts (and before the threads race to)."""
-    warm_up(spec.params, spec.settings, np.asarray(spec.grid.base_state, dtype=np.float64))
+    warm_up(spec.params, spec.settings, np.asarray(spec.grid.base_state, dtype=np.float64),
+            (verified_labels,))
 
 
 def open_basin(store: str | os.PathLike):

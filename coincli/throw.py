@@ -18,7 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .enums import Certainty, Engine, Status
-from .integrators import check_step, integrate, new_control, warm_up
+from .integrators import check_step, final_state, integrate, new_control, warm_up
 from .integrators.batch import NO_LABEL, interruptible, outcome_label, rungs_agree
 from .integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
 from .integrators.ladder import ladder_of
@@ -196,7 +196,7 @@ def _run(p, settings, state0, samples, events, final, control, engine: Engine):
         result = python(integrate)(p, capped, state0, samples, events, final, control)
         if not (result.status == Status.BUDGET and capped.max_steps < settings.max_steps):
             return result, time.perf_counter() - start, engine
-    warm_up(p, settings._replace(sample_dt=0.0), state0)  # before the clock starts
+    warm_up(p, settings._replace(sample_dt=0.0), state0, (final_state,))  # before the clock
     start = time.perf_counter()
     kernel = compiled(integrate)
     result = interruptible(lambda: kernel(p, settings, state0, samples, events, final, control),

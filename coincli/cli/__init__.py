@@ -1,24 +1,13 @@
 """The `coin` command line: typer app assembled from one module per command.
 
 The command modules do without ``from __future__ import annotations``: with it, typer has to
-evaluate every option's annotation string, twice, on each start."""
+evaluate every option's annotation string, twice, on each start. typer is held below 0.29
+(pyproject.toml), which coerces every option's value through a pydantic adapter: importing
+pydantic and building the adapters adds 0.15-0.2 s to every command that takes an option."""
 
 from typing import Annotated
 
 import typer
-import typer.core
-
-
-def _flag_type(self, ctx):
-    # typer >= 0.20 shows every flag as "<bool>", which reads as if the flag took a value;
-    # an on/off flag needs no type column, a value option keeps its metavar or type.
-    if self.is_flag and self.metavar is None:
-        return ""
-    return _value_type(self, ctx)
-
-
-_value_type = typer.core.TyperOption.display_type_rich
-typer.core.TyperOption.display_type_rich = _flag_type
 
 app = typer.Typer(
     name="coin",

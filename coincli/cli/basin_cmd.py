@@ -323,8 +323,9 @@ def verify_command(
                                          metavar="STORE")],
     json_out: JsonOpt = False,
 ) -> None:
-    """Check a store without computing anything: every chunk's checksum, every tile's data
-    against its digest, every metadata file.
+    """Check a store without computing anything: checksums, digests and metadata.
+
+    Every chunk's checksum, every tile's data against its digest, every metadata file.
 
     Exit code 0 if the store is intact (complete or not), 1 if anything is damaged (listed:
     rerunning the sweep command recomputes those tiles), 2 if it is no basin store.

@@ -10,7 +10,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..integrators import warm_up
+from ..integrators.batch import verified_labels, warm_up
 from ..montecarlo import (
     BatchResult,
     BatchTask,
@@ -84,7 +84,8 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
         mode, n_workers = "threads", threads or usable_cores()
         if any(p.peek() is not None for p in progs):
             for spec, s in zip(specs, plan.scenes, strict=True):
-                warm_up(spec.params, spec.settings, np.asarray(state_array(s)))
+                warm_up(spec.params, spec.settings, np.asarray(state_array(s)),
+                        (verified_labels,))
         runner = run_threads(lambda t, control: compute_batch(specs[t.value], t, control),
                              ItemQueue(tasks()), n_workers)
     pending: list[dict[int, BatchResult]] = [{} for _ in plan.scenes]
