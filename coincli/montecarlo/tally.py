@@ -68,7 +68,7 @@ class Tally:
 GOALS = ("all", "standing")
 CONFIDENCE = 0.95
 INTERVAL_NOTE = ("Wilson score interval at 95 % (scipy): exact in its model for independent "
-                 "draws, conservative in practice for scrambled Sobol points")
+                 "draws; scrambled Sobol points measured to have the same variance here")
 
 
 def wilson_arrays(k, n, confidence: float = CONFIDENCE) -> tuple[np.ndarray, np.ndarray]:
