@@ -35,6 +35,7 @@ from .grid import (
     make_spec,
     parse_pair,
     split_options,
+    with_mirror,
 )
 from .integrators import check_step, warm_up
 from .integrators.batch import verified_labels
@@ -73,15 +74,18 @@ class SweepPlan:
 
 
 def plan_sweep(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, force: bool = False,
-               **initial) -> SweepPlan:
+               mirror: bool = True, **initial) -> SweepPlan:
     """Check everything about a sweep before any work: the ranges (two initial conditions
     swept, ``name=(lo, hi)`` or ``'LO:HI'``; vy and vphi sweep their defaults unless given), the
-    other initial values, the resolution, the tiles, the method and its step."""
+    other initial values, the resolution, the tiles, the method and its step. ``mirror``: where
+    the sweep is its own mirror image, compute one tile of each mirror pair
+    (:attr:`coincli.grid.Grid.mirror_flips`; the plan's ``attrs`` say which axes)."""
     from .io.schema import basin_attrs
 
     ranges, fixed = split_options(initial)
     scene = validate(scene.with_overrides(**fixed))
-    grid = make_grid(scene, ranges, parse_pair("res", res, 2), parse_pair("chunk", chunk, 1))
+    grid = make_grid(scene, ranges, parse_pair("res", res, 2), parse_pair("chunk", chunk, 1),
+                     use_mirror=mirror)
     for axis in grid.axes:  # every swept value must make a valid scene too
         for value in (axis.lo, axis.hi):
             validate(scene.with_overrides(**{axis.name: value}))
@@ -210,7 +214,9 @@ def estimate_sweep(plan: SweepPlan, threads: int | None = None, *, workers: int 
     from .io.runner import usable_cores
 
     grid, spec = plan.grid, plan.spec
-    cells = grid.n_cells if cells is None else int(cells)
+    if cells is None:  # a mirror tile costs nothing
+        cells = sum(grid.tile_cells(t) for t in grid.work_tiles())
+    cells = int(cells)
     cores = usable_cores()
     n = None if scheduler is not None else min(workers or threads or cores, cores)
     _load_kernels(spec)
@@ -298,12 +304,12 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
         if max_seconds is not None and estimate.seconds > max_seconds:
             raise SweepTooLong(estimate, max_seconds)
     state = store_io.prepare(path, plan.attrs, spec, overwrite=overwrite)
-    todo = [t for t in grid.tiles() if not state.done[t]]
+    todo = [t for t in grid.work_tiles() if not all(state.done[u] for u in grid.task_tiles(t))]
     total = len(grid.tiles())
-    before = total - len(todo)
-    cells_todo = sum(grid.tile_cells(t) for t in todo)
+    before = total - sum(len(grid.task_tiles(t)) for t in todo)
+    cells_todo = sum(grid.tile_cells(u) for t in todo for u in grid.task_tiles(t))
     if not fresh and want_estimate and todo:
-        estimate = estimate_sweep(plan, **where, cells=cells_todo)
+        estimate = estimate_sweep(plan, **where, cells=sum(grid.tile_cells(t) for t in todo))
         if max_seconds is not None and estimate.seconds > max_seconds:
             raise SweepTooLong(estimate, max_seconds)
     damaged = tuple(sorted(state.damaged))
@@ -318,9 +324,11 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
         return SweepReport(str(path), total, total, total, 0, 0.0, mode, n_workers, False,
                            damaged=damaged, estimate=estimate)
     def is_done(tile) -> bool:  # by another process, since the check above
-        if tile in state.damaged:  # its old digest is there: check the data
-            return store_io.tile_done(path, tile, grid)
-        return store_io.has_digest(path, tile)
+        return all(store_io.tile_done(path, u, grid) if u in state.damaged  # check the data
+                   else store_io.has_digest(path, u) for u in grid.task_tiles(tile))
+
+    def tiles_elsewhere() -> int:
+        return sum(len(grid.task_tiles(t)) for t in queue.done_elsewhere)
 
     claims = Claims(store_io.claims_dir(path))
     queue = TileQueue(todo, claims, is_done=is_done)
@@ -340,10 +348,10 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
             kernel_seconds += done.compute_seconds
             store_seconds += done.write_seconds
             if done.written:
-                computed += 1
+                computed += done.tiles
                 cells += done.cells
             if progress is not None:
-                progress(SweepProgress(before + computed + len(queue.done_elsewhere), total,
+                progress(SweepProgress(before + computed + tiles_elsewhere(), total,
                                        cells, cells_todo, time.perf_counter() - wall0))
     except KeyboardInterrupt:
         interrupted = True
@@ -352,7 +360,7 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
         claims.close()
     interrupted = interrupted or not queue.finished or (stop is not None and stop.is_set())
     wall = time.perf_counter() - wall0
-    elsewhere = len(queue.done_elsewhere)
+    elsewhere = tiles_elsewhere()
     n_done = total if not interrupted else before + computed + elsewhere
     with contextlib.suppress(OSError):  # a cost record lost is no reason to fail a sweep
         store_io.record_run(path, store_io.run_record(
@@ -367,19 +375,21 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
           None = None, overwrite: bool = False, force: bool = False,
           threads: int | None = None, workers: int | None = None, scheduler: str | None = None,
           progress: Callable[[SweepProgress], None] | None = None, stop=None,
-          x0=None, y0=None, phi0=None, vx=None, vy=None, vphi=None):
+          mirror: bool = True, x0=None, y0=None, phi0=None, vx=None, vy=None, vphi=None):
     """The basin map of two initial conditions as an xarray Dataset.
 
     Swept axes are given as ``name=(lo, hi)`` (vy and vphi sweep (0.05, 2) m/s and (-20, 20)
     rad/s unless given); a plain number fixes a value. ``res`` cells per axis (N or (N, M)),
-    tiles of ``chunk`` cells. Without ``store`` the map is computed in memory and returned; with
-    ``store`` it is computed into (or resumed from) that Zarr store, the same store
-    ``coin basin`` writes, and the store is returned opened. Every label is verified (see
+    tiles of ``chunk`` cells (where the sweep is its own mirror image, one tile of each mirror
+    pair is computed and the other mirrored, unless ``mirror=False``: see
+    :attr:`coincli.grid.Grid.mirror_flips`). Without ``store`` the map is computed in memory and
+    returned; with ``store`` it is computed into (or resumed from) that Zarr store, the same
+    store ``coin basin`` writes, and the store is returned opened. Every label is verified (see
     coincli.integrators.ladder) unless the scene's integration says ``verify=False``
     (``scene.with_overrides(verify=False)``). Interrupted (``stop`` set, or Ctrl-C, which stops
     the tiles in flight at once), it raises KeyboardInterrupt; a store keeps every finished
     tile for a resume."""
-    plan = plan_sweep(scene, res=res, chunk=chunk, force=force, x0=x0, y0=y0,
+    plan = plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=mirror, x0=x0, y0=y0,
                       phi0=phi0, vx=vx, vy=vy, vphi=vphi)
     if store is not None:
         report = sweep(plan, store, overwrite=overwrite, threads=threads, workers=workers,
@@ -409,16 +419,17 @@ def _basin_in_memory(plan: SweepPlan, threads, progress, stop):
     _load_kernels(spec)
     wall0 = time.perf_counter()
     cells = 0
-    runner = run_threads(partial(compute_tile, spec), TileQueue(tiles),
+    runner = run_threads(partial(compute_tile, spec), TileQueue(grid.work_tiles()),
                          threads or usable_cores(), stop)
     try:
-        for result in runner:
-            s0, s1 = grid.tile_slices(result.tile)
-            for name, block in result.arrays.items():
-                arrays[name][s0, s1] = block
-            done[result.tile] = 1
-            seconds[result.tile] = result.cpu_seconds
-            cells += result.cells
+        for computed in runner:
+            for result in with_mirror(computed, grid):
+                s0, s1 = grid.tile_slices(result.tile)
+                for name, block in result.arrays.items():
+                    arrays[name][s0, s1] = block
+                done[result.tile] = 1
+                seconds[result.tile] = result.cpu_seconds
+                cells += result.cells
             if progress is not None:
                 progress(SweepProgress(int(done.sum()), len(tiles), cells, grid.n_cells,
                                        time.perf_counter() - wall0))

@@ -20,6 +20,7 @@ import pytest
 from conftest import reset_sigint
 from typer.testing import CliRunner
 
+import coincli
 from coincli.cli import app
 from coincli.grid import compute_tile, make_grid, make_spec, parse_pair, parse_range
 from coincli.integrators import NO_LABEL, info
@@ -287,9 +288,12 @@ def test_task_function_is_importable_and_writes_its_tile(tmp_path):
     spec = make_spec(Scene(), grid)
     store.prepare(path, basin_attrs(Scene(), info("event"), spec), spec)
     done = run_tile_task(str(path), spec, (1, 0))
-    assert done.tile == (1, 0) and done.cells == 4 and done.cpu_seconds >= 0 and done.written
+    assert done.tile == (1, 0) and done.cpu_seconds >= 0 and done.written
     assert done.compute_seconds > 0 and done.write_seconds > 0
-    assert store.read_done(path).tolist() == [[0, 0], [1, 0]]
+    # vphi sweeps -5:5 in whole tiles: the task writes tile (1, 0) and its mirror image (1, 1)
+    assert done.tiles == 2 and done.cells == 8
+    done_flags = store.read_done(path)
+    assert (done_flags[0] == 0).all() and (done_flags[1] != 0).all()
 
 
 # -- pictures and statistics ---------------------------------------------------------------------
@@ -297,7 +301,8 @@ def _partial_store(tmp_path, verify=True) -> Path:
     """A 8 x 8 sweep with 2 of its 4 tiles computed."""
     path = tmp_path / "partial.zarr"
     scene = Scene().with_overrides(verify=verify)
-    grid = make_grid(scene, {"vy": (0.3, 1.9), "vphi": (-15.0, 15.0)}, (8, 8), (4, 4))
+    grid = make_grid(scene, {"vy": (0.3, 1.9), "vphi": (-15.0, 15.0)}, (8, 8), (4, 4),
+                     use_mirror=False)
     spec = make_spec(scene, grid)
     attrs = basin_attrs(scene, info("event"), spec)
     store.prepare(path, attrs, spec)
@@ -407,3 +412,38 @@ def test_verified_labels_of_the_thick_coin_are_those_of_tight_runs(tmp_path):
     assert stats["verified"] and stats["certain"]["count"] == int(certain.sum())
     assert stats["uncertain"]["count"] + stats["certain"]["count"] == stats["labelled"]
     coin_ok("render", str(path), "-o", str(tmp_path / "t.png"), "--dpi", "50")
+
+
+# -- mirror symmetry -----------------------------------------------------------------------------
+def _flips(ranges, res=(8, 8), chunk=(4, 4), use_mirror=True, **fixed):
+    return make_grid(Scene().with_overrides(**fixed), ranges, res, chunk,
+                     use_mirror=use_mirror).mirror_flips
+
+
+def test_which_sweeps_are_their_own_mirror_image():
+    assert _flips({"vy": (0.1, 1.0), "vphi": (-5.0, 5.0)}) == (False, True)
+    assert _flips({"vx": (-1.0, 1.0), "vphi": (-5.0, 5.0)}) == (True, True)
+    assert _flips({"phi0": (-1.0, 1.0), "vy": (0.1, 1.0)}) == (True, False)
+    assert _flips({"vy": (0.1, 1.0), "vphi": (-5.0, 6.0)}) is None  # not symmetric
+    assert _flips({"vy": (0.1, 1.0), "vphi": (-5.0, 5.0)}, res=(8, 10)) is None  # part tiles
+    assert _flips({"vy": (0.1, 1.0), "vphi": (-5.0, 5.0)}, phi0=0.1) is None  # moved by it
+    assert _flips({"vy": (0.1, 1.0), "vphi": (-5.0, 5.0)}, vx=0.2) is None
+    assert _flips({"vy": (0.1, 1.0), "vphi": (-5.0, 5.0)}, x0=0.3) == (False, True)  # any x0
+    assert _flips({"y0": (0.011, 0.02), "vy": (0.1, 1.0)}) is None  # nothing it reverses
+    assert _flips({"vy": (0.1, 1.0), "vphi": (-5.0, 5.0)}, use_mirror=False) is None
+
+
+@pytest.mark.parametrize("ranges", [dict(vy=(0.3, 1.9), vphi=(-15.0, 15.0)),
+                                    dict(vx=(-0.4, 0.4), vphi=(-15.0, 15.0), vy=1.2)])
+def test_a_mirrored_map_is_the_full_map(ranges):
+    """Each mirror pair computed once (a reflection in vphi, or through the centre in (vx,
+    vphi)) gives the labels of computing every cell."""
+    scene = Scene()
+    half = coincli.basin(scene, res=8, chunk=2, threads=1, **ranges)
+    full = coincli.basin(scene, res=8, chunk=2, threads=1, mirror=False, **ranges)
+    assert half.attrs["sweep"]["mirror"] == [d for d in ("vx", "vphi") if d in ranges]
+    assert full.attrs["sweep"]["mirror"] is None
+    for name in ("quarter_turns", "status", "certainty", "rung"):
+        np.testing.assert_array_equal(half[name].values, full[name].values, err_msg=name)
+    turns = half["quarter_turns"].values
+    assert np.array_equal(turns[::-1, ::-1] if "vx" in ranges else turns[:, ::-1], -turns)

@@ -39,7 +39,8 @@ from coincli.io import claims as claims_io
 from coincli.io import store
 
 runner = CliRunner()
-ARGS = ["--res", "8", "--chunk", "4", "-q"]  # 4 tiles of 16 cells
+# 4 tiles of 16 cells, each computed (these tests are about tiles; mirrored sweeps: see the end)
+ARGS = ["--res", "8", "--chunk", "4", "--no-mirror", "-q"]
 ROOT = Path(__file__).parent.parent
 
 
@@ -257,7 +258,7 @@ def test_two_processes_started_together_share_a_new_store(tmp_path):
 
 
 def test_racing_creations_end_in_one_store(tmp_path):
-    plan = coincli.plan_sweep(coincli.load_preset("paper"), res=8, chunk=4)
+    plan = coincli.plan_sweep(coincli.load_preset("paper"), res=8, chunk=4, mirror=False)
     path = tmp_path / "s.zarr"
     barrier = threading.Barrier(4)
     errors = []
@@ -290,7 +291,7 @@ def _claim(path: Path, tile, pid: int, age: float = 0.0) -> Path:
 
 
 def test_stale_claims_are_taken_over_and_live_ones_waited_for(tmp_path, clean):
-    plan = coincli.plan_sweep(coincli.load_preset("paper"), res=8, chunk=4)
+    plan = coincli.plan_sweep(coincli.load_preset("paper"), res=8, chunk=4, mirror=False)
     path = tmp_path / "s.zarr"
     store.prepare(path, plan.attrs, plan.spec)
     dead = subprocess.Popen(["true"])
@@ -318,7 +319,7 @@ def test_stale_claims_are_taken_over_and_live_ones_waited_for(tmp_path, clean):
 
 
 def test_a_tile_finished_elsewhere_is_not_computed_again(tmp_path, clean):
-    plan = coincli.plan_sweep(coincli.load_preset("paper"), res=8, chunk=4)
+    plan = coincli.plan_sweep(coincli.load_preset("paper"), res=8, chunk=4, mirror=False)
     path = copy_store(clean, tmp_path / "s.zarr")
     (path / "done" / "c" / "1" / "1").rename(tmp_path / "digest")  # (1, 1) looks unfinished
     held = _claim(path, (1, 1), os.getppid())  # ... and a live process holds it
@@ -419,7 +420,8 @@ def test_estimate_comes_from_a_fixed_pilot():
     rows = np.array([i for i, _ in cells])
     assert (rows < 256).any() and (rows >= 256).any()  # spread over the grid
     est = coincli.estimate_sweep(plan, threads=2)
-    assert est.cells == 512 * 512 and est.pilot_cells == 24 and not est.at_least
+    # vphi sweeps -20:20 in whole tiles: half the cells are mirror images, computed for free
+    assert est.cells == 512 * 512 // 2 and est.pilot_cells == 24 and not est.at_least
     assert est.seconds == pytest.approx(est.cpu_per_cell * est.cells / est.workers)
     assert 1e-6 < est.cpu_per_cell < 0.05
     half = coincli.estimate_sweep(plan, threads=1, cells=1000, budget=0.0)  # one cell timed
@@ -536,3 +538,45 @@ def test_disk_full_in_the_middle_of_a_sweep(tmp_path, clean, monkeypatch):
     assert store.check(path).intact  # what was written is whole
     coin_ok(path, *ARGS)  # space again: resume
     assert_identical(path, clean)
+
+
+# -- mirrored sweeps -----------------------------------------------------------------------------
+# vphi over -20:20 in whole tiles: tiles (i, 0) are computed, tiles (i, 1) are their mirror images
+MIRRORED = ["--res", "8", "--chunk", "4", "-q"]
+
+
+@pytest.fixture(scope="module")
+def mirrored(tmp_path_factory) -> Path:
+    """The store of `clean`, made with the mirror: 2 tiles computed, 2 mirrored."""
+    path = tmp_path_factory.mktemp("mirrored") / "m.zarr"
+    coin_ok(path, *MIRRORED)
+    return path
+
+
+def test_a_mirrored_store_has_the_labels_of_the_full_one(mirrored, clean):
+    half, full = store.read_basin(mirrored), store.read_basin(clean)
+    for name in ("quarter_turns", "status", "certainty", "rung", "steps"):
+        np.testing.assert_array_equal(half.arrays[name], full.arrays[name], err_msg=name)
+    np.testing.assert_allclose(half.arrays["settle_time"], full.arrays["settle_time"], rtol=1e-5)
+    assert half.attrs["sweep"]["mirror"] == ["vphi"] and full.attrs["sweep"]["mirror"] is None
+    costs = {t: json.loads((store.cost_dir(mirrored) / f"tile_{t}.json").read_text())
+             for t in ("0_0", "0_1", "1_0", "1_1")}
+    assert costs["0_1"]["mirror_of"] == [0, 0] and costs["1_1"]["mirror_of"] == [1, 0]
+    assert costs["0_1"]["cpu_seconds"] == 0.0 < costs["0_0"]["cpu_seconds"]
+    assert "mirror_of" not in costs["0_0"]
+
+
+def test_a_damaged_or_lost_tile_is_recomputed_with_its_mirror(tmp_path, mirrored):
+    path = copy_store(mirrored, tmp_path / "m.zarr")
+    (path / "done" / "c" / "1" / "1").unlink()  # mirror tile (1, 1) looks unfinished
+    _flip_bit(path / "quarter_turns" / "c" / "0" / "0", None)  # computed tile (0, 0) damaged
+    said = " ".join(coin_ok(path, *MIRRORED).output.split())  # as one line, however wrapped
+    assert "this run computed 4 tiles" in said and "mirror images" in said
+    assert_identical(path, mirrored)
+
+
+def test_a_store_is_not_resumed_with_the_other_mirror_setting(tmp_path, clean, mirrored):
+    for source, args in ((clean, MIRRORED), (mirrored, ARGS)):
+        path = copy_store(source, tmp_path / f"{source.stem}.zarr")
+        assert "mirror" in one_line_error(coin(path, *args))
+        assert files_of(path) == files_of(source)

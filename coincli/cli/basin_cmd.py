@@ -161,7 +161,12 @@ def sweep_command(
                                        help="Tile size in cells, N or NxM: the "
                                        "unit of work, of writing and of resuming.",
                                        rich_help_panel=SWEEP)] = str(DEFAULT_CHUNK),
-
+    no_mirror: Annotated[bool, typer.Option("--no-mirror", help="Compute every tile, also "
+                                            "where the sweep is its own mirror image (phi0, "
+                                            "vx, vphi zero or swept symmetrically: by default "
+                                            "one tile of each pair is computed and the other "
+                                            "is its mirror, n -> -n).",
+                                            rich_help_panel=SWEEP)] = False,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing store "
                                             "instead of resuming it.",
                                             rich_help_panel=SWEEP)] = False,
@@ -204,8 +209,8 @@ def sweep_command(
                             inertia=inertia, k=k, c=c, g=g, method=method, dt=dt, rtol=rtol,
                             t_end=t_end, stop_on_settle=stop_on_settle, max_steps=max_steps,
                             verify=False if single_pass else None)
-        plan = api.plan_sweep(scene, res=res, chunk=chunk, force=force, x0=x0,
-                              y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
+        plan = api.plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=not no_mirror,
+                              x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
         api.check_where(threads, workers, scheduler)
     grid = plan.grid
     progress = Progress(
@@ -270,9 +275,12 @@ def sweep_command(
              else f"Dask ({scheduler or f'{report.workers} local workers'})")
     others = (f"; {counted(report.tiles_elsewhere, 'tile')} by other processes"
               if report.tiles_elsewhere else "")
+    mirrored = plan.attrs["sweep"]["mirror"]
+    halves = (f", half of them as the mirror images of the others: {' and '.join(mirrored)} "
+              "reversed, n -> -n" if mirrored else "")
     say(console, f"{path}: {report.tiles_done}/{total} tiles done; this run computed "
                  f"{counted(report.tiles_computed, 'tile')} "
-                 f"({counted(report.cells, 'cell')}) in "
+                 f"({counted(report.cells, 'cell')}{halves}) in "
                  f"{report.wall_seconds:.1f} s wall, {rate:,.0f} "
                  f"cells/s on {where}{others}.")
     if report.interrupted or not report.complete:

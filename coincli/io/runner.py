@@ -27,7 +27,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..enums import Status
-from ..grid import SweepSpec, compute_tile
+from ..grid import SweepSpec, compute_tile, with_mirror
 from ..integrators.batch import new_control
 from ..params import ParameterError
 from .claims import TileQueue
@@ -39,16 +39,18 @@ class TileDone(NamedTuple):
     """What a tile task reports back: no data, only what it cost and whether it was written."""
 
     tile: tuple[int, int]
-    cells: int  # cells written (0 if interrupted)
+    cells: int  # cells written (0 if interrupted), its mirror tile's included
     cpu_seconds: float
     written: bool  # False: stopped through its control flag, nothing written
     compute_seconds: float = 0.0  # wall time in the kernels
-    write_seconds: float = 0.0  # wall time writing the tile and its cost record
+    write_seconds: float = 0.0  # wall time writing the tile(s) and cost record(s)
+    tiles: int = 1  # tiles written: 2 when the tile's mirror image was written too
 
 
 def run_tile_task(path: str, spec: SweepSpec, tile: tuple[int, int],
                   control: np.ndarray | None = None) -> TileDone:
-    """Compute one tile and write it to the store at ``path``. ``control[0]`` set (from another
+    """Compute one tile and write it to the store at ``path``, and its mirror tile if the
+    sweep has one (:meth:`coincli.grid.Grid.task_tiles`). ``control[0]`` set (from another
     thread) stops the computation; a tile so stopped is not written at all."""
     from .store import write_tile
 
@@ -57,9 +59,11 @@ def run_tile_task(path: str, spec: SweepSpec, tile: tuple[int, int],
     if control[0] or (result.arrays["status"] == Status.INTERRUPTED).any():
         return TileDone(tuple(tile), 0, result.cpu_seconds, False, result.wall_seconds)
     start = time.perf_counter()
-    write_tile(path, spec, result)
-    return TileDone(tuple(tile), result.cells, result.cpu_seconds, True, result.wall_seconds,
-                    time.perf_counter() - start)
+    results = with_mirror(result, spec.grid)
+    for each in results:
+        write_tile(path, spec, each)
+    return TileDone(tuple(tile), sum(r.cells for r in results), result.cpu_seconds, True,
+                    result.wall_seconds, time.perf_counter() - start, len(results))
 
 
 def usable_cores() -> int:

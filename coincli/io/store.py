@@ -124,7 +124,8 @@ def _display_name(key: str) -> str:
     if parts[0] == "sweep" and parts[1] == "axes" and len(parts) == 4:
         return f"--{parts[2]} {'LO' if parts[3] == 'lo' else 'HI' if parts[3] == 'hi' else 'cells'}"
     if parts[0] == "sweep":
-        return {"dims": "swept axes", "chunk": "--chunk", "fixed": "fixed initial value"}.get(
+        return {"dims": "swept axes", "chunk": "--chunk", "fixed": "fixed initial value",
+                "mirror": "mirrored axes (none: --no-mirror)"}.get(
             parts[1], parts[1]) + (f" {parts[2]}" if len(parts) > 2 else "")
     if parts[0] == "method":
         return "method" if parts[1] == "name" else parts[1]
@@ -615,9 +616,10 @@ def write_tile(path: str | os.PathLike, spec: SweepSpec, result: TileResult) -> 
     for name in ARRAY_NAMES:
         arr = group[name].with_config({"write_empty_chunks": True})
         arr[s0, s1] = result.arrays[name]
-    _write_atomically(cost_dir(path) / f"tile_{i}_{j}.json",
-                      json.dumps({"cpu_seconds": result.cpu_seconds,
-                                  "host": socket.gethostname(), "pid": os.getpid()}))
+    cost = {"cpu_seconds": result.cpu_seconds, "host": socket.gethostname(), "pid": os.getpid()}
+    if result.mirror_of is not None:
+        cost["mirror_of"] = list(result.mirror_of)
+    _write_atomically(cost_dir(path) / f"tile_{i}_{j}.json", json.dumps(cost))
     digest = tile_digest((i, j), result.arrays)
     group["done"].with_config({"write_empty_chunks": True})[i:i + 1, j:j + 1] = digest
 
