@@ -12,16 +12,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.progress import (
-    BarColumn,
-    Progress,
-    ProgressColumn,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 from rich.table import Table
-from rich.text import Text
 from typer.core import TyperGroup
 
 from ..defaults import DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES
@@ -98,17 +89,6 @@ VphiRange = Annotated[str, _ic("vphi", "Initial angular velocity, rad/s.")]
 
 
 DEFAULT_TEXT = {name: f"{lo:g}:{hi:g}" for name, (lo, hi) in DEFAULT_RANGES.items()}
-
-
-class RateColumn(ProgressColumn):
-    def __init__(self, unit: str):
-        super().__init__()
-        self.unit = unit
-
-    def render(self, task) -> Text:
-        speed = task.finished_speed or task.speed
-        return Text(f"{speed:,.0f} {self.unit}/s" if speed else f"- {self.unit}/s",
-                    style="progress.data.speed")
 
 
 class _Stop:
@@ -212,6 +192,16 @@ def sweep_command(
         plan = api.plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=not no_mirror,
                               x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
         api.check_where(threads, workers, scheduler)
+    from rich.progress import (
+        BarColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    from .progress import RateColumn
+
     grid = plan.grid
     progress = Progress(
         TextColumn("[bold]basin[/]"), BarColumn(),
@@ -239,7 +229,7 @@ def sweep_command(
                              f"{_tile_list(start.damaged)}")
         est = start.estimate
         if est is not None and est.seconds > 60:
-            say(err_console, f"estimate: {_estimate_text(est, scheduler)}")
+            say(err_console, f"estimate: {_estimate_text(est, plan, scheduler)}")
         if start.cells_todo:
             announce_compilation()
             if not quiet:
@@ -299,13 +289,14 @@ def _tile_list(tiles, most: int = 8) -> str:
     return text + (f" and {len(tiles) - most} more" if len(tiles) > most else "")
 
 
-def _estimate_text(est, scheduler) -> str:
+def _estimate_text(est, plan, scheduler) -> str:
     from ..api import format_duration
 
     bound = "at least" if est.at_least else "about"
     on = (f"on {est.workers} {'core' if est.workers == 1 else 'cores'}" if est.workers
           else f"of CPU time over the cluster at {scheduler}")
-    return (f"{bound} {format_duration(est.seconds)} {on} for {est.cells:,} cells "
+    mirrored = ", as many again mirrored" if plan.grid.mirror_flips else ""
+    return (f"{bound} {format_duration(est.seconds)} {on} for {est.cells:,} cells{mirrored} "
             f"({est.cpu_per_cell * 1e3:.3g} ms a cell, from a pilot of {est.pilot_cells} "
             f"cells)")
 
@@ -319,7 +310,7 @@ def _too_long(est, plan, scheduler) -> str:
     r0, r1 = (max(2, int(n * scale) // 64 * 64 or int(n * scale)) for n in (n0, n1))
     smaller = f"--res {r0}" if (n0 == n1 and r0 == r1) else f"--res {r0}x{r1}"
     machines = math.ceil(est.seconds / MAX_SECONDS)
-    return (f"this sweep would take {_estimate_text(est, scheduler)}. Give --yes to start it "
+    return (f"this sweep would take {_estimate_text(est, plan, scheduler)}. Give --yes to start it "
             f"anyway, or split it: a smaller {smaller} (about "
             f"{format_duration(MAX_SECONDS)} here), narrower ranges, or this same command on "
             f"{machines} machines sharing the store (each claims its own tiles)")
@@ -648,6 +639,8 @@ def analyze_command(
             check_rrd_path(figure)  # a writable file path
         basin = read_basin(path)
         api.check_where(threads, None, None)
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
     progress = Progress(TextColumn("[bold]analyze[/] {task.description}"), BarColumn(),
                         TextColumn("{task.percentage:>3.0f} %"), TimeElapsedColumn(),
                         console=err_console, disable=quiet, transient=True)

@@ -7,14 +7,13 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from ..defaults import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION, PARAMETER_UNITS
 from ..params import ParameterError
 from ..version import __version__
 from . import app
-from .basin_cmd import RateColumn, _Stop
+from .basin_cmd import _Stop
 from .common import (
     INIT,
     COpt,
@@ -169,6 +168,10 @@ def fractions_command(
         api.check_where(threads, workers, scheduler)
     if plan.note and not json_out:
         say(err_console, f"[cyan]note:[/] {plan.note}")
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from .progress import RateColumn
+
     wide = err_console.width >= 100  # at 80 columns the rate goes: the estimate matters more
     progress = Progress(
         TextColumn("{task.fields[value]}"), BarColumn(bar_width=20 if wide else 8),
