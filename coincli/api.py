@@ -111,8 +111,8 @@ class SweepProgress:
 
     tiles_done: int  # complete tiles, including those done before this run and by others
     tiles_total: int
-    cells_done: int  # cells computed by this run so far
-    cells_todo: int  # cells this run set out to compute
+    cells_done: int  # cells this run has filled so far (mirror images included)
+    cells_todo: int  # cells this run set out to fill
     elapsed: float  # s of wall time since this run started
 
 
@@ -161,12 +161,12 @@ class SweepReport:
     tiles_total: int
     tiles_done: int  # complete tiles in the store now (as far as this run saw)
     tiles_before: int  # complete tiles when this run started
-    cells: int  # cells computed by this run
+    cells: int  # cells this run filled (mirror images included)
     wall_seconds: float
     mode: str  # "threads" or "dask"
     workers: int
     interrupted: bool
-    tiles_computed: int = 0  # tiles this run computed and wrote
+    tiles_computed: int = 0  # tiles this run wrote (a computed tile's mirror image included)
     tiles_elsewhere: int = 0  # tiles other processes finished while this one ran
     damaged: tuple = ()  # tiles found damaged at the start (recomputed if not interrupted)
     estimate: SweepEstimate | None = None
@@ -214,9 +214,7 @@ def estimate_sweep(plan: SweepPlan, threads: int | None = None, *, workers: int 
     from .io.runner import usable_cores
 
     grid, spec = plan.grid, plan.spec
-    if cells is None:  # a mirror tile costs nothing
-        cells = sum(grid.tile_cells(t) for t in grid.work_tiles())
-    cells = int(cells)
+    cells = grid.work_cells if cells is None else int(cells)
     cores = usable_cores()
     n = None if scheduler is not None else min(workers or threads or cores, cores)
     _load_kernels(spec)

@@ -40,6 +40,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -181,7 +182,7 @@ class Grid:
     def n_cells(self) -> int:
         return self.shape[0] * self.shape[1]
 
-    @property
+    @cached_property
     def tile_grid(self) -> tuple[int, int]:
         """Number of tiles along each axis."""
         return tuple(-(-n // c) for n, c in zip(self.shape, self.chunk, strict=True))
@@ -195,7 +196,7 @@ class Grid:
         t0, t1 = self.tile_grid
         return [(i, j) for i in range(t0) for j in range(t1)]
 
-    @property
+    @cached_property  # asked once per tile: a million times for a sweep of 65536 x 65536
     def mirror_flips(self) -> tuple[bool, bool] | None:
         """Which axes the mirror reverses, if this sweep maps onto itself under it in whole
         tiles (module docstring) and ``use_mirror``; None otherwise."""
@@ -220,7 +221,22 @@ class Grid:
 
     def work_tiles(self) -> list[tuple[int, int]]:
         """The tiles a sweep computes: every tile, or one of each mirror pair."""
+        if self.mirror_flips is None:
+            return self.tiles()
         return [t for t in self.tiles() if t <= self.mirror_tile(t)]
+
+    @property
+    def work_cells(self) -> int:
+        """The cells a sweep computes: all, or those of :meth:`work_tiles` (half, and the
+        other half of any tile that is its own mirror image)."""
+        flips = self.mirror_flips
+        if flips is None:
+            return self.n_cells
+        # a tile is its own mirror image if it is the middle one along every reversed axis
+        axes = list(zip(self.shape, self.chunk, flips, self.tile_grid, strict=True))
+        own = (0 if any(flip and tiles % 2 == 0 for _, _, flip, tiles in axes) else
+               math.prod(chunk if flip else n for n, chunk, flip, _ in axes))
+        return (self.n_cells + own) // 2
 
     def task_tiles(self, tile: tuple[int, int]) -> tuple[tuple[int, int], ...]:
         """The tiles computing work tile ``tile`` fills: itself, and its mirror if another."""

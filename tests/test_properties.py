@@ -94,6 +94,33 @@ def test_tiles_cover_every_cell_once(n0, n1, c0, c1):
     assert sorted(map(tuple, np.concatenate(rows))) == sorted(map(tuple, every))
 
 
+@settings(deadline=None)
+@given(st.integers(2, 40), st.integers(2, 40), st.integers(1, 17), st.integers(1, 17),
+       st.sampled_from([("vy", "vphi"), ("vx", "vphi"), ("phi0", "vy")]))
+def test_mirror_pairs_cover_every_tile_once(n0, n1, c0, c1, dims):
+    """The tiles a mirrored sweep computes, with their mirror images, are every tile once; a
+    tile's mirror holds the mirror cells; the cells computed are counted right."""
+    ranges = {"vy": (0.1, 1.0), "vx": (-0.5, 0.5), "vphi": (-5.0, 5.0), "phi0": (-1.0, 1.0)}
+    grid = make_grid(Scene(), {d: ranges[d] for d in dims}, (n0, n1), (c0, c1))
+    filled = [u for t in grid.work_tiles() for u in grid.task_tiles(t)]
+    assert sorted(filled) == grid.tiles()
+    assert grid.work_cells == sum(grid.tile_cells(t) for t in grid.work_tiles())
+    flips = grid.mirror_flips
+    if flips is None:
+        assert any(n % c for n, c, d in zip(grid.shape, grid.chunk, dims, strict=True)
+                   if d != "vy") and grid.work_cells == grid.n_cells
+        return
+    for tile in grid.work_tiles():  # the mirror tile's states, reversed, are the negated ones
+        mirror = grid.mirror_tile(tile)
+        s0, s1 = grid.tile_slices(tile)
+        a = grid.tile_states(tile).reshape(s0.stop - s0.start, s1.stop - s1.start, 6)
+        b = grid.tile_states(mirror).reshape(a.shape)
+        order = tuple(slice(None, None, -1) if f else slice(None) for f in flips)
+        for index, name in ((grid.axes[0].index, dims[0]), (grid.axes[1].index, dims[1])):
+            sign = -1.0 if name != "vy" else 1.0
+            np.testing.assert_allclose(b[order][..., index], sign * a[..., index], atol=1e-12)
+
+
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.floats(0.05, 1.2), st.floats(0.5, 20.0), st.floats(-0.3, 0.3))
 def test_mirror_symmetry_of_the_outcome(vy, vphi, vx):
