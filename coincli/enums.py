@@ -99,8 +99,9 @@ class Certainty(IntEnum):
 
 
 class Engine(IntEnum):
-    """What runs a kernel: numba's compiled code, or CPython on the same source (same floats,
-    no compilation or loading: the faster choice for one short run), or the choice of AUTO."""
+    """What runs a kernel: numba's compiled code, or CPython on the same source (the same
+    result to rounding, no compilation or loading: the faster choice for one short run), or the
+    choice of AUTO."""
 
     AUTO = 0
     PYTHON = 1

@@ -9,7 +9,17 @@ registered kernel in a cached ``njit`` dispatcher and rebinds the names in the `
 modules to the dispatchers (numba resolves a kernel's callees through its module's globals), so
 from then on every caller in the package runs compiled code. Kernels are written in the subset
 of Python that numba compiles and CPython runs alike, with the same operations in the same
-order, so both give the same floats (a test runs one throw both ways and compares every bit).
+order.
+
+Compiled, a multiply followed by an add may be fused into one FMA instruction (numba's
+``fastmath={"contract"}``, nothing else of fast-math: no reassociation, NaN and infinity keep
+their meaning), rounding once instead of twice: the Runge-Kutta stages are sums of products,
+and the kernels run 1.38 times faster (0.0165 against 0.0227 ms a trajectory, three
+interleaved rounds). So the compiled kernels and CPython agree to rounding, not to the bit: the
+same labels, steps and statuses on the tests' throws, states equal to 1e-13 of their scale
+after one bounce and to 1e-7 after a second of them, rounding growing along the motion
+(tests/test_engines.py); on 5,632 throws of the paper and thick coins, no certain label changed.
+Compiled results are the same on every machine whose CPU has FMA (x86-64 since 2013, ARM64).
 
 The cache: numba checks only the timestamp of the file that defines a function, not of the
 files whose kernels it calls, so an edit to a callee could leave stale machine code in use. Our
@@ -128,7 +138,7 @@ def _activate() -> None:
             importlib.import_module(module)
 
         _install_locator(numba)
-        dispatchers = {fn: numba.njit(cache=True, nogil=True,
+        dispatchers = {fn: numba.njit(cache=True, nogil=True, fastmath={"contract"},
                                       inline="always" if fn in _INLINE else "never")(fn)
                        for fn in _KERNELS}
         # rebind every name in the package that refers to a kernel, so that numba finds

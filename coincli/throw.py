@@ -143,7 +143,8 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     ``sample_dt`` the state is kept every ``sample_dt`` seconds of simulated time (exact times
     for the adaptive methods); with ``record_events`` every contact onset and lift-off is kept
     with its state. ``force`` allows a fixed step beyond the method's stable step. ``engine``
-    chooses what runs the kernel (the result is the same to the bit); ``control`` (from
+    chooses what runs the kernel (the same result to rounding: compiled code fuses multiplies
+    and adds, :mod:`coincli.jit`); ``control`` (from
     :func:`coincli.integrators.new_control`) lets another thread stop it."""
     validate(scene)
     method = check_step(scene, force=force)
@@ -189,7 +190,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
 
 def _run(p, settings, state0, samples, events, final, control, engine: Engine):
     """One kernel run: (result, wall seconds, the engine for the next rung). A Python run that
-    outgrows PYTHON_STEPS is run again compiled (the same floats), and so is every rung after."""
+    outgrows PYTHON_STEPS is run again compiled, from the start, and so is every rung after."""
     if engine == Engine.PYTHON:
         start = time.perf_counter()
         capped = settings._replace(max_steps=min(settings.max_steps, PYTHON_STEPS))
