@@ -77,8 +77,10 @@ def stratification(store: str, bins: int = 8) -> None:
     finished `coin fractions` store, by sets of coordinates."""
     import zarr
 
+    from coincli.enums import Certainty
+
     group = zarr.open_group(store, mode="r")
-    certain = group["certainty"][:] == 1  # Certainty.CERTAIN
+    certain = group["certainty"][:] == Certainty.CERTAIN
     initial = group["initial"][:][certain]
     standing = (group["quarter_turns"][:][certain] % 2 != 0).astype(float)
     steps = group["steps"][:][certain].astype(float)

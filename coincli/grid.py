@@ -211,6 +211,12 @@ class Grid:
                 return None
         return flips if any(flips) else None
 
+    @property
+    def mirror_dims(self) -> list[str]:
+        """The swept initial conditions the mirror reverses (none without a mirror)."""
+        flips = self.mirror_flips or (False, False)
+        return [d for d, flip in zip(self.dims, flips, strict=True) if flip]
+
     def mirror_tile(self, tile: tuple[int, int]) -> tuple[int, int]:
         """The tile holding the mirror images of ``tile``'s cells (itself without a mirror)."""
         flips = self.mirror_flips
@@ -268,12 +274,10 @@ class Grid:
                 if name not in swept}
 
     def to_dict(self) -> dict:
-        flips = self.mirror_flips
         return {"dims": list(self.dims), "axes": [a.to_dict() for a in self.axes],
                 "fixed": self.fixed(), "chunk": list(self.chunk),
                 "cell_centres": "numpy.linspace(lo, hi, n): both ends included",
-                "mirror": (None if flips is None else
-                           [d for d, flip in zip(self.dims, flips, strict=True) if flip])}
+                "mirror": self.mirror_dims or None}
 
 
 def split_options(options: dict) -> tuple[dict[str, tuple[float, float]], dict[str, float]]:

@@ -29,6 +29,7 @@ sources and keeps it in ``~/.cache/coincli`` (or ``$NUMBA_CACHE_DIR/coincli``).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import inspect
 import os
@@ -116,8 +117,14 @@ def cache_dir() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "coincli"
 
 
+@functools.cache  # the sources do not change under a running process; hashing them is 3 ms
 def sources_digest() -> str:
-    """Hash of every file that defines a kernel or a type the kernels use."""
+    """Hash of every file that defines a kernel or a type the kernels use (every kernel module
+    imported first, so that the set is whole whoever asks first)."""
+    import importlib
+
+    for module in KERNEL_MODULES:
+        importlib.import_module(module)
     files = sorted({inspect.getfile(fn) for fn in _KERNELS}
                    | {str(_PACKAGE / name) for name in ("jit.py", "params.py", "enums.py")})
     digest = hashlib.sha256()

@@ -265,7 +265,7 @@ def sweep_command(
              else f"Dask ({scheduler or f'{report.workers} local workers'})")
     others = (f"; {counted(report.tiles_elsewhere, 'tile')} by other processes"
               if report.tiles_elsewhere else "")
-    mirrored = plan.attrs["sweep"]["mirror"]
+    mirrored = plan.grid.mirror_dims
     halves = (f", half of them as the mirror images of the others: {' and '.join(mirrored)} "
               "reversed, n -> -n" if mirrored else "")
     say(console, f"{path}: {report.tiles_done}/{total} tiles done; this run computed "
@@ -295,7 +295,7 @@ def _estimate_text(est, plan, scheduler) -> str:
     bound = "at least" if est.at_least else "about"
     on = (f"on {est.workers} {'core' if est.workers == 1 else 'cores'}" if est.workers
           else f"of CPU time over the cluster at {scheduler}")
-    mirrored = ", as many again mirrored" if plan.grid.mirror_flips else ""
+    mirrored = ", as many again mirrored" if plan.grid.mirror_dims else ""
     return (f"{bound} {format_duration(est.seconds)} {on} for {est.cells:,} cells{mirrored} "
             f"({est.cpu_per_cell * 1e3:.3g} ms a cell, from a pilot of {est.pilot_cells} "
             f"cells)")
