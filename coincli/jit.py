@@ -47,6 +47,7 @@ _KERNELS: list = []  # the registered Python functions, in definition order
 _INLINE: set = set()  # kernels numba inlines into their callers (small helpers on hot paths)
 _DISPATCHERS: dict = {}  # Python function -> numba dispatcher (after activation)
 _LOCK = threading.Lock()
+_SKIP_BLAS_PROBE = False  # see skip_blas_probe
 
 
 def kernel(fn=None, *, inline: bool = False):
@@ -62,6 +63,29 @@ def kernel(fn=None, *, inline: bool = False):
     if inline:
         _INLINE.add(fn)
     return fn
+
+
+def skip_blas_probe() -> None:
+    """Have this process load numba without its BLAS probe: when numba first loads any compiled
+    code it imports ``numba.np.arraymath``, which imports scipy.linalg (0.2 s) to learn whether
+    ``np.convolve`` and ``np.correlate`` may call BLAS. No kernel of ours uses them, so the
+    ``coin`` command (a process that runs only our kernels) hides scipy.linalg during that one
+    import; the two functions would then fall back to plain loops. A library user's process
+    keeps numba's behaviour: only the CLI calls this."""
+    global _SKIP_BLAS_PROBE
+    _SKIP_BLAS_PROBE = True
+
+
+def _import_numba_lowering() -> None:
+    """Import ``numba.np.arraymath`` now, without the BLAS probe if asked (skip_blas_probe)."""
+    if not _SKIP_BLAS_PROBE or "scipy.linalg" in sys.modules:
+        return  # numba imports it when it first loads code; with scipy.linalg loaded, cheaply
+    sys.modules["scipy.linalg"] = None  # `import scipy.linalg.cython_blas` raises ImportError
+    try:
+        import numba.np.arraymath  # noqa: F401
+    finally:
+        if sys.modules.get("scipy.linalg", 0) is None:
+            del sys.modules["scipy.linalg"]
 
 
 def is_active() -> bool:
@@ -141,6 +165,7 @@ def _activate() -> None:
 
         import numba
 
+        _import_numba_lowering()
         for module in KERNEL_MODULES:
             importlib.import_module(module)
 

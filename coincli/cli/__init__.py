@@ -55,4 +55,7 @@ _register()
 
 
 def main() -> None:
+    from ..jit import skip_blas_probe
+
+    skip_blas_probe()
     app()
