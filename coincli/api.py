@@ -302,7 +302,7 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
         if max_seconds is not None and estimate.seconds > max_seconds:
             raise SweepTooLong(estimate, max_seconds)
     state = store_io.prepare(path, plan.attrs, spec, overwrite=overwrite)
-    todo = [t for t in grid.work_tiles() if not all(state.done[u] for u in grid.task_tiles(t))]
+    todo = [t for t in spec.work_order() if not all(state.done[u] for u in grid.task_tiles(t))]
     total = len(grid.tiles())
     before = total - sum(len(grid.task_tiles(t)) for t in todo)
     cells_todo = sum(grid.tile_cells(u) for t in todo for u in grid.task_tiles(t))
@@ -417,7 +417,7 @@ def _basin_in_memory(plan: SweepPlan, threads, progress, stop):
     _load_kernels(spec)
     wall0 = time.perf_counter()
     cells = 0
-    runner = run_threads(partial(compute_tile, spec), TileQueue(grid.work_tiles()),
+    runner = run_threads(partial(compute_tile, spec), TileQueue(spec.work_order()),
                          threads or usable_cores(), stop)
     try:
         for computed in runner:

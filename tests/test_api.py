@@ -152,6 +152,25 @@ def test_import_is_light_and_leaves_numba_alone():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
+def test_the_command_loads_kernels_without_numbas_blas_probe(tmp_path):
+    """`coin basin` (through the CLI's main, as the console script runs it) loads and runs its
+    kernels without importing scipy.linalg, which numba imports only to probe for BLAS; a
+    library user's process keeps that probe (numba's np.convolve may use BLAS there)."""
+    store = tmp_path / "s.zarr"
+    cli = ("import sys, coincli.cli\n"
+           f"sys.argv = ['coin', 'basin', {str(store)!r}, '--res', '4', '-q']\n"
+           "try:\n    coincli.cli.main()\nexcept SystemExit as e:\n    assert not e.code, e\n"
+           "assert 'coincli.integrators.batch' in sys.modules and 'numba' in sys.modules\n"
+           "assert 'scipy.linalg' not in sys.modules\n"
+           "import numba.np.arraymath as m; assert m._HAVE_BLAS is False")
+    subprocess.run([sys.executable, "-c", cli], check=True, capture_output=True)
+    assert coincli.open_basin(store).quarter_turns.shape == (4, 4)
+    library = ("import coincli\n"
+               "coincli.classify(coincli.load_preset('paper').with_overrides(vy=0.5))\n"
+               "import numba.np.arraymath as m; assert m._HAVE_BLAS is True")
+    subprocess.run([sys.executable, "-c", library], check=True)
+
+
 def test_the_command_line_declares_its_options_without_numpy():
     """`coin --help` and option parsing load the command modules only: no numpy, numba or
     kernels (their import is most of a command's start-up)."""

@@ -433,6 +433,20 @@ def test_which_sweeps_are_their_own_mirror_image():
     assert _flips({"vy": (0.1, 1.0), "vphi": (-5.0, 5.0)}, use_mirror=False) is None
 
 
+def test_tiles_are_computed_most_energetic_first():
+    """The work tiles in order of falling energy at their middle cells (the costly ones first,
+    so that the sweep's last tiles are cheap), each once."""
+    scene = coincli.load_preset("paper")
+    grid = make_grid(scene, {"vy": (0.05, 2.0), "vphi": (-20.0, 20.0)}, (16, 16), (4, 4))
+    spec = make_spec(scene, grid)
+    order = spec.work_order()
+    assert sorted(order) == sorted(grid.work_tiles()) and len(order) == 8  # mirrored: half
+    assert order[0] == (3, 0) and order[-1] == (0, 1)  # fastest throw first, slowest last
+    middle = [grid.tile_states(t)[len(grid.tile_states(t)) // 2] for t in order]
+    kinetic = [s[4] ** 2 + spec.params.inertia / spec.params.mass * s[5] ** 2 for s in middle]
+    assert kinetic == sorted(kinetic, reverse=True)
+
+
 @pytest.mark.parametrize("ranges", [dict(vy=(0.3, 1.9), vphi=(-15.0, 15.0)),
                                     dict(vx=(-0.4, 0.4), vphi=(-15.0, 15.0), vy=1.2)])
 def test_a_mirrored_map_is_the_full_map(ranges):

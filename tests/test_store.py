@@ -358,7 +358,7 @@ def test_a_tile_finished_elsewhere_is_not_computed_again(tmp_path, clean):
 # tile (0, 0) is quick (low vy settles at once), tile (1, 0) takes seconds (paper's method,
 # little damping)
 STUCK = ["--preset", "paper-method", "--stop-on-settle", "--t-end", "20", "--c", "0.02",
-         "--res", "2", "--chunk", "1x2", "--vy", "0.05:2", "--vphi", "-1:1", "--threads", "1",
+         "--res", "2", "--chunk", "1x2", "--vy", "0.05:2", "--vphi", "-1:1", "--threads", "2",
          "-q"]
 
 
@@ -370,7 +370,8 @@ def test_second_ctrl_c_stops_a_stuck_sweep_at_once(tmp_path):
     proc = start(path, *STUCK)
     claim = store.claims_dir(path) / "tile_1_0"
     end = time.monotonic() + 60
-    while not claim.exists():  # the slow tile is being computed
+    # the slow tile is being computed, and the quick one, beside it, is done
+    while not (claim.exists() and store.has_digest(path, (0, 0))):
         assert proc.poll() is None, proc.communicate()
         assert time.monotonic() < end, "the slow tile never started"
         time.sleep(0.005)
