@@ -424,7 +424,8 @@ def test_keyboard_interrupt_in_the_api_stops_the_tiles_in_flight(tmp_path):
         threading.Timer(0.3, send).start()
 
     with sigint_raises():
-        report = coincli.sweep(plan, path, threads=1, progress=interrupt)
+        # two threads: the slow tile (more energy, so first) and the quick one side by side
+        report = coincli.sweep(plan, path, threads=2, progress=interrupt)
     # timed from the interrupt, not from the start (loading the kernels varies with the load)
     assert time.monotonic() - sent[0] < 1.5  # not the seconds the slow tile takes
     assert report.interrupted and report.tiles_done == 1
