@@ -141,14 +141,18 @@ def cache_dir() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "coincli"
 
 
-@functools.cache  # the sources do not change under a running process; hashing them is 3 ms
-def sources_digest() -> str:
-    """Hash of every file that defines a kernel or a type the kernels use (every kernel module
-    imported first, so that the set is whole whoever asks first)."""
+def _import_kernel_modules() -> None:
     import importlib
 
     for module in KERNEL_MODULES:
         importlib.import_module(module)
+
+
+@functools.cache  # the sources do not change under a running process; hashing them is 3 ms
+def sources_digest() -> str:
+    """Hash of every file that defines a kernel or a type the kernels use (every kernel module
+    imported first, so that the set is whole whoever asks first)."""
+    _import_kernel_modules()
     files = sorted({inspect.getfile(fn) for fn in _KERNELS}
                    | {str(_PACKAGE / name) for name in ("jit.py", "params.py", "enums.py")})
     digest = hashlib.sha256()
@@ -161,13 +165,10 @@ def _activate() -> None:
     with _LOCK:
         if _DISPATCHERS:
             return
-        import importlib
-
         import numba
 
         _import_numba_lowering()
-        for module in KERNEL_MODULES:
-            importlib.import_module(module)
+        _import_kernel_modules()
 
         _install_locator(numba)
         dispatchers = {fn: numba.njit(cache=True, nogil=True, fastmath={"contract"},

@@ -34,17 +34,16 @@ the same bytes), counted as not computed by ``stats`` and ``render``, and listed
 A tile's chunks are encoded here, as the template's codecs say (:func:`encode_chunk`: bytes
 little-endian, zstd level 0, crc32c, with numcodecs and google-crc32c, the libraries Zarr's own
 codecs call), and written to ``CHUNK.HOST-PID-THREAD.partial``, then renamed: Zarr's ``arr[...] =``
-takes 4 ms a chunk, nearly all of it in its asyncio machinery, against 0.5 ms, and the bytes
-are the same (tests/test_store.py). Every chunk of a tile is written, also one equal to the fill
-value. A ``.partial`` file left by a killed writer is removed by the next writer of that tile.
-Reading goes through Zarr. The store
-is created from a template built in memory (:func:`template`: every metadata file and the
-coordinate chunks), in ``.NAME.creating-HOST-PID`` beside it, renamed into place under a lock
-(``.NAME.lock``, ``flock``), so that processes racing to create one store all end up in the
-winner's. Metadata is consolidated once at creation and never changes afterwards, so
-``xarray.open_zarr(path)`` opens it directly; a metadata file or coordinate chunk that differs
-from the template is rewritten on resume. ``quarter_turns`` carries ``missing_value`` so xarray
-masks cells without a label to NaN (``mask_and_scale=False`` keeps the int16 values).
+takes 4 ms a chunk, nearly all of it in its asyncio machinery, against 0.5 ms, and the bytes are
+the same (tests/test_store.py). Every chunk of a tile is written, also one equal to the fill value.
+A ``.partial`` file left by a killed writer is removed by the next writer of that tile. Reading
+goes through Zarr. The store is created from a template built in memory (:func:`template`: every
+metadata file and the coordinate chunks), in ``.NAME.creating-HOST-PID`` beside it, renamed into
+place under a lock (``.NAME.lock``, ``flock``), so that processes racing to create one store all
+end up in the winner's. Metadata is consolidated once at creation and never changes afterwards, so
+``xarray.open_zarr(path)`` opens it directly; a metadata file or coordinate chunk that differs from
+the template is rewritten on resume. ``quarter_turns`` carries ``missing_value`` so xarray masks
+cells without a label to NaN (``mask_and_scale=False`` keeps the int16 values).
 """
 
 from __future__ import annotations
@@ -451,8 +450,9 @@ def _compare_metadata(path: Path, files: dict[str, bytes]) -> list[str]:
     return bad
 
 
-def _rewrite(target: Path, data: bytes) -> None:
-    """Write a file of the store whole, through a temporary file beside it."""
+def _write_atomically(target: Path, data: bytes) -> None:
+    """Write a file of the store (or of its cost records) whole, through a temporary file
+    beside it, renamed into place."""
     # "*.partial": the suffix by which the next writer of a tile finds a dead writer's file
     tmp = target.with_name(f"{target.name}.{socket.gethostname()}-{os.getpid()}-"
                            f"{threading.get_ident()}.partial")
@@ -573,7 +573,7 @@ def check(path: str | os.PathLike, *, repair_with: dict | None = None,
     repaired = []
     if repair_with is not None:
         for key in metadata:
-            _rewrite(view.path / key, files[key])
+            _write_atomically(view.path / key, files[key])
             repaired.append(key)
     done = np.zeros(view.grid.tile_grid, dtype=bool)
     damaged = {}
@@ -650,14 +650,16 @@ def write_tile(path: str | os.PathLike, spec: SweepSpec, result: TileResult) -> 
     i, j = tile
     _remove_partials(path, tile)
     for name in ARRAY_NAMES:
-        _rewrite(_chunk_file(path, name, tile), encode_chunk(result.arrays[name], DTYPES[name],
-                                                             FILLS[name], spec.grid.chunk))
+        _write_atomically(_chunk_file(path, name, tile),
+                          encode_chunk(result.arrays[name], DTYPES[name], FILLS[name],
+                                       spec.grid.chunk))
     cost = {"cpu_seconds": result.cpu_seconds, "host": socket.gethostname(), "pid": os.getpid()}
     if result.mirror_of is not None:
         cost["mirror_of"] = list(result.mirror_of)
-    _write_atomically(cost_dir(path) / f"tile_{i}_{j}.json", json.dumps(cost))
+    _write_atomically(cost_dir(path) / f"tile_{i}_{j}.json", json.dumps(cost).encode())
     digest = np.array([[tile_digest(tile, result.arrays)]])
-    _rewrite(_chunk_file(path, "done", tile), encode_chunk(digest, DONE_DTYPE, 0, (1, 1)))
+    _write_atomically(_chunk_file(path, "done", tile),
+                      encode_chunk(digest, DONE_DTYPE, 0, (1, 1)))
 
 
 def read_done(path: str | os.PathLike) -> np.ndarray:
@@ -672,12 +674,6 @@ def cost_dir(path: str | os.PathLike) -> Path:
 
 def claims_dir(path: str | os.PathLike) -> Path:
     return cost_dir(path) / "claims"
-
-
-def _write_atomically(target: Path, text: str) -> None:
-    tmp = target.with_name(f".{target.name}.{os.getpid()}.{threading.get_ident()}")
-    with atomic_output(target, tmp) as out:
-        out.write_text(text)
 
 
 def record_run(path: str | os.PathLike, run: dict) -> None:
