@@ -13,22 +13,18 @@ Names load on first use, so ``import coincli`` (and ``coin --help``) stays cheap
 
 from .version import __version__
 
-_API = ("Certainty", "Fractions", "FractionsOver", "Method", "Outcome", "Scene", "Status",
-        "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport", "SweepStart", "SweepTooLong",
-        "Trajectory",
+_API = ("Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan", "FractionsProgress",
+        "Method", "Outcome", "ParameterError", "Scene", "Status", "StopReason", "SweepEstimate",
+        "SweepPlan", "SweepProgress", "SweepReport", "SweepStart", "SweepTooLong", "Trajectory",
         "analyze", "basin", "basin_stats", "classify", "estimate_sweep", "fractions",
-        "fractions_over", "load_preset", "open_basin", "open_fractions", "plan_sweep",
-        "render_analysis", "render_basin", "render_fractions", "simulate", "stability", "sweep",
-        "verify_basin")
+        "fractions_over", "load_preset", "open_basin", "open_fractions", "plan_fractions",
+        "plan_sweep", "render_analysis", "render_basin", "render_fractions", "run_fractions",
+        "simulate", "stability", "sweep", "verify_basin")  # = coincli.api.__all__ (tested)
 
 __all__ = ["__version__", *_API]
 
 
 def __getattr__(name: str):
-    if name == "Scene":
-        from .params import Scene
-
-        return Scene
     if name in _API:
         from . import api
 

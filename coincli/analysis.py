@@ -112,6 +112,14 @@ class AnalysisOptions:
             raise ParameterError(f"--balls must be at least 100, got {self.balls}")
         if self.max_dilation < 1:
             raise ParameterError(f"--max-dilation must be at least 1, got {self.max_dilation}")
+        if not (isinstance(self.confidence, int | float) and 0.0 < self.confidence < 1.0):
+            raise ParameterError(f"confidence must be between 0 and 1 (e.g. 0.95), got "
+                                 f"{self.confidence!r}")
+        axes = tuple(range(len(shape)))
+        if self.direction not in ("random", "axis", *axes, *map(str, axes)) or \
+                isinstance(self.direction, bool):
+            raise ParameterError(f"direction must be 'random', 'axis' or an axis index "
+                                 f"({', '.join(map(str, axes))}), got {self.direction!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -231,6 +239,18 @@ class BasinAnalysis:
     @property
     def band_axis(self) -> dict:
         return self.axes[0]
+
+    def __repr__(self) -> str:  # one line in a notebook; everything: to_dict()
+        w = self.whole
+        parts = [f"S_b = {w.entropy.basin_entropy:.3g}",
+                 f"S_bb = {w.entropy.boundary_basin_entropy:.3g}"]
+        if w.exponent is not None and math.isfinite(w.exponent.alpha):
+            parts.append(f"alpha = {w.exponent.alpha:.3g} [{w.exponent.alpha_low:.3g}, "
+                         f"{w.exponent.alpha_high:.3g}]")
+        parts.append(f"Wada: {'yes' if w.wada.is_wada else 'no'}")
+        names = " x ".join(a["name"] for a in self.axes)
+        return (f"BasinAnalysis({names}, whole map: {', '.join(parts)}; "
+                f"{len(self.bands)} bands of {self.axes[0]['name']})")
 
     def to_dict(self) -> dict:
         name = self.axes[0]["name"]

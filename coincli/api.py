@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .enums import Certainty, Method, Status
+from .enums import Certainty, Engine, Method, Status, StopReason
 from .grid import (
     DEFAULT_CHUNK,
     DEFAULT_RES,
@@ -42,7 +42,7 @@ from .integrators.batch import verified_labels
 from .io.runner import check_where
 from .montecarlo import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, Fractions, FractionsOver
 from .montecarlo.plan import FractionsPlan, FractionsProgress, plan_fractions
-from .params import ParameterError, Scene, check_start, validate
+from .params import ParameterError, Scene, check_start, require_scene, validate
 from .presets import load
 from .statics import StabilityReport, analyse
 from .throw import Outcome, Trajectory, classify, simulate
@@ -72,6 +72,15 @@ class SweepPlan:
     def grid(self) -> Grid:
         return self.spec.grid
 
+    def __repr__(self) -> str:  # one line in a notebook; everything: .attrs
+        from .integrators.ladder import describe
+
+        g = self.grid
+        axes = " x ".join(f"{a.name} {a.lo:g}:{a.hi:g} ({a.n})" for a in g.axes)
+        tiles = len(g.tiles())
+        return (f"SweepPlan({axes}, {tiles} tile{'s' * (tiles != 1)}, {g.work_cells:,} of "
+                f"{g.n_cells:,} cells computed, {describe(self.scene.integration)})")
+
 
 def plan_sweep(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, force: bool = False,
                mirror: bool = True, **initial) -> SweepPlan:
@@ -83,7 +92,7 @@ def plan_sweep(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, force: boo
     from .io.schema import basin_attrs
 
     ranges, fixed = split_options(initial)
-    scene = validate(scene.with_overrides(**fixed))
+    scene = validate(require_scene(scene).with_overrides(**fixed))
     grid = make_grid(scene, ranges, parse_pair("res", res, 2), parse_pair("chunk", chunk, 1),
                      use_mirror=mirror)
     for axis in grid.axes:  # every swept value must make a valid scene too
@@ -288,6 +297,7 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
     from .io.runner import hard_stop, run_dask, run_threads, run_tile_task, usable_cores
 
     check_where(threads, workers, scheduler)
+    _check_progress(progress)
     started = time.time()
     path = Path(store)
     spec, grid = plan.spec, plan.grid
@@ -387,6 +397,7 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
     (``scene.with_overrides(verify=False)``). Interrupted (``stop`` set, or Ctrl-C, which stops
     the tiles in flight at once), it raises KeyboardInterrupt; a store keeps every finished
     tile for a resume."""
+    _check_progress(progress)
     plan = plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=mirror, x0=x0, y0=y0,
                       phi0=phi0, vx=vx, vy=vy, vphi=vphi)
     if store is not None:
@@ -443,6 +454,11 @@ def _basin_in_memory(plan: SweepPlan, threads, progress, stop):
                             runs=[run]))
 
 
+def _check_progress(progress) -> None:
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress must be a function (or None), got {type(progress).__name__}")
+
+
 def _load_kernels(spec: SweepSpec) -> None:
     """Load the compiled kernels before the clock starts (and before the threads race to)."""
     warm_up(spec.params, spec.settings, np.asarray(spec.grid.base_state, dtype=np.float64),
@@ -489,13 +505,19 @@ def basin_stats(basin) -> dict:
     """Outcome counts and fractions, P(standing) with its 95 % Wilson interval, the cells
     without a label, the certain and uncertain cells of a verified sweep with the outcome
     probabilities over the certain ones, the tiles (done, damaged) and the cost, of a Dataset or
-    a store path (plain values: ``coin basin stats --json`` prints this). A store is read one
-    tile at a time, each checked, so memory stays flat at any resolution; damaged tiles count
-    as not computed."""
-    from .stats import BasinCounts, cost_summary
+    a store path (plain values, ready for ``json.dumps``, a value that cannot be known None:
+    ``coin basin stats --json`` prints this). A store is read one tile at a time, each
+    checked, so memory stays flat at any resolution; damaged tiles count as not computed."""
+    from .jsonable import jsonable
 
     if isinstance(basin, str | os.PathLike):
-        return _store_stats(basin)
+        return jsonable(_store_stats(basin))
+    return jsonable(_dataset_stats(basin))
+
+
+def _dataset_stats(basin) -> dict:
+    from .stats import BasinCounts, cost_summary
+
     view = _as_basin(basin)
     a = view.arrays
     counts = BasinCounts()
@@ -566,6 +588,7 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
     from .analysis import DEFAULT_POINTS, AnalysisOptions, analyze_basin
     from .io.runner import usable_cores
 
+    _check_progress(progress)
     view = _as_basin(basin)
     opts = AnalysisOptions(box=int(box), bands=int(bands),
                            points=DEFAULT_POINTS if points is None else int(points),
@@ -609,14 +632,28 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
     Runs batches of ``batch`` samples on ``threads`` threads (or on Dask: ``workers``,
     ``scheduler``) until the 95 % interval of every probability has half-width <= ``precision``
     (``of='standing'``: of P(standing) only), or ``max_samples`` are spent; ``samples`` fixes
-    the count instead. With ``store`` the samples and labels are kept in (and resumed from)
-    that Zarr store. ``stop`` (a threading.Event) or Ctrl-C ends the run early: the result then
-    says ``stopped='interrupted'``. Returns a :class:`coincli.montecarlo.Fractions`."""
+    the count instead (``max_samples`` is spent in whole batches). With ``store`` the samples
+    and labels are kept in (and resumed from) that Zarr store. Setting ``stop`` (a
+    threading.Event) ends the run early with what it has: the result then says
+    ``stopped=StopReason.INTERRUPTED``. Ctrl-C (a notebook's interrupt) raises
+    KeyboardInterrupt, as it does in :func:`basin`; a store keeps every finished batch for a
+    resume. Returns a :class:`coincli.montecarlo.Fractions`."""
     plan = plan_fractions(scene, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi, samples=samples,
                           precision=precision, of=of, max_samples=max_samples, seed=seed,
                           sampler=sampler, batch=batch, force=force)
-    return run_fractions(plan, store=store, overwrite=overwrite, threads=threads,
-                         workers=workers, scheduler=scheduler, progress=progress, stop=stop)
+    return _raise_if_interrupted(
+        run_fractions(plan, store=store, overwrite=overwrite, threads=threads,
+                      workers=workers, scheduler=scheduler, progress=progress, stop=stop), stop)
+
+
+def _raise_if_interrupted(result, stop):
+    """KeyboardInterrupt for a run that Ctrl-C (not ``stop``) cut short; else the result."""
+    if not result.interrupted or (stop is not None and stop.is_set()):
+        return result
+    runs = result.results if isinstance(result, FractionsOver) else [result]
+    done = sum(r.samples for r in runs)
+    kept = f"; {result.store} keeps them for a resume" if result.store else ""
+    raise KeyboardInterrupt(f"fractions interrupted after {done:,} samples{kept}")
 
 
 def fractions_over(scene: Scene, parameter: str, values, *, keep=(), **options) -> FractionsOver:
@@ -624,13 +661,14 @@ def fractions_over(scene: Scene, parameter: str, values, *, keep=(), **options) 
     (thickness, diameter, k, c, mass, inertia, g), the same sample points at every value
     (common random numbers). For thickness and diameter the mass and inertia follow a uniform
     solid disc of the scene's density, except those named in ``keep`` (the result's ``note``
-    says which). Options are those of :func:`fractions`; each value is resumable on its own
-    in the store. Returns a :class:`coincli.montecarlo.FractionsOver`."""
+    says which). Options are those of :func:`fractions` (Ctrl-C and ``stop`` as there); each
+    value is resumable on its own in the store. Returns a
+    :class:`coincli.montecarlo.FractionsOver`."""
     run_options = {k: options.pop(k) for k in ("store", "overwrite", "threads", "workers",
                                                "scheduler", "progress", "stop")
                    if k in options}
     plan = plan_fractions(scene, over=(parameter, values), keep=keep, **options)
-    return run_fractions(plan, **run_options)
+    return _raise_if_interrupted(run_fractions(plan, **run_options), run_options.get("stop"))
 
 
 def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None,
@@ -642,6 +680,7 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     options): a Fractions for a plain run, a FractionsOver for a continuation."""
     from .io.fractions_run import run_fractions as run
 
+    _check_progress(progress)
     return run(plan, store=store, overwrite=overwrite, threads=threads, workers=workers,
                scheduler=scheduler, progress=progress, stop=stop)
 
@@ -664,8 +703,11 @@ def render_fractions(result: FractionsOver, out: str | os.PathLike, *,
     return plot_over(result, out, title=title, dpi=dpi)
 
 
-__all__ = ["Certainty", "Fractions", "FractionsOver", "FractionsPlan", "FractionsProgress",
-           "Method", "Outcome", "Status", "SweepPlan", "SweepProgress", "SweepReport", "Trajectory",
-           "basin", "basin_stats", "classify", "fractions", "fractions_over", "load_preset",
-           "open_basin", "open_fractions", "plan_fractions", "plan_sweep", "render_basin",
-           "render_fractions", "run_fractions", "simulate", "stability", "sweep"]
+__all__ = ["Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
+           "FractionsProgress", "Method", "Outcome", "ParameterError", "Scene", "Status",
+           "StopReason",
+           "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport", "SweepStart",
+           "SweepTooLong", "Trajectory", "analyze", "basin", "basin_stats", "classify",
+           "estimate_sweep", "fractions", "fractions_over", "load_preset", "open_basin",
+           "open_fractions", "plan_fractions", "plan_sweep", "render_analysis", "render_basin",
+           "render_fractions", "run_fractions", "simulate", "stability", "sweep", "verify_basin"]

@@ -1,17 +1,34 @@
 """The enumerations every layer shares: how a run ended (:class:`Status`) and how it was
 integrated (:class:`Method`).
 
-Both are ``IntEnum`` so that numba kernels can use them (as ``Status.SETTLED.value``) and stores
+They are ``IntEnum`` so that numba kernels can use them (as ``Status.SETTLED.value``) and stores
 can hold them as small integers; everything above the kernels uses the members, their names and
-their messages, never bare numbers or hand-compared strings.
+their messages, never bare numbers or hand-compared strings; printed, a member is its word.
 """
 
 from __future__ import annotations
 
-from enum import IntEnum
+from enum import IntEnum, StrEnum
 
 
-class Status(IntEnum):
+class _Named(IntEnum):
+    """An IntEnum that prints as its word: ``str(Status.SETTLED)`` and ``f"{status}"`` give
+    ``settled``, not ``0`` (``f"{status:d}"`` and ``int(status)`` still give the number)."""
+
+    @property
+    def label(self) -> str:
+        return self.name.lower()
+
+    def __str__(self) -> str:
+        return self.label
+
+    def __format__(self, spec: str) -> str:
+        if spec and spec[-1] in "bcdoxXneEfFgG%":  # a number's presentation type
+            return int.__format__(self, spec)
+        return format(self.label, spec)
+
+
+class Status(_Named):
     """How a run (or a basin cell) ended. Only SETTLED gives a final count of quarter turns."""
 
     SETTLED = 0
@@ -55,7 +72,7 @@ _STATUS_MESSAGES = {
 }
 
 
-class Method(IntEnum):
+class Method(_Named):
     """Integration methods; the value is the id the kernels dispatch on."""
 
     SYMPLECTIC_EULER = 0
@@ -67,7 +84,7 @@ class Method(IntEnum):
     @property
     def label(self) -> str:
         """The name a user types: ``symplectic_euler``, ``event``..."""
-        return self.name.lower()
+        return super().label
 
     @classmethod
     def parse(cls, value: str | int | Method) -> Method:
@@ -83,10 +100,10 @@ class Method(IntEnum):
                          f"{', '.join(m.label for m in cls)}")
 
 
-class Certainty(IntEnum):
-    """Whether a label is converged (verification per cell, see coincli.verify): CERTAIN when
-    two successive rungs of the ladder of settings agree (same n, both settled), UNCERTAIN when
-    none did by the last rung, UNVERIFIED for a single pass (no ladder)."""
+class Certainty(_Named):
+    """Whether a label is converged (verification per cell, see coincli.integrators.ladder):
+    CERTAIN when two successive rungs of the ladder of settings agree (same n, both settled),
+    UNCERTAIN when none did by the last rung, UNVERIFIED for a single pass (no ladder)."""
 
     UNCERTAIN = 0
     CERTAIN = 1
@@ -98,7 +115,7 @@ class Certainty(IntEnum):
         return self.name.lower().replace("_", " ")
 
 
-class Engine(IntEnum):
+class Engine(_Named):
     """What runs a kernel: numba's compiled code, or CPython on the same source (the same
     result to rounding, no compilation or loading: the faster choice for one short run), or the
     choice of AUTO."""
@@ -108,4 +125,18 @@ class Engine(IntEnum):
     NUMBA = 2
 
 
-__all__ = ["Certainty", "Engine", "Method", "Status"]
+class StopReason(StrEnum):
+    """Why a Monte Carlo run (`coin fractions`) ended: every interval narrow enough, the
+    samples asked for done, the sample budget spent, or interrupted (its numbers are partial)."""
+
+    PRECISION = "precision"
+    SAMPLES = "samples"
+    BUDGET = "budget"
+    INTERRUPTED = "interrupted"
+
+    @property
+    def label(self) -> str:
+        return self.value
+
+
+__all__ = ["Certainty", "Engine", "Method", "Status", "StopReason"]

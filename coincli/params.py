@@ -229,8 +229,17 @@ def check_start(scene: Scene, y0: float | None = None, phi0: float | None = None
             f"{DEEPEST_FORCE:g} times the coin's weight)")
 
 
+def require_scene(scene) -> Scene:
+    """TypeError naming the argument unless ``scene`` is a Scene (a preset's name is not)."""
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a coincli.Scene, e.g. coincli.load_preset('paper'), "
+                        f"got {type(scene).__name__} {scene!r:.40}")
+    return scene
+
+
 def validate(scene: Scene) -> Scene:
     """Raise ParameterError with a one-line message if a value is unusable; return the scene."""
+    require_scene(scene)
     c, f, s, i = scene.coin, scene.foundation, scene.initial, scene.integration
     for name in ("diameter", "thickness", "mass", "inertia"):
         _check_number(name, getattr(c, name), positive=True)

@@ -26,6 +26,7 @@ from .jit import compiled, is_active, python
 from .model import energies, rounded_quarter_turns
 from .params import (
     STATE_NAMES,
+    ParameterError,
     Scene,
     model_params,
     run_settings,
@@ -35,6 +36,7 @@ from .params import (
 )
 
 MAX_EVENTS = 200_000
+MAX_SAMPLES = 10_000_000  # states a trajectory keeps at most (560 MB)
 # Engine.AUTO runs the kernel as Python (no numba to import, no machine code to load: ~0.7 s
 # saved) when the run is adaptive and stops once settled; a typical throw takes under a hundred
 # steps (about 5 ms in Python). One that needs more than PYTHON_STEPS is run again compiled.
@@ -81,6 +83,21 @@ class Trajectory:
     @property
     def settled(self) -> bool:
         return self.status == Status.SETTLED
+
+    def __repr__(self) -> str:  # one line in a notebook; everything: summary()
+        n = "no count" if self.quarter_turns is None else \
+            f"n = {self.quarter_turns} ({self.pose})"
+        when = (f" at {self.settle_time:.4g} s" if self.settled else
+                f" at t = {self.t_final:.4g} s")
+        rung = f" at {self.rungs[-1].setting}" if self.rungs and \
+            self.certainty == Certainty.CERTAIN else ""
+        kept = []
+        if self.samples is not None and len(self.samples):
+            kept.append(f"{len(self.samples):,} samples")
+        if self.events is not None and len(self.events):
+            kept.append(f"{len(self.events):,} events")
+        return (f"Trajectory({n}, {self.status}{when}, {self.certainty}{rung}, "
+                f"{self.steps:,} steps{''.join(', ' + k for k in kept)})")
 
     @property
     def pose(self) -> str:
@@ -149,11 +166,12 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     validate(scene)
     method = check_step(scene, force=force)
     integ = scene.integration
+    _check_sample_dt(sample_dt, integ.t_end)
     p = model_params(scene)
     base = run_settings(integ, float(sample_dt or 0.0))
     ladder = ladder_of(integ)
     state0 = state_array(scene)
-    if sample_dt:
+    if sample_dt is not None:
         samples = np.empty((int(integ.t_end / sample_dt) + 3, SAMPLE_COLUMNS))
     else:
         samples = np.empty((0, SAMPLE_COLUMNS))
@@ -186,6 +204,20 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
         previous = (result, label)
     return _trajectory(scene, p, state0, final, result, samples, events, sample_dt,
                        record_events, wall, certainty, rungs)
+
+
+def _check_sample_dt(sample_dt, t_end: float) -> None:
+    """ParameterError (one line) unless ``sample_dt`` is None or a usable interval."""
+    if sample_dt is None:
+        return
+    if isinstance(sample_dt, bool) or not isinstance(sample_dt, int | float) or \
+            not math.isfinite(sample_dt) or sample_dt <= 0:
+        raise ParameterError(f"sample_dt must be a number of seconds > 0 (or None), got "
+                             f"{sample_dt!r}")
+    if t_end / sample_dt > MAX_SAMPLES:
+        raise ParameterError(f"sample_dt = {sample_dt:g} s would keep {t_end / sample_dt:.3g} "
+                             f"states over t_end = {t_end:g} s, at most {MAX_SAMPLES:,}: take "
+                             f"sample_dt >= {t_end / MAX_SAMPLES:.2g} s")
 
 
 def _run(p, settings, state0, samples, events, final, control, engine: Engine):

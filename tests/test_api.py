@@ -189,3 +189,68 @@ def test_worked_example_runs(tmp_path):
                          text=True, check=True).stdout
     assert "fig.-2 throw: n = 6 (lying)" in out and "<xarray.Dataset>" in out
     assert (tmp_path / "example-basin.png").stat().st_size > 10_000
+
+
+def test_public_names_are_one_list_and_all_resolve():
+    api_names = set(coincli.api.__all__)
+    assert set(coincli.__all__) - {"__version__"} == api_names
+    for name in api_names:
+        assert getattr(coincli, name) is getattr(coincli.api, name), name
+    assert issubclass(coincli.ParameterError, ValueError)
+
+
+def test_enums_print_as_their_words_and_stay_numbers_inside():
+    assert str(Status.SETTLED) == f"{Status.SETTLED}" == "settled"
+    assert f"{Method.EVENT}" == "event" and f"{Certainty.NOT_COMPUTED}" == "not computed"
+    assert f"{Status.BUDGET:d}" == "3" and int(Status.BUDGET) == 3
+    assert f"{Status.SETTLED:>9}" == "  settled"
+    assert str(coincli.StopReason.PRECISION) == "precision"
+
+
+def test_results_print_in_one_short_line():
+    scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
+    run = coincli.simulate(scene, sample_dt=1e-3, record_events=True)
+    assert repr(run) == ("Trajectory(n = 6 (lying), settled at 0.3622 s, certain at rtol = "
+                         f"1e-07, 112 steps, {len(run.samples):,} samples, "
+                         f"{len(run.events):,} events)")
+    result = coincli.fractions(scene, samples=256, batch=256)
+    assert repr(result).startswith("Fractions(P(standing) = ") and "\n" not in repr(result)
+    assert "256 samples" in repr(result) and "stopped: samples" in repr(result)
+    over = coincli.fractions_over(scene, "k", [5e3, 1e4], samples=256, batch=256)
+    assert repr(over).startswith("FractionsOver(k (N/m), 2 values, P(standing) 5000: ")
+    assert len(repr(coincli.plan_sweep(scene, res=16))) < 200
+
+
+@pytest.mark.parametrize("call, kind, match", [
+    (lambda s: coincli.simulate("paper"), TypeError, "scene must be a coincli.Scene"),
+    (lambda s: coincli.basin("paper", res=8), TypeError, "scene must be a coincli.Scene"),
+    (lambda s: coincli.simulate(s, sample_dt=-0.01), ParameterError, "sample_dt must be"),
+    (lambda s: coincli.simulate(s, sample_dt=1e-12), ParameterError, "at most 10,000,000"),
+    (lambda s: coincli.basin(s, res=8, threads="2"), ParameterError, "whole number"),
+    (lambda s: coincli.basin(s, res=8, progress=3), TypeError, "progress must be a function"),
+    (lambda s: coincli.basin_stats({}), TypeError, "a basin must be an xarray Dataset"),
+])
+def test_wrong_arguments_are_named_before_any_work(call, kind, match):
+    with pytest.raises(kind, match=match):
+        call(coincli.load_preset("paper"))
+
+
+def test_analysis_settings_are_checked_before_any_work():
+    ds = coincli.basin(coincli.load_preset("paper"), **SMALL)
+    with pytest.raises(ParameterError, match="confidence must be between 0 and 1"):
+        coincli.analyze(ds, confidence=2.0, points=0, bands=1)
+    with pytest.raises(ParameterError, match="direction must be 'random', 'axis' or an axis"):
+        coincli.analyze(ds, direction="up", points=0, bands=1)
+
+
+def test_each_open_function_refuses_the_other_kind_of_store(tmp_path):
+    coincli.basin(coincli.load_preset("paper"), store=tmp_path / "b.zarr", **SMALL)
+    with pytest.raises(ParameterError, match="not a coin fractions store"):
+        coincli.open_fractions(tmp_path / "b.zarr")
+    (tmp_path / "file").write_text("x")
+    for run in (lambda: coincli.basin(coincli.load_preset("paper"), store=tmp_path / "file",
+                                      **SMALL),
+                lambda: coincli.fractions(coincli.load_preset("paper"), samples=8,
+                                          store=tmp_path / "file")):
+        with pytest.raises(ParameterError, match="exists and is not a directory"):
+            run()

@@ -321,3 +321,21 @@ def test_cli_refuses_bad_input_in_one_line(args, fragment):
     assert result.exit_code == 2, (result.stdout, result.stderr)
     err = result.stderr.strip()
     assert err.startswith("error:") and len(err.splitlines()) == 1 and fragment in err, err
+
+
+def test_ctrl_c_raises_out_of_fractions_and_keeps_the_batches(tmp_path):
+    """A notebook's interrupt must stop a cell that loops over runs, as in coincli.basin; the
+    store keeps what was finished."""
+    import signal
+
+    from conftest import sigint_raises
+
+    def interrupt(update):
+        if update.samples >= 1024:
+            signal.raise_signal(signal.SIGINT)
+
+    with sigint_raises(), pytest.raises(KeyboardInterrupt, match="fractions interrupted after"):
+        coincli.fractions(PAPER, samples=8192, batch=512, threads=1, progress=interrupt,
+                          store=tmp_path / "f.zarr")
+    kept = coincli.open_fractions(tmp_path / "f.zarr")
+    assert int(kept["filled"].values.astype(bool).sum()) >= 2

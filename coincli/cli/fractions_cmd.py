@@ -10,6 +10,7 @@ import typer
 from rich.table import Table
 
 from ..defaults import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION, PARAMETER_UNITS
+from ..enums import StopReason
 from ..params import ParameterError
 from ..version import __version__
 from . import app
@@ -231,14 +232,14 @@ def _header(plan, samples: int) -> str:
 
 def _stopped(result) -> str:
     goal = result.goal
-    if result.stopped == "precision":
+    if result.stopped is StopReason.PRECISION:
         of = "every probability" if goal["of"] == "all" else "P(standing)"
         return (f"{of} known to ±{100 * goal['precision']:.3g} percentage points or better "
                 f"(95 %; widest now ±{100 * result.achieved:.3g})")
-    if result.stopped == "budget":
+    if result.stopped is StopReason.BUDGET:
         return (f"the budget of {goal['max_samples']:,} samples is spent before ±"
                 f"{100 * goal['precision']:.3g} pp (widest ±{100 * result.achieved:.3g} pp)")
-    if result.stopped == "samples":
+    if result.stopped is StopReason.SAMPLES:
         return "the samples asked for are done"
     return "interrupted"
 

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..params import ParameterError
 from .schema import FILLS, VARIABLES
 
 DONE_VAR_ATTRS = {"long_name": "1 = tile complete (its data checked against its digest)"}
@@ -86,8 +87,11 @@ def to_dataset(basin: Basin):
 def from_dataset(ds) -> Basin:
     """A Basin from a Dataset of :func:`to_dataset`, or from ``xarray.open_zarr`` of a store
     (whose masked float ``quarter_turns`` is turned back into int16 with its fill)."""
+    if not hasattr(ds, "attrs") or not hasattr(ds, "data_vars"):
+        raise TypeError(f"a basin must be an xarray Dataset (coincli.basin, coincli.open_basin) "
+                        f"or a store's path, got {type(ds).__name__}")
     if "coin_basin" not in ds.attrs:
-        raise ValueError("not a coin basin dataset (no coin_basin attribute)")
+        raise ParameterError("not a coin basin dataset (no coin_basin attribute)")
     arrays = {}
     for name in VARIABLES:
         if name in ds.data_vars:

@@ -10,6 +10,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..enums import StopReason
 from ..integrators.batch import verified_labels, warm_up
 from ..montecarlo import (
     BatchResult,
@@ -151,7 +152,7 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     path = None if store is None else str(store)
     results = []
     for v, (prog, s) in enumerate(zip(progs, plan.scenes, strict=True)):
-        stopped = prog.reason if prog.done else "interrupted"
+        stopped = prog.reason if prog.done else StopReason.INTERRUPTED
         cost = total_cost if plan.parameter is None else {"cpu_seconds": cpu[v]}
         results.append(make_result(prog, sampling, s, stopped, cost, path, plan.parameter,
                                    None if plan.values is None else plan.values[v]))

@@ -278,7 +278,10 @@ def open_fractions(path):
     import xarray as xr
 
     check_is_store(path)
-    return xr.open_zarr(str(path))
+    ds = xr.open_zarr(str(path))
+    if MARK not in ds.attrs:
+        raise ParameterError(f"{path} is not a coin fractions store")
+    return ds
 
 
 __all__ = ["COLUMNS", "LABELS", "Layout", "Writer", "cost_dir", "differences", "open_fractions",

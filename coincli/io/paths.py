@@ -10,6 +10,8 @@ import socket
 from collections.abc import Iterator
 from pathlib import Path
 
+from ..params import ParameterError
+
 DEFAULT_CONNECT_URL = "rerun+http://127.0.0.1:9876/proxy"
 
 # what a user should read for the errors a file system gives
@@ -87,14 +89,15 @@ def check_writable(path: str | os.PathLike, *, what: str = "output",
     (default) or a directory such as a Zarr store (``directory``: it, or the folder it would be
     created in, must accept new files). The folder is tried by creating and removing an empty
     file, so a read-only mount, a full disk or a missing permission is found before any work.
-    ``create_parents`` creates missing folders first."""
+    ``create_parents`` creates missing folders first. A path of the wrong kind (a folder where
+    a file is wanted, or the other way round) is a ParameterError, like any bad argument."""
     p = Path(path)
     if not directory and p.is_dir():
-        raise IsADirectoryError(f"{what} '{path}' is a directory")
+        raise ParameterError(f"{what} '{path}' is a directory")
     if str(path) == "" or p.name == "":
         raise FileNotFoundError(f"invalid {what} '{path}'")
     if directory and p.exists() and not p.is_dir():
-        raise NotADirectoryError(f"{what} '{path}' exists and is not a directory")
+        raise ParameterError(f"{what} '{path}' exists and is not a directory")
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         if create_parents:

@@ -293,8 +293,9 @@ def check_where(threads, workers, scheduler) -> None:
         raise ParameterError("give --workers (a local cluster) or --scheduler (an existing "
                              "one), not both")
     for option, value in (("--threads", threads), ("--workers", workers)):
-        if value is not None and value < 1:
-            raise ParameterError(f"{option} must be at least 1, got {value}")
+        if value is not None and (isinstance(value, bool) or
+                                  not isinstance(value, int | np.integer) or value < 1):
+            raise ParameterError(f"{option} must be a whole number >= 1, got {value!r}")
     if threads is not None and (workers is not None or scheduler is not None):
         raise ParameterError("--threads is for a local run; a Dask run uses one thread per "
                              "worker")

@@ -373,6 +373,11 @@ class StoreCheck:
     def tiles_done(self) -> int:
         return int(self.done.sum())
 
+    def __repr__(self) -> str:
+        return (f"StoreCheck({self.path!r}, intact={self.intact}, {self.tiles_done} of "
+                f"{self.done.size} tiles done, {len(self.damaged)} damaged, "
+                f"{len(self.metadata)} metadata files differing)")
+
 
 @dataclass
 class StoreView:

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..enums import StopReason
 from ..params import Scene
 from ..stats import proportion
 from .continuation import PARAMETER_UNITS
@@ -21,8 +22,7 @@ class Fractions:
     ``standing``, ``lying``: over the counted (certain) labels; ``uncertain``: over all samples;
     ``outcomes``: one row per n; each a dict with ``probability``, ``low``, ``high`` (the 95 %
     Wilson interval), ``count`` and ``of``. ``all_labelled`` holds the same over every labelled
-    sample. ``stopped`` says why the run ended: ``precision``, ``samples``, ``budget`` or
-    ``interrupted``."""
+    sample. ``stopped`` says why the run ended (a :class:`coincli.StopReason`)."""
 
     samples: int
     counted: int
@@ -33,7 +33,7 @@ class Fractions:
     all_labelled: dict
     status: dict
     verified: bool
-    stopped: str
+    stopped: StopReason
     goal: dict
     achieved: float  # the widest half-width the stop rule looks at
     sampling: dict
@@ -45,7 +45,13 @@ class Fractions:
 
     @property
     def interrupted(self) -> bool:
-        return self.stopped == "interrupted"
+        return self.stopped is StopReason.INTERRUPTED
+
+    def __repr__(self) -> str:  # one line in a notebook; the numbers: to_dict()
+        at = "" if self.parameter is None else f"{self.parameter} = {self.value:g}: "
+        return (f"Fractions({at}P(standing) = {_pct(self.standing)}, "
+                f"{self.samples:,} samples, {self.counted:,} counted, uncertain "
+                f"{100 * self.uncertain['probability']:.3g} %, stopped: {self.stopped})")
 
     def probability(self, n: int) -> dict:
         """P(n) over the counted labels (zero count if n never occurred)."""
@@ -69,7 +75,14 @@ class Fractions:
         return out
 
 
-def make_result(progression: Progression, sampling: Sampling, scene: Scene, stopped: str,
+def _pct(row: dict) -> str:
+    """'0.76 % [0.66, 0.87]': a probability and its 95 % interval, in percent."""
+    return (f"{100 * row['probability']:.3g} % [{100 * row['low']:.3g}, "
+            f"{100 * row['high']:.3g}]")
+
+
+def make_result(progression: Progression, sampling: Sampling, scene: Scene,
+                stopped: StopReason,
                 cost: dict, store: str | None = None, parameter: str | None = None,
                 value: float | None = None) -> Fractions:
     s = summary(progression.tally, progression.verified)
@@ -104,6 +117,15 @@ class FractionsOver:
     @property
     def interrupted(self) -> bool:
         return any(r.interrupted for r in self.results)
+
+    def __repr__(self) -> str:
+        unit = PARAMETER_UNITS[self.parameter]
+        rows = "; ".join(f"{v:g}: {_pct(r.standing)}" for v, r in
+                         zip(self.values, self.results, strict=True))
+        if len(rows) > 300:
+            rows = rows[:300].rsplit(";", 1)[0] + "; ..."
+        return (f"FractionsOver({self.parameter} ({unit}), {len(self.values)} values, "
+                f"P(standing) {rows})")
 
     def to_dict(self) -> dict:
         return {"parameter": self.parameter, "units": PARAMETER_UNITS[self.parameter],

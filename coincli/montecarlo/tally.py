@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..defaults import DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION
-from ..enums import Certainty, Status
+from ..enums import Certainty, Status, StopReason
 from ..params import ParameterError
 from ..stats import outcome_rows, proportion
 
@@ -257,7 +257,7 @@ class Progression:
         self.prefix = 0  # batches 0 .. prefix-1 are complete and counted
         self.tally = Tally()
         self.done = False
-        self.reason: str | None = None
+        self.reason: StopReason | None = None
         self.issued: set[int] = set()  # batches handed out, not back yet
         self._advance()
 
@@ -290,11 +290,12 @@ class Progression:
             self.prefix += 1
             if self.goal.precision is not None and precise(self.tally, self.goal.precision,
                                                            self.goal.of):
-                self.done, self.reason = True, "precision"
+                self.done, self.reason = True, StopReason.PRECISION
                 return
         if self.prefix >= self.limit:
             self.done = True
-            self.reason = "samples" if self.goal.samples is not None else "budget"
+            self.reason = StopReason.SAMPLES if self.goal.samples is not None else \
+                StopReason.BUDGET
 
     @property
     def samples(self) -> int:
