@@ -181,6 +181,7 @@ class SweepReport:
     estimate: SweepEstimate | None = None
     kernel_seconds: float = 0.0  # wall time of the tiles in the kernels, summed over threads
     store_seconds: float = 0.0  # wall time of the tiles' writes, summed over threads
+    mirrored_cells: int = 0  # of ``cells``, those written as mirror images of computed ones
 
     @property
     def complete(self) -> bool:
@@ -349,7 +350,7 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
         runner = run_threads(partial(run_tile_task, str(path), spec), queue, n_workers, stop)
     wall0 = time.perf_counter()
     interrupted = False
-    computed = cells = 0
+    computed = cells = mirrored = 0
     kernel_seconds = store_seconds = 0.0
     try:
         for done in runner:
@@ -358,6 +359,7 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
             if done.written:
                 computed += done.tiles
                 cells += done.cells
+                mirrored += done.cells - grid.tile_cells(done.tile)
             if progress is not None:
                 progress(SweepProgress(before + computed + tiles_elsewhere(), total,
                                        cells, cells_todo, time.perf_counter() - wall0))
@@ -370,13 +372,14 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
     wall = time.perf_counter() - wall0
     elsewhere = tiles_elsewhere()
     n_done = total if not interrupted else before + computed + elsewhere
+    interrupted = interrupted and n_done < total  # a stop that came after the last tile
     with contextlib.suppress(OSError):  # a cost record lost is no reason to fail a sweep
         store_io.record_run(path, store_io.run_record(
             started, wall, computed, cells, mode, n_workers, interrupted,
             kernel_seconds=kernel_seconds, store_seconds=store_seconds))
     return SweepReport(str(path), total, n_done, before, cells, wall, mode, n_workers,
                        interrupted, computed, elsewhere, damaged, estimate, kernel_seconds,
-                       store_seconds)
+                       store_seconds, mirrored)
 
 
 def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os.PathLike |

@@ -214,3 +214,19 @@ def test_installed_script_bad_input_has_no_traceback():
     assert proc.stdout == ""
     assert len(proc.stderr.strip().splitlines()) == 1
     assert "Traceback" not in proc.stderr and "mass" in proc.stderr
+
+
+@pytest.mark.parametrize("args, fragment", [
+    (["simulate", "--vy", "abc", "--no-rrd"], "Invalid value for '--vy': 'abc' is not a valid"),
+    (["methods", "--dt", "1"], "No such option: --dt"),
+    (["basin", "sweep"], "Missing argument 'STORE'"),
+    (["simulate", "extra"], "unexpected extra argument"),
+])
+def test_a_mistyped_command_line_is_one_error_line(args, fragment):
+    """click's own usage errors too, not only ours: one line naming the help, exit code 2."""
+    proc = subprocess.run([sys.executable, "-m", "coincli", *args], capture_output=True,
+                          text=True, cwd=REPO, timeout=120)
+    assert proc.returncode == 2 and proc.stdout == ""
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and fragment in lines[0]
+    assert "--help')" in lines[0]

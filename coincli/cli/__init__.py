@@ -5,6 +5,7 @@ evaluate every option's annotation string, twice, on each start. typer is held b
 (pyproject.toml), which coerces every option's value through a pydantic adapter: importing
 pydantic and building the adapters adds 0.15-0.2 s to every command that takes an option."""
 
+import sys
 from typing import Annotated
 
 import typer
@@ -54,8 +55,39 @@ def _register() -> None:
 _register()
 
 
+def _click_exceptions():
+    try:  # typer 0.28 carries its own click (pyproject.toml holds typer below 0.29)
+        from typer._click import exceptions
+    except ImportError:  # a typer that uses click itself
+        from click import exceptions
+    return exceptions
+
+
+def run(args: list[str] | None = None) -> int:
+    """Run the app; its exit code. A mistyped command line (an unknown option, a value of the
+    wrong type, a missing argument) is one ``error:`` line and code 2, like every other bad
+    input, instead of click's boxed usage message."""
+    exceptions = _click_exceptions()
+    try:
+        code = app(args=args, standalone_mode=False)
+    except exceptions.NoArgsIsHelpError as exc:  # `coin` alone: the help, as click shows it
+        exc.show()
+        return exc.exit_code
+    except exceptions.UsageError as exc:
+        from .common import fail
+
+        where = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
+        return fail(exc.format_message().rstrip(".") + where).exit_code
+    except exceptions.ClickException as exc:
+        exc.show()
+        return exc.exit_code
+    except exceptions.Abort:
+        return 1
+    return code if isinstance(code, int) else 0
+
+
 def main() -> None:
     from ..jit import skip_blas_probe
 
     skip_blas_probe()
-    app()
+    sys.exit(run())

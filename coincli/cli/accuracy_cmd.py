@@ -1,6 +1,5 @@
 """`coin accuracy`: the work-precision chart, and where each fixed-step method fails."""
 
-import os
 from pathlib import Path
 from typing import Annotated
 
@@ -67,11 +66,14 @@ def accuracy_command(
                                           help="vy0 range, m/s.")] = "0.05:2",
     vphi_range: Annotated[str, typer.Option("--vphi", "--vphi-range", metavar="LO:HI",
                                             help="vphi0 range, rad/s.")] = "-20:20",
-    methods: Annotated[str, typer.Option("--methods", help="Comma-separated methods.")] = ",".join(
+    methods: Annotated[str, typer.Option("--methods", help="Comma-separated methods "
+                                         "(default: all of them, see coin methods).",
+                                         show_default=False)] = ",".join(
         m.label for m in Method),
     quick: Annotated[bool, typer.Option("--quick", help="Two settings per method (a smoke "
                                         "test, not a chart to trust).")] = False,
-    threads: Annotated[int, typer.Option("--threads", help="Threads.")] = os.cpu_count() or 1,
+    threads: Annotated[int | None, typer.Option("--threads", help="Threads (default: one per "
+                                                "core).")] = None,
     stability: Annotated[bool, typer.Option("--stability", help="Only find where each "
                                             "fixed-step method fails (bisection).")] = False,
     preset: PresetOpt = "paper", diameter: DiameterOpt = None, thickness: ThicknessOpt = None,
@@ -92,6 +94,9 @@ def accuracy_command(
             run_stability(scene, json_out)
             return
         names = parse_methods(methods)
+        from ..io.runner import usable_cores
+
+        threads = usable_cores() if threads is None else threads
         if threads < 1:
             raise ParameterError("--threads must be at least 1")
         grid = acc.vy_vphi_grid(scene, parse_range(vy_range, "--vy"),

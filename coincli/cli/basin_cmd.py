@@ -178,7 +178,9 @@ def sweep_command(
 
     Defaults: the paper's setting (x0 = 0, y0 = r, phi0 = 0, vx0 = 0) over vy0 in 0.05:2 m/s and vphi0 in -20:20 rad/s, 512 x 512 cells. Running the same command again resumes the sweep (and recomputes any damaged tile); several processes or machines may run it on one store at once. Ctrl-C stops after the tiles in flight, a second Ctrl-C at once. A sweep estimated at over 12 hours is refused without --yes.
 
-    Example: coin basin out.zarr --vy 0:2 --vphi -20:20 --res 512
+    Example:
+
+    coin basin out.zarr --vy 0:2 --vphi -20:20 --res 512
     """  # noqa: E501
     from .. import api
     from ..io import store as store_io
@@ -227,6 +229,11 @@ def sweep_command(
             say(err_console, f"[yellow]damaged:[/] {counted(len(start.damaged), 'tile')} of "
                              f"{path} failed the integrity check, recomputed now: "
                              f"{_tile_list(start.damaged)}")
+        if 0 < start.tiles_done < start.tiles_total:
+            say(err_console, f"resuming {path}: {start.tiles_done} of "
+                             f"{counted(start.tiles_total, 'tile')} done already, "
+                             f"{counted(start.tiles_total - start.tiles_done, 'tile')} to "
+                             "compute")
         est = start.estimate
         if est is not None and est.seconds > 60:
             say(err_console, f"estimate: {_estimate_text(est, plan, scheduler)}")
@@ -265,9 +272,11 @@ def sweep_command(
              else f"Dask ({scheduler or f'{report.workers} local workers'})")
     others = (f"; {counted(report.tiles_elsewhere, 'tile')} by other processes"
               if report.tiles_elsewhere else "")
-    mirrored = plan.grid.mirror_dims
-    halves = (f", half of them as the mirror images of the others: {' and '.join(mirrored)} "
-              "reversed, n -> -n" if mirrored else "")
+    share = ("half" if 2 * report.mirrored_cells == report.cells
+             else f"{report.mirrored_cells:,}")
+    halves = (f", {share} of them as the mirror images of the others: "
+              f"{' and '.join(plan.grid.mirror_dims)} reversed, n -> -n"
+              if report.mirrored_cells else "")
     say(console, f"{path}: {report.tiles_done}/{total} tiles done; this run computed "
                  f"{counted(report.tiles_computed, 'tile')} "
                  f"({counted(report.cells, 'cell')}{halves}) in "
@@ -326,9 +335,8 @@ def verify_command(
 
     Every chunk's checksum, every tile's data against its digest, every metadata file.
 
-    Exit code 0 if the store is intact (complete or not), 1 if anything is damaged (listed:
-    rerunning the sweep command recomputes those tiles), 2 if it is no basin store.
-    """
+    Exit code 0 if the store is intact (complete or not), 1 if anything is damaged (listed: rerunning the sweep command recomputes those tiles), 2 if it is no basin store.
+    """  # noqa: E501 (typer keeps a docstring's line breaks)
     from .. import api
     from ..io.store import StoreDamaged
 
@@ -451,10 +459,8 @@ def stats_command(
 ) -> None:
     """Outcome probabilities (95 % Wilson intervals), certain and uncertain cells, and cost.
 
-    Count and fraction of each n over the labelled cells and, for a verified sweep, over the
-    certain cells only; P(standing) with and without the uncertain cells; the cells unsettled,
-    non-finite, over budget or not computed; the CPU and wall time of the sweep.
-    """
+    Count and fraction of each n over the labelled cells and, for a verified sweep, over the certain cells only; P(standing) with and without the uncertain cells; the cells unsettled, non-finite, over budget or not computed; the CPU and wall time of the sweep.
+    """  # noqa: E501 (typer keeps a docstring's line breaks)
     from .. import api
     from ..io.paths import check_writable, describe
     from ..io.store import open_view
@@ -620,7 +626,9 @@ def analyze_command(
 
     On the map (uncertain and not-computed cells left out): basin entropy S_b and boundary basin entropy S_bb in boxes (Daza et al. 2016) with the log-2 criterion, the ball test for fractal boundaries (Puy et al. 2021), the Wada merging test. With the simulator: the uncertainty exponent alpha by the perturbation method (McDonald et al. 1985) from random initial conditions perturbed far below the grid spacing, classified with verified labels (only certain ones count); D = 2 - alpha.
 
-    Example: coin basin analyze out.zarr --bands 4 -o analysis.png
+    Example:
+
+    coin basin analyze out.zarr --bands 4 -o analysis.png
     """  # noqa: E501
     from .. import api
     from ..analysis import DEFAULT_POINTS
@@ -710,7 +718,8 @@ def _print_analysis(path: Path, result, data: dict) -> None:
                   f"(2021), S_bb in {opts.balls:,} random balls of radius {opts.radius:g} cells; "
                   f"smooth when within {_num(ft.low if ft else math.nan)} to "
                   f"{_num(ft.high if ft else math.nan)} (a smooth boundary gives "
-                  f"{_num(ft.smooth_value if ft else math.nan)}).", highlight=False,
+                  f"{_num(ft.smooth_value if ft else math.nan)}), fractal outside it, above or "
+                  "below (their rule, as in Attractors.jl).", highlight=False,
                   style="dim")
 
     p = w.perturbation

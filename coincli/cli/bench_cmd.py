@@ -45,8 +45,8 @@ def bench_command(
                                           help="vy0 range, m/s.")] = "0.05:2",
     vphi_range: Annotated[str, typer.Option("--vphi", "--vphi-range", metavar="LO:HI",
                                             help="vphi0 range, rad/s.")] = "-20:20",
-    threads: Annotated[int, typer.Option("--threads", help="Threads for the label grids.")] = (
-        os.cpu_count() or 1),
+    threads: Annotated[int | None, typer.Option("--threads", help="Threads for the label "
+                                                "grids (default: one per core).")] = None,
     preset: PresetOpt = "paper", json_out: JsonOpt = False,
 ) -> None:
     """Benchmark: cost per trajectory of each method and of the paper's setting side by side, their label accuracy, and the full default basin on all cores."""  # noqa: E501
@@ -54,6 +54,9 @@ def bench_command(
     from ..accuracy import vy_vphi_grid
 
     with user_errors():
+        from ..io.runner import usable_cores
+
+        threads = usable_cores() if threads is None else threads
         if threads < 1 or repeats < 1:
             raise ParameterError("--threads and --repeats must be at least 1")
         if basin_res != 0 and basin_res < 2:

@@ -143,7 +143,9 @@ def fractions_command(
 
     Each initial condition is a DIST: a value (0.01, 2pi), LO:HI (uniform), normal(MEAN,SD) or normal(MEAN,SD,LO,HI) (truncated); numbers may use pi (-pi:pi), and y0 multiples of the half diagonal r (r:5r). Samples are drawn until every 95 % interval is narrower than --precision (or --samples of them), counting only verified (certain) labels and reporting the uncertain fraction beside them. The same command gives the same samples and results; with --store it resumes where it stopped.
 
-    Example: coin fractions --y0 r:5r --phi0 -pi:pi --vx -0.5:0.5 --precision 0.05%
+    Example:
+
+    coin fractions --y0 r:5r --phi0 -pi:pi --vx -0.5:0.5 --precision 0.05%
     """  # noqa: E501
     from .. import api
     from ..montecarlo import parse_count, parse_precision
@@ -167,7 +169,7 @@ def fractions_command(
             of=of, max_samples=parse_count("--max-samples", max_samples), seed=seed,
             sampler=sampler, batch=batch, over=over, keep=keep, force=force)
         api.check_where(threads, workers, scheduler)
-    if plan.note and not json_out:
+    if plan.note and not json_out and not console.is_terminal:  # else the result shows it
         say(err_console, f"[cyan]note:[/] {plan.note}")
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -279,7 +281,9 @@ def _print_result(plan, r) -> None:
                                  f"{cost['wall_seconds']:.1f} s wall on {where} "
                                  f"({cost['trajectories_per_second']:,.0f} a second; "
                                  f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each, every "
-                                 "rung of the ladder counted)"))
+                                 "rung of the ladder counted)"
+                                 + (f"; {cost['from_store']:,} samples were in the store "
+                                    "already" if cost.get("from_store") else "")))
     else:
         summary.append(("cost", "nothing computed: every batch was in the store"))
     if r.store:
@@ -299,14 +303,16 @@ def _print_over(plan, res) -> None:
     if res.note:
         say(console, f"note: {res.note}")
     basis = "certain labels" if first.verified else "settled runs"
+    reasons = {r.stopped for r in res.results}
+    one_reason = len(reasons) == 1  # then said once, under the table: it fits 80 columns
     table = Table(title=f"P(standing) over the {basis}, 95 % Wilson intervals",
-                  title_justify="left")
+                  title_justify="left", show_edge=False)
     unit = PARAMETER_UNITS[res.parameter]
     cols = [(f"{res.parameter} ({unit})", "right")]
     if res.parameter in ("thickness", "diameter"):
         cols.append(("t/d", "right"))
     cols += [("samples", "right"), ("P(standing)", "right"), ("95 % interval", "right"),
-             ("uncertain", "right"), ("stopped", "left")]
+             ("uncertain", "right")] + ([] if one_reason else [("stopped", "left")])
     for col, just in cols:
         table.add_column(col, justify=just, no_wrap=True)
     for value, r in zip(res.values, res.results, strict=True):
@@ -314,14 +320,18 @@ def _print_over(plan, res) -> None:
         if res.parameter in ("thickness", "diameter"):
             row.append(f"{r.scene['coin']['thickness'] / r.scene['coin']['diameter']:.3g}")
         row += [f"{r.samples:,}", percent(r.standing["probability"]), interval(r.standing),
-                percent(r.uncertain["probability"], 3), r.stopped]
+                percent(r.uncertain["probability"], 3)] + ([] if one_reason else [r.stopped])
         table.add_row(*row)
     console.print(table)
+    if one_reason:
+        say(console, f"stopped: {res.results[0].stopped} (every value)")
     cost = res.cost
     if cost.get("computed"):
         say(console, f"cost: {cost['computed']:,} trajectories in {cost['wall_seconds']:.1f} s "
                      f"wall ({cost['trajectories_per_second']:,.0f} a second, "
-                     f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each)")
+                     f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each)"
+                     + (f"; {cost['from_store']:,} samples were in the store already"
+                        if cost.get("from_store") else ""))
     if res.store:
         say(console, f"store: {res.store}")
 

@@ -82,7 +82,9 @@ def simulate_command(
 
     The throw is verified on a ladder of tighter settings (--single-pass: once), and recorded for the Rerun viewer (coin.rrd unless --rrd or --no-rrd).
 
-    Example, the throw of the paper's fig. 2 (lying after six quarter turns here; from vy0 = 1.1974 m/s on it stands after seven, as the paper says): coin simulate --vy 1.197 --vphi 3.508
+    Example, the throw of the paper's fig. 2 (lying after six quarter turns here; from vy0 = 1.1974 m/s on it stands after seven, as the paper says):
+
+    coin simulate --vy 1.197 --vphi 3.508
     """  # noqa: E501
     from ..throw import simulate  # coincli.simulate, without the rest of the API's imports
 

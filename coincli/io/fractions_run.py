@@ -57,6 +57,7 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                                 else np.asarray(plan.values), overwrite=overwrite)
         _resume(plan, progs, draws, layout, store, filled)
         writer = fstore.Writer(store, layout)
+    from_store = sum(p.samples for p in progs)  # counted already, as the store holds them
 
     def tasks():
         while True:
@@ -148,7 +149,7 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     total_cost = {"computed": computed, "cpu_seconds": sum(cpu), "wall_seconds": wall,
                   "trajectories_per_second": computed / wall if wall > 0 else math.nan,
                   "cpu_ms_per_trajectory": 1e3 * sum(cpu) / computed if computed else math.nan,
-                  "mode": mode, "workers": n_workers}
+                  "mode": mode, "workers": n_workers, "from_store": from_store}
     path = None if store is None else str(store)
     results = []
     for v, (prog, s) in enumerate(zip(progs, plan.scenes, strict=True)):
