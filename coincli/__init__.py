@@ -3,10 +3,11 @@
 The public API (see :mod:`coincli.api` and the README's "Python API"):
 
     import coincli
-    scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
-    run = coincli.simulate(scene)
-    ds = coincli.basin(scene, vy=(0.05, 2.0), vphi=(-20.0, 20.0), res=64)
-    p = coincli.fractions(scene, phi0="0:2pi", precision=0.001).standing   # Monte Carlo
+    base = coincli.load_preset("paper")
+    run = coincli.simulate(base.with_overrides(vy=1.197, vphi=3.508))   # one throw
+    ds = coincli.basin(base, vy=(0.05, 2.0), vphi=(-20.0, 20.0), res=64)
+    r = coincli.fractions(base, phi0="-pi:pi", precision=0.001)   # Monte Carlo
+    r.standing["probability"], r.standing["low"], r.standing["high"]
 
 Names load on first use, so ``import coincli`` (and ``coin --help``) stays cheap.
 """

@@ -470,8 +470,9 @@ def _load_kernels(spec: SweepSpec) -> None:
 
 def open_basin(store: str | os.PathLike):
     """A basin store as an xarray Dataset (in memory; every tile checked: cells of unfinished
-    or damaged tiles read as not computed, status NOT_COMPUTED; the damaged tiles are listed in
-    the attribute ``damaged_tiles``)."""
+    or damaged tiles read as not computed, status NOT_COMPUTED and quarter_turns -32768, so
+    take ``ds.where(ds.status != coincli.Status.NOT_COMPUTED)`` before averaging a partial
+    map; the damaged tiles are listed in the attribute ``damaged_tiles``)."""
     from .io.dataset import to_dataset
     from .io.store import read_basin
 

@@ -142,9 +142,12 @@ def _announce(scene) -> None:
         return
     steps = step_budget(integ)
     if steps > SLOW_STEPS:
-        hours = steps * 2e-8 / 3600  # ~20 ns a step compiled, the paper's method
-        err_console.print(f"[yellow]note[/]: up to {steps:.3g} steps of {integ.dt:g} s "
-                          f"(about {hours:.2g} hours); Ctrl-C stops it", highlight=False)
+        from ..api import format_duration
+
+        seconds = steps * 2e-8  # ~20 ns a step compiled, the paper's method
+        err_console.print(f"[yellow]note[/]: up to {steps:,} steps of {integ.dt:g} s "
+                          f"(about {format_duration(seconds)}); Ctrl-C stops it",
+                          highlight=False)
 
 
 def _check_recording_options(scene, rrd_path, connect, log_every) -> None:
