@@ -204,7 +204,8 @@ def test_parameter_mismatch_is_refused(tmp_path):
     result = coin(path, *SMALL, "--vphi", "-10:20")
     assert result.exit_code == 2 and "--vphi LO = -20 in the store, -10 here" in result.output
     result = coin(path, "--res", "16", "--chunk", "4", "-q")
-    assert result.exit_code == 2 and "cells = 8 in the store, 16 here" in result.output
+    assert result.exit_code == 2 and "--res (vy cells) = 8 in the store, 16 here" in \
+        " ".join(result.output.split())
     result = coin(path, *SMALL, "--single-pass")
     assert result.exit_code == 2 and "verification" in result.output
     # the same command resumes (nothing left to do); --overwrite replaces

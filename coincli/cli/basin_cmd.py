@@ -194,18 +194,12 @@ def sweep_command(
         plan = api.plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=not no_mirror,
                               x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
         api.check_where(threads, workers, scheduler)
-    from rich.progress import (
-        BarColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-    from .progress import RateColumn
+    from .progress import Bars, RateColumn
 
     grid = plan.grid
-    progress = Progress(
+    progress = Bars(
         TextColumn("[bold]basin[/]"), BarColumn(),
         TextColumn("{task.fields[tiles]}/{task.fields[ntiles]} tiles"),
         RateColumn("cells"), TimeElapsedColumn(),
@@ -647,9 +641,11 @@ def analyze_command(
             check_rrd_path(figure)  # a writable file path
         basin = read_basin(path)
         api.check_where(threads, None, None)
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
-    progress = Progress(TextColumn("[bold]analyze[/] {task.description}"), BarColumn(),
+    from .progress import Bars
+
+    progress = Bars(TextColumn("[bold]analyze[/] {task.description}"), BarColumn(),
                         TextColumn("{task.percentage:>3.0f} %"), TimeElapsedColumn(),
                         console=err_console, disable=quiet, transient=True)
     tasks: dict = {}

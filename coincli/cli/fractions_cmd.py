@@ -171,12 +171,12 @@ def fractions_command(
         api.check_where(threads, workers, scheduler)
     if plan.note and not json_out and not console.is_terminal:  # else the result shows it
         say(err_console, f"[cyan]note:[/] {plan.note}")
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
-    from .progress import RateColumn
+    from .progress import Bars, RateColumn
 
     wide = err_console.width >= 100  # at 80 columns the rate goes: the estimate matters more
-    progress = Progress(
+    progress = Bars(
         TextColumn("{task.fields[value]}"), BarColumn(bar_width=20 if wide else 8),
         TextColumn("{task.completed:,.0f}/{task.total:,.0f}"),
         TextColumn("P(standing) {task.fields[estimate]}"),

@@ -1,8 +1,21 @@
-"""The progress column the sweep commands share (rich.progress is imported only by commands
+"""The progress bar and column the commands share (rich.progress is imported only by commands
 that draw a progress bar, not by `coin --help`)."""
 
-from rich.progress import ProgressColumn
+from rich.progress import Progress, ProgressColumn
 from rich.text import Text
+
+
+class Bars(Progress):
+    """rich's Progress, except that stopping one that never showed a bar prints nothing (rich
+    prints an empty line when stderr is not a terminal, which would come before an error)."""
+
+    def stop(self) -> None:
+        if not self.live.is_started:
+            return
+        if not self.tasks:
+            self.live.stop()
+            return
+        super().stop()
 
 
 class RateColumn(ProgressColumn):

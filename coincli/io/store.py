@@ -158,7 +158,9 @@ def _display_name(key: str) -> str:
     if parts[0] == "parameters":
         return parts[-1]
     if parts[0] == "sweep" and parts[1] == "axes" and len(parts) == 4:
-        return f"--{parts[2]} {'LO' if parts[3] == 'lo' else 'HI' if parts[3] == 'hi' else 'cells'}"
+        if parts[3] == "n":
+            return f"--res ({parts[2]} cells)"
+        return f"--{parts[2]} {'LO' if parts[3] == 'lo' else 'HI'}"
     if parts[0] == "sweep":
         return {"dims": "swept axes", "chunk": "--chunk", "fixed": "fixed initial value",
                 "mirror": "mirrored axes (none: --no-mirror)"}.get(
@@ -183,7 +185,8 @@ def differences(stored: dict, wanted: dict) -> list[str]:
     a = flatten_attrs({k: stored.get(k) for k in COMPARED_ATTRS})
     b = flatten_attrs({k: wanted.get(k) for k in COMPARED_ATTRS})
     out = []
-    for key in sorted(set(a) | set(b), key=lambda k: (k.split(".")[0] != "sweep", k)):
+    # the sweep first, then in the attributes' own order (the axes as swept: vy, then vphi)
+    for key in sorted(dict.fromkeys([*a, *b]), key=lambda k: k.split(".")[0] != "sweep"):
         if a.get(key, "absent") != b.get(key, "absent"):
             out.append(f"{_display_name(key)} = {show_value(a.get(key))} in the store, "
                        f"{show_value(b.get(key))} here")
