@@ -6,6 +6,7 @@ A preset names any subset of the sections ``[coin]``, ``[foundation]``, ``[initi
 
 from __future__ import annotations
 
+import os
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +41,9 @@ def load_preset_file(path: Path) -> Preset:
         raise ParameterError(f"malformed preset file {path}: {exc}") from None
     except OSError as exc:
         raise ParameterError(f"cannot read preset file {path}: {exc.strerror}") from None
+    if not data:  # most likely the wrong file, not a wish for every default
+        raise ParameterError(f"preset file {path} is empty: it needs at least one value "
+                             "(presets/paper.toml shows them all)")
     try:
         scene = scene_from_dict(data)
     except TypeError as exc:  # a value of the wrong type for a dataclass field
@@ -60,7 +64,10 @@ def available() -> list[Preset]:
 
 def load(name_or_path: str | None) -> Preset:
     """Load a preset by name (a file in :func:`presets_dir`) or by path to a TOML file."""
-    name_or_path = name_or_path or DEFAULT_PRESET
+    if name_or_path is not None and not isinstance(name_or_path, str | os.PathLike):
+        raise TypeError(f"a preset is a name or the path of a TOML file, got "
+                        f"{type(name_or_path).__name__}")
+    name_or_path = str(name_or_path or DEFAULT_PRESET)
     candidate = Path(name_or_path)
     if candidate.suffix == ".toml" or candidate.exists() or "/" in name_or_path:
         if not candidate.is_file():

@@ -95,7 +95,7 @@ def test_ctrl_c_stops_a_long_simulation_within_two_seconds(tmp_path):
     assert time.monotonic() - sent < 2.0
     assert proc.returncode == 130, (out, err)
     assert "interrupted" in err and "Traceback" not in err
-    assert "up to 1e+11 steps" in err  # announced before it started
+    assert "up to 100,000,000,000 steps" in err  # announced before it started
     assert os.listdir(tmp_path) == []
 
 
