@@ -54,7 +54,8 @@ class Coin:
 
 @dataclass(frozen=True)
 class Foundation:
-    """Winkler foundation with viscous damping acting on each penetrating corner."""
+    """Winkler foundation with viscous damping acting on each penetrating corner: stiffness k
+    (N/m) and damping c (N s/m)."""
 
     k: float = 1.0e4  # N/m
     c: float = 0.5  # N s/m
@@ -62,7 +63,8 @@ class Foundation:
 
 @dataclass(frozen=True)
 class InitialState:
-    """Initial position and velocity of the centroid. ``y0=None`` means y0 = r (as in the paper)."""
+    """Initial position (x0, y0 in m, phi0 in rad) and velocity (vx, vy in m/s, vphi in rad/s) of
+    the centroid. ``y0=None`` means y0 = r (as in the paper)."""
 
     x0: float = 0.0
     y0: float | None = None
@@ -105,6 +107,10 @@ class Integration:
 
 @dataclass(frozen=True)
 class Scene:
+    """Everything one throw needs: the coin, the foundation, gravity g (m/s^2), the initial
+    state and the integration settings, in SI units. Made by :func:`coincli.load_preset`;
+    ``scene.with_overrides(vy=1.2, k=5000)`` gives a changed copy (flat names, see there)."""
+
     coin: Coin = field(default_factory=Coin)
     foundation: Foundation = field(default_factory=Foundation)
     g: float = 9.81
@@ -151,7 +157,9 @@ class Scene:
                     changes[name][key] = value
                     break
             else:
-                raise ParameterError(f"unknown parameter '{key}'")
+                known = ", ".join(["g", *(f.name for obj in groups.values()
+                                          for f in fields(obj))])
+                raise ParameterError(f"unknown parameter '{key}'; known: {known}")
         new = {name: replace(obj, **changes[name]) for name, obj in groups.items()}
         return replace(self, **new, **top)
 
