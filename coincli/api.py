@@ -709,9 +709,9 @@ def render_fractions(result: FractionsOver, out: str | os.PathLike, *,
 
 __all__ = ["Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
            "FractionsProgress", "Method", "Outcome", "ParameterError", "Scene", "Status",
-           "StopReason",
-           "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport", "SweepStart",
-           "SweepTooLong", "Trajectory", "analyze", "basin", "basin_stats", "classify",
-           "estimate_sweep", "fractions", "fractions_over", "load_preset", "open_basin",
-           "open_fractions", "plan_fractions", "plan_sweep", "render_analysis", "render_basin",
-           "render_fractions", "run_fractions", "simulate", "stability", "sweep", "verify_basin"]
+           "StopReason", "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport",
+           "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin", "basin_stats",
+           "classify", "estimate_sweep", "fractions", "fractions_over", "load_preset",
+           "open_basin", "open_fractions", "plan_fractions", "plan_sweep", "render_analysis",
+           "render_basin", "render_fractions", "run_fractions", "simulate", "stability", "sweep",
+           "verify_basin"]
