@@ -723,9 +723,19 @@ def _print_analysis(path: Path, result, data: dict) -> None:
         conf = int(round(100 * opts.confidence))
         exp = Table(title=f"Uncertainty exponent: perturbation method, {p.n_points:,} points, "
                           f"eps {p.eps[0]:.0e} to {p.eps[-1]:.0e}", title_justify="left")
-        for col in (head, "alpha", f"{conf} % interval", "D", "local alpha", "uncertain",
+        for col in (head, "alpha", f"{conf} % interval", "D", "local alpha", "left out",
                     "grid"):
             exp.add_column(col, justify="left" if col == head else "right", no_wrap=True)
+        impossible = False  # a grid alpha outside 0 to 2 (it would make D < 0 or D > 2)
+
+        def grid_alpha(r) -> str:
+            nonlocal impossible
+            alpha = r.grid_exponent.alpha if r.grid_exponent else None
+            if alpha is not None and math.isfinite(alpha) and not 0.0 <= alpha <= 2.0:
+                impossible = True
+                return f"{alpha:.2f}*"
+            return _num(alpha, ".2f")
+
         for r, d in zip(regions, [data, *data["bands"]], strict=True):
             x = r.exponent
             exp.add_row("whole map" if r is w else _span(r), _num(r.alpha, ".2f"),
@@ -734,17 +744,18 @@ def _print_analysis(path: Path, result, data: dict) -> None:
                         _num(None if x is None else x.boundary_dimension, ".2f"),
                         _local(d["perturbation"]["local_exponents"] if d["perturbation"]
                                else []),
-                        percent(r.uncertain_fraction),
-                        _num(r.grid_exponent.alpha if r.grid_exponent else None, ".2f"),
+                        percent(r.uncertain_fraction), grid_alpha(r),
                         style="bold" if r is w else None)
         console.print(exp)
         console.print("alpha: slope of log f(eps) against log eps, f the fraction of points "
                       "whose certain label changes under a perturbation eps (relative to each "
                       f"axis's range; the grid spacing is {1 / (ax0['n'] - 1):.1e}); "
                       "D = 2 - alpha. local alpha: the slope between the two smallest and "
-                      "between the two largest eps with an uncertain point. uncertain: points "
-                      "left out because a label was not certain. grid: alpha by box counting "
-                      "on the map (Attractors.jl's estimator), for comparison.", style="dim",
+                      "between the two largest eps at which some label changes. left out: "
+                      "points whose label (or a perturbed one) was not certain. grid: alpha by "
+                      "box counting on the map (Attractors.jl's estimator), for comparison"
+                      + ("; * outside 0 to 2: no dimension follows, the map does not resolve "
+                         "the scaling there" if impossible else "") + ".", style="dim",
                       highlight=False)
     wada = "; ".join(f"{'whole map' if r is w else _span(r)}: "
                      f"{'yes' if r.wada.is_wada else 'no'}" for r in regions)
