@@ -54,35 +54,36 @@ def _flag(flags: str, text: str, panel: str | None = None):
 PresetOpt = Annotated[str, typer.Option("--preset", "-p", metavar="NAME|FILE",
                                         help="Preset name (see `coin presets`) or path to a "
                                              "TOML file.", rich_help_panel=PHYS)]
-DiameterOpt = Annotated[float | None, _opt("--diameter", "Coin diameter d.", "M", PHYS)]
-ThicknessOpt = Annotated[float | None, _opt("--thickness", "Coin thickness t.", "M", PHYS)]
-MassOpt = Annotated[float | None, _opt("--mass", "Coin mass m.", "KG", PHYS)]
+DiameterOpt = Annotated[float | None, _opt("--diameter", "Coin diameter d.", "m", PHYS)]
+ThicknessOpt = Annotated[float | None, _opt("--thickness", "Coin thickness t.", "m", PHYS)]
+MassOpt = Annotated[float | None, _opt("--mass", "Coin mass m.", "kg", PHYS)]
 InertiaOpt = Annotated[float | None, _opt("--inertia", "Moment of inertia I about the axis "
-                                          "normal to the plane.", "KG*M^2", PHYS)]
-KOpt = Annotated[float | None, _opt("--k", "Foundation stiffness per corner.", "N/M", PHYS)]
-COpt = Annotated[float | None, _opt("--c", "Viscous damping per corner.", "N*S/M", PHYS)]
-GOpt = Annotated[float | None, _opt("--g", "Gravity.", "M/S^2", PHYS)]
+                                          "normal to the plane.", "kg*m^2", PHYS)]
+KOpt = Annotated[float | None, _opt("--k", "Foundation stiffness per corner.", "N/m", PHYS)]
+COpt = Annotated[float | None, _opt("--c", "Viscous damping per corner.", "N*s/m", PHYS)]
+GOpt = Annotated[float | None, _opt("--g", "Gravity.", "m/s^2", PHYS)]
 
-X0Opt = Annotated[float | None, _opt("--x0", "Initial x [dim]\\[0][/dim]", "M", INIT)]
-Y0Opt = Annotated[float | None, _opt("--y0", "Initial height of the centroid [dim]\\[r: "
-                                     "standing on a corner, as in the paper][/dim]", "M", INIT)]
-Phi0Opt = Annotated[float | None, _opt("--phi0", "Initial angle [dim]\\[0][/dim]", "RAD",
+X0Opt = Annotated[float | None, _opt("--x0", "Initial x [dim]\\[0][/dim]", "m", INIT)]
+Y0Opt = Annotated[float | None, _opt("--y0", "Initial height of the centroid [dim]\\[r, the "
+                                     "half diagonal: as high as a coin balanced on a corner, "
+                                     "the paper's start][/dim]", "m", INIT)]
+Phi0Opt = Annotated[float | None, _opt("--phi0", "Initial angle [dim]\\[0][/dim]", "rad",
                                        INIT)]
 VxOpt = Annotated[float | None, _opt("--vx", "Initial horizontal velocity [dim]\\[0][/dim]",
-                                     "M/S", INIT)]
+                                     "m/s", INIT)]
 VyOpt = Annotated[float | None, _opt("--vy", "Initial vertical velocity [dim]\\[0][/dim]",
-                                     "M/S", INIT)]
+                                     "m/s", INIT)]
 VphiOpt = Annotated[float | None, _opt("--vphi", "Initial angular velocity [dim]\\[0][/dim]",
-                                       "RAD/S", INIT)]
+                                       "rad/s", INIT)]
 
 MethodOpt = Annotated[str | None, _opt("--method", "Integration method (see `coin methods`).",
                                        "NAME", INTEG)]
 DtOpt = Annotated[float | None, _opt("--dt", "Step of a fixed-step method, first step of an "
-                                     "adaptive one.", "S", INTEG)]
+                                     "adaptive one.", "s", INTEG)]
 RtolOpt = Annotated[float | None, _opt("--rtol", "Relative tolerance of an adaptive method "
                                        "(the first rung of the verification ladder).", "RTOL",
                                        INTEG)]
-TEndOpt = Annotated[float | None, _opt("--t-end", "End time.", "S", INTEG)]
+TEndOpt = Annotated[float | None, _opt("--t-end", "End time.", "s", INTEG)]
 StopOpt = Annotated[bool | None, _flag("--stop-on-settle/--full", "Stop as soon as the outcome "
                                        "is decided (E < E_crit), or always run to --t-end as "
                                        "the paper does [dim]\\[paper: --stop-on-settle][/dim]",

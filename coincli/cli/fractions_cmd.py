@@ -56,8 +56,9 @@ def _dist(name: str, text: str):
 
 Y0Dist = Annotated[str | None, _dist("y0", "Initial height of the centroid, m, or in multiples "
                                      "of the half diagonal r (r:5r) [dim]\\[r][/dim].")]
-Phi0Dist = Annotated[str | None, _dist("phi0", "Initial angle, rad; 0:2pi is a random landing "
-                                       "angle [dim]\\[0][/dim].")]
+Phi0Dist = Annotated[str | None, _dist("phi0", "Initial angle, rad; -pi:pi is a random "
+                                       "landing angle, symmetric so that P(n) = P(-n) "
+                                       "[dim]\\[0][/dim].")]
 VxDist = Annotated[str | None, _dist("vx", "Initial horizontal velocity, m/s "
                                      "[dim]\\[0][/dim].")]
 VyDist = Annotated[str | None, _dist("vy", "Initial vertical velocity, m/s "
