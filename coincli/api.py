@@ -704,6 +704,9 @@ def render_fractions(result: FractionsOver, out: str | os.PathLike, *,
     SVG or PDF by the file's suffix)."""
     from .io.fractions_plot import plot_over
 
+    if not isinstance(result, FractionsOver):
+        raise TypeError(f"render_fractions draws a continuation (coincli.fractions_over), got "
+                        f"{type(result).__name__}")
     return plot_over(result, out, title=title, dpi=dpi)
 
 

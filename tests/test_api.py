@@ -229,6 +229,9 @@ def test_results_print_in_one_short_line():
     (lambda s: coincli.basin(s, res=8, threads="2"), ParameterError, "whole number"),
     (lambda s: coincli.basin(s, res=8, progress=3), TypeError, "progress must be a function"),
     (lambda s: coincli.basin_stats({}), TypeError, "a basin must be an xarray Dataset"),
+    (lambda s: coincli.render_fractions(None, "x.png"), TypeError, "draws a continuation"),
+    (lambda s: coincli.load_preset(3), TypeError, "a preset is a name or the path"),
+    (lambda s: s.with_overrides(foo=1), ParameterError, "known: g, diameter"),
 ])
 def test_wrong_arguments_are_named_before_any_work(call, kind, match):
     with pytest.raises(kind, match=match):
