@@ -58,7 +58,7 @@ def on_threads(run, states: np.ndarray, threads: int) -> list:
 
 def main() -> None:
     import coincli
-    from coincli.enums import Certainty, Status
+    from coincli.enums import Certainty, Method, Status
     from coincli.integrators.batch import label_states
     from coincli.montecarlo.batch import BatchTask, compute_batch, make_fraction_spec
     from coincli.params import model_params, run_settings
@@ -83,7 +83,7 @@ def main() -> None:
     p, settings = model_params(scene), run_settings(scene.integration)
     refs = []
     for rtol in REFERENCE_RTOLS:
-        at = settings._replace(rtol=rtol, stop_on_settle=True)
+        at = settings._replace(method=int(Method.EVENT), rtol=rtol, stop_on_settle=True)
         outs = on_threads(lambda s, at=at: label_states(p, at, s), states, args.threads)
         refs.append((np.concatenate([o.quarter_turns for o in outs]).astype(int),
                      np.concatenate([o.status for o in outs])))
@@ -91,6 +91,8 @@ def main() -> None:
     reference = (st11 == Status.SETTLED) & (st12 == Status.SETTLED) & (n11 == n12)
 
     judged = certain & reference
+    if not judged.any():
+        sys.exit("no certain label to judge (a single-pass preset?)")
     n_differs = judged & (n != n12)
     parity_differs = judged & (n % 2 != n12 % 2)
     count = int(judged.sum())

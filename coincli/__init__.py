@@ -25,7 +25,16 @@ _API = ("Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan", "F
 __all__ = ["__version__", *_API]
 
 
+# names that need no more than a light module (coincli.api imports numpy and the kernels' modules)
+_LIGHT = {"Scene": "params", "ParameterError": "params", "Certainty": "enums", "Engine": "enums",
+          "Method": "enums", "Status": "enums", "StopReason": "enums"}
+
+
 def __getattr__(name: str):
+    if name in _LIGHT:
+        import importlib
+
+        return getattr(importlib.import_module(f".{_LIGHT[name]}", __name__), name)
     if name in _API:
         from . import api
 

@@ -115,11 +115,12 @@ class AnalysisOptions:
         if not (isinstance(self.confidence, int | float) and 0.0 < self.confidence < 1.0):
             raise ParameterError(f"confidence must be between 0 and 1 (e.g. 0.95), got "
                                  f"{self.confidence!r}")
-        axes = tuple(range(len(shape)))
-        if self.direction not in ("random", "axis", *axes, *map(str, axes)) or \
-                isinstance(self.direction, bool):
+        d = self.direction
+        index = isinstance(d, int | np.integer) and not isinstance(d, bool) and \
+            0 <= d < len(shape)
+        if not index and d not in ("random", "axis"):
             raise ParameterError(f"direction must be 'random', 'axis' or an axis index "
-                                 f"({', '.join(map(str, axes))}), got {self.direction!r}")
+                                 f"({', '.join(map(str, range(len(shape))))}), got {d!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -152,7 +153,8 @@ class RegionAnalysis:
     @property
     def uncertain_fraction(self) -> float:
         """Fraction of the perturbation triples left out because a label was not certain
-        (over every eps), NaN without points."""
+        (over every eps), NaN without points: the "left out" column of coin basin analyze
+        (the name is that of the JSON key, kept for the stores and scripts that read it)."""
         pert = self.perturbation
         if pert is None or pert.n_points == 0:
             return math.nan
@@ -250,7 +252,8 @@ class BasinAnalysis:
         parts.append(f"Wada: {'yes' if w.wada.is_wada else 'no'}")
         names = " x ".join(a["name"] for a in self.axes)
         return (f"BasinAnalysis({names}, whole map: {', '.join(parts)}; "
-                f"{len(self.bands)} bands of {self.axes[0]['name']})")
+                f"{len(self.bands)} band{'s' * (len(self.bands) != 1)} of "
+                f"{self.axes[0]['name']})")
 
     def to_dict(self) -> dict:
         name = self.axes[0]["name"]

@@ -15,6 +15,7 @@ takes a basin takes a Dataset from :func:`basin` or :func:`open_basin`, or the p
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import time
 from collections.abc import Callable
@@ -77,7 +78,7 @@ class SweepPlan:
 
         g = self.grid
         axes = " x ".join(f"{a.name} {a.lo:g}:{a.hi:g} ({a.n})" for a in g.axes)
-        tiles = len(g.tiles())
+        tiles = math.prod(g.tile_grid)
         return (f"SweepPlan({axes}, {tiles} tile{'s' * (tiles != 1)}, {g.work_cells:,} of "
                 f"{g.n_cells:,} cells computed, {describe(self.scene.integration)})")
 
@@ -640,8 +641,8 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
     and labels are kept in (and resumed from) that Zarr store. Setting ``stop`` (a
     threading.Event) ends the run early with what it has: the result then says
     ``stopped=StopReason.INTERRUPTED``. Ctrl-C (a notebook's interrupt) raises
-    KeyboardInterrupt, as it does in :func:`basin`; a store keeps every finished batch for a
-    resume. Returns a :class:`coincli.montecarlo.Fractions`."""
+    KeyboardInterrupt, as it does in :func:`basin`; a store keeps every batch counted so far
+    for a resume. Returns a :class:`coincli.montecarlo.Fractions`."""
     plan = plan_fractions(scene, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi, samples=samples,
                           precision=precision, of=of, max_samples=max_samples, seed=seed,
                           sampler=sampler, batch=batch, force=force)
@@ -681,7 +682,9 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                   progress: Callable[[FractionsProgress], None] | None = None,
                   stop=None) -> Fractions | FractionsOver:
     """Run a Monte Carlo run planned by :func:`plan_fractions` (see :func:`fractions` for the
-    options): a Fractions for a plain run, a FractionsOver for a continuation."""
+    options): a Fractions for a plain run, a FractionsOver for a continuation. Unlike
+    :func:`fractions`, it does not raise on Ctrl-C: it returns what it has, with
+    ``stopped=StopReason.INTERRUPTED`` (as :func:`sweep` returns a report)."""
     from .io.fractions_run import run_fractions as run
 
     _check_progress(progress)

@@ -11,6 +11,7 @@ trajectory returned is the last rung's.
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from dataclasses import dataclass, field
 from typing import NamedTuple
@@ -97,7 +98,8 @@ class Trajectory:
         if self.events is not None and len(self.events):
             kept.append(f"{len(self.events):,} events")
         return (f"Trajectory({n}, {self.status}{when}, {self.certainty}{rung}, "
-                f"{self.steps:,} steps{''.join(', ' + k for k in kept)})")
+                f"{self.steps:,} step{'s' * (self.steps != 1)}"
+                f"{''.join(', ' + k for k in kept)})")
 
     @property
     def pose(self) -> str:
@@ -167,11 +169,16 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     method = check_step(scene, force=force)
     integ = scene.integration
     _check_sample_dt(sample_dt, integ.t_end)
+    try:
+        engine = Engine[engine.upper()] if isinstance(engine, str) else Engine(engine)
+    except (KeyError, ValueError):
+        raise ParameterError(f"engine must be one of {', '.join(e.label for e in Engine)}, "
+                             f"got {engine!r}") from None
     p = model_params(scene)
     base = run_settings(integ, float(sample_dt or 0.0))
     ladder = ladder_of(integ)
     state0 = state_array(scene)
-    if sample_dt is not None:
+    if sample_dt:
         samples = np.empty((int(integ.t_end / sample_dt) + 3, SAMPLE_COLUMNS))
     else:
         samples = np.empty((0, SAMPLE_COLUMNS))
@@ -207,13 +214,13 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
 
 
 def _check_sample_dt(sample_dt, t_end: float) -> None:
-    """ParameterError (one line) unless ``sample_dt`` is None or a usable interval."""
-    if sample_dt is None:
-        return
-    if isinstance(sample_dt, bool) or not isinstance(sample_dt, int | float) or \
-            not math.isfinite(sample_dt) or sample_dt <= 0:
-        raise ParameterError(f"sample_dt must be a number of seconds > 0 (or None), got "
-                             f"{sample_dt!r}")
+    """ParameterError (one line) unless ``sample_dt`` is None, 0 or a usable interval."""
+    if sample_dt is None or (isinstance(sample_dt, numbers.Real) and sample_dt == 0):
+        return  # keep no states
+    if isinstance(sample_dt, bool) or not isinstance(sample_dt, numbers.Real) or \
+            not math.isfinite(sample_dt) or sample_dt < 0:
+        raise ParameterError(f"sample_dt must be a number of seconds > 0 (0 or None: keep "
+                             f"none), got {sample_dt!r}")
     if t_end / sample_dt > MAX_SAMPLES:
         raise ParameterError(f"sample_dt = {sample_dt:g} s would keep {t_end / sample_dt:.3g} "
                              f"states over t_end = {t_end:g} s, at most {MAX_SAMPLES:,}: take "

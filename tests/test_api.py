@@ -192,6 +192,8 @@ def test_worked_example_runs(tmp_path):
 
 
 def test_public_names_are_one_list_and_all_resolve():
+    import coincli.api
+
     api_names = set(coincli.api.__all__)
     assert set(coincli.__all__) - {"__version__"} == api_names
     for name in api_names:
@@ -225,6 +227,7 @@ def test_results_print_in_one_short_line():
     (lambda s: coincli.simulate("paper"), TypeError, "scene must be a coincli.Scene"),
     (lambda s: coincli.basin("paper", res=8), TypeError, "scene must be a coincli.Scene"),
     (lambda s: coincli.simulate(s, sample_dt=-0.01), ParameterError, "sample_dt must be"),
+    (lambda s: coincli.simulate(s, engine="fast"), ParameterError, "engine must be one of"),
     (lambda s: coincli.simulate(s, sample_dt=1e-12), ParameterError, "at most 10,000,000"),
     (lambda s: coincli.basin(s, res=8, threads="2"), ParameterError, "whole number"),
     (lambda s: coincli.basin(s, res=8, progress=3), TypeError, "progress must be a function"),
@@ -242,14 +245,20 @@ def test_analysis_settings_are_checked_before_any_work():
     ds = coincli.basin(coincli.load_preset("paper"), **SMALL)
     with pytest.raises(ParameterError, match="confidence must be between 0 and 1"):
         coincli.analyze(ds, confidence=2.0, points=0, bands=1)
-    with pytest.raises(ParameterError, match="direction must be 'random', 'axis' or an axis"):
-        coincli.analyze(ds, direction="up", points=0, bands=1)
+    for direction in ("up", "1", 1.0, True, 2):
+        with pytest.raises(ParameterError, match="direction must be 'random', 'axis' or an"):
+            coincli.analyze(ds, direction=direction, points=0, bands=1)
 
 
 def test_each_open_function_refuses_the_other_kind_of_store(tmp_path):
     coincli.basin(coincli.load_preset("paper"), store=tmp_path / "b.zarr", **SMALL)
     with pytest.raises(ParameterError, match="not a coin fractions store"):
         coincli.open_fractions(tmp_path / "b.zarr")
+    coincli.fractions(coincli.load_preset("paper"), samples=8, batch=8,
+                      store=tmp_path / "f.zarr")
+    for read in (coincli.open_basin, coincli.basin_stats):
+        with pytest.raises(ParameterError, match="not a coin basin store"):
+            read(tmp_path / "f.zarr")
     (tmp_path / "file").write_text("x")
     for run in (lambda: coincli.basin(coincli.load_preset("paper"), store=tmp_path / "file",
                                       **SMALL),
@@ -257,3 +266,18 @@ def test_each_open_function_refuses_the_other_kind_of_store(tmp_path):
                                           store=tmp_path / "file")):
         with pytest.raises(ParameterError, match="exists and is not a directory"):
             run()
+
+
+def test_light_names_load_without_the_api():
+    code = ("import sys, coincli; coincli.Scene, coincli.Status, coincli.ParameterError; "
+            "print('coincli.api' in sys.modules, 'numpy' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["False", "False"]
+
+
+def test_simulate_keeps_no_states_for_sample_dt_zero_and_takes_an_engine_by_name():
+    scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
+    run = coincli.simulate(scene, sample_dt=0, engine="python")
+    assert run.samples is None or len(run.samples) == 0
+    assert run.quarter_turns == 6

@@ -462,3 +462,22 @@ def test_a_mirrored_map_is_the_full_map(ranges):
         np.testing.assert_array_equal(half[name].values, full[name].values, err_msg=name)
     turns = half["quarter_turns"].values
     assert np.array_equal(turns[::-1, ::-1] if "vx" in ranges else turns[:, ::-1], -turns)
+
+
+def test_a_resumed_sweep_says_so_and_counts_only_mirrored_cells_as_mirrored(tmp_path):
+    import threading
+
+    path = str(tmp_path / "r.zarr")
+    ranges = dict(vy=(0.3, 1.0), vphi=(-15.0, 15.0))
+    plan = coincli.plan_sweep(coincli.load_preset("paper"), res=16, chunk=8, **ranges)
+    stop = threading.Event()  # after the first work tile (and its mirror image)
+    report = coincli.sweep(plan, path, threads=1, progress=lambda u: stop.set(), stop=stop)
+    assert report.interrupted and report.tiles_done == 2 and report.mirrored_cells == 64
+    result = coin(path, "--vy", "0.3:1", "--vphi", "-15:15", "--res", "16", "--chunk", "8")
+    text = " ".join(result.output.split())
+    assert result.exit_code == 0
+    assert "resuming " in text and "2 of 4 tiles done already, 2 tiles to compute" in text
+    assert "half of them as the mirror images" in text
+    # one tile that is its own mirror image: every cell computed, none said to be mirrored
+    one = coin(str(tmp_path / "one.zarr"), "--vy", "0.3:1", "--vphi", "-15:15", "--res", "8")
+    assert one.exit_code == 0 and "mirror" not in one.output

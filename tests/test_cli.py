@@ -221,6 +221,7 @@ def test_installed_script_bad_input_has_no_traceback():
     (["methods", "--dt", "1"], "No such option: --dt"),
     (["basin", "sweep"], "Missing argument 'STORE'"),
     (["simulate", "extra"], "unexpected extra argument"),
+    (["simulate", "--vy"], "requires an argument"),
 ])
 def test_a_mistyped_command_line_is_one_error_line(args, fragment):
     """click's own usage errors too, not only ours: one line naming the help, exit code 2."""
@@ -230,3 +231,30 @@ def test_a_mistyped_command_line_is_one_error_line(args, fragment):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and fragment in lines[0]
     assert "--help')" in lines[0]
+
+
+def test_an_unexpected_error_is_not_hidden_and_abort_is_exit_1():
+    """A bug must surface as itself, not as an error of the usage-error handling."""
+    import typer
+
+    from coincli import cli
+
+    @cli.app.command("boom-test", hidden=True)
+    def boom(abort: bool = False) -> None:
+        if abort:
+            raise typer.Abort()
+        raise RuntimeError("boom")
+
+    try:
+        with pytest.raises(RuntimeError, match="boom"):
+            cli.run(["boom-test"])
+        assert cli.run(["boom-test", "--abort"]) == 1
+    finally:
+        cli.app.registered_commands[:] = [c for c in cli.app.registered_commands
+                                          if c.name != "boom-test"]
+
+
+def test_an_empty_preset_file_is_refused(in_tmp):
+    Path("empty.toml").write_text("")
+    result = CliRunner().invoke(app, ["simulate", "--preset", "empty.toml", "--no-rrd"])
+    assert result.exit_code == 2 and "is empty" in result.output

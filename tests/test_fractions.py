@@ -339,3 +339,13 @@ def test_ctrl_c_raises_out_of_fractions_and_keeps_the_batches(tmp_path):
                           store=tmp_path / "f.zarr")
     kept = coincli.open_fractions(tmp_path / "f.zarr")
     assert int(kept["filled"].values.astype(bool).sum()) >= 2
+
+
+def test_a_resumed_run_says_what_the_store_held(tmp_path):
+    store = str(tmp_path / "f.zarr")
+    args = ["fractions", "--store", store, "--batch", "1024", "--threads", "1"]
+    first = CliRunner().invoke(app, [*args, "--samples", "2048"])
+    assert first.exit_code == 0 and "were in the store already" not in first.output
+    more = CliRunner().invoke(app, [*args, "--samples", "4096"])
+    assert more.exit_code == 0, more.output
+    assert "2,048 samples were in the store already" in " ".join(more.output.split())

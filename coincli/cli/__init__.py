@@ -70,18 +70,19 @@ def run(args: list[str] | None = None) -> int:
     exceptions = _click_exceptions()
     try:
         code = app(args=args, standalone_mode=False)
-    except exceptions.NoArgsIsHelpError as exc:  # `coin` alone: the help, as click shows it
-        exc.show()
+    except exceptions.NoArgsIsHelpError as exc:  # `coin` alone: typer has printed the help
+        if exc.format_message():
+            exc.show()
         return exc.exit_code
     except exceptions.UsageError as exc:
         from .common import fail
 
-        where = f" (see '{exc.ctx.command_path} --help')" if exc.ctx is not None else ""
-        return fail(exc.format_message().rstrip(".") + where).exit_code
+        command = exc.ctx.command_path if exc.ctx is not None else "coin"
+        return fail(f"{exc.format_message().rstrip('.')} (see '{command} --help')").exit_code
     except exceptions.ClickException as exc:
         exc.show()
         return exc.exit_code
-    except exceptions.Abort:
+    except typer.Abort:
         return 1
     return code if isinstance(code, int) else 0
 

@@ -527,14 +527,15 @@ def stats_command(
     if not stats["computed"]:
         summary.append(("cost", "nothing computed yet"))
     elif "cpu_seconds" in cost:
-        summary.append(("cost", f"{cost['cpu_seconds']:.4g} CPU s, "
-                                f"{cost['cpu_ms_per_cell']:.3g} ms a cell, "
-                                f"{cost['trajectories_per_cpu_second']:,.0f} cells per CPU s"))
+        summary.append(("cost", f"{_num(cost['cpu_seconds'], '.4g')} CPU s, "
+                                f"{_num(cost['cpu_ms_per_cell'], '.3g')} ms a cell, "
+                                f"{_num(cost['trajectories_per_cpu_second'], ',.0f')} cells "
+                                "per CPU s"))
     if cost.get("wall_seconds"):
         runs = cost["runs"]
-        summary.append(("wall", f"{cost['wall_seconds']:.4g} s over {runs} "
+        summary.append(("wall", f"{_num(cost['wall_seconds'], '.4g')} s over {runs} "
                                 f"run{'s' if runs != 1 else ''}, "
-                                f"{cost['trajectories_per_second']:,.0f} cells/s"))
+                                f"{_num(cost['trajectories_per_second'], ',.0f')} cells/s"))
     print_rows(console, summary)
 
 

@@ -57,8 +57,8 @@ def _dist(name: str, text: str):
 Y0Dist = Annotated[str | None, _dist("y0", "Initial height of the centroid, m, or in multiples "
                                      "of the half diagonal r (r:5r) [dim]\\[r][/dim].")]
 Phi0Dist = Annotated[str | None, _dist("phi0", "Initial angle, rad; -pi:pi is a random "
-                                       "landing angle, symmetric so that P(n) = P(-n) "
-                                       "[dim]\\[0][/dim].")]
+                                       "landing angle (with vx and vphi symmetric about 0, "
+                                       "as by default, P(n) = P(-n)) [dim]\\[0][/dim].")]
 VxDist = Annotated[str | None, _dist("vx", "Initial horizontal velocity, m/s "
                                      "[dim]\\[0][/dim].")]
 VyDist = Annotated[str | None, _dist("vy", "Initial vertical velocity, m/s "

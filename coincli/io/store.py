@@ -158,9 +158,8 @@ def _display_name(key: str) -> str:
     if parts[0] == "parameters":
         return parts[-1]
     if parts[0] == "sweep" and parts[1] == "axes" and len(parts) == 4:
-        if parts[3] == "n":
-            return f"--res ({parts[2]} cells)"
-        return f"--{parts[2]} {'LO' if parts[3] == 'lo' else 'HI'}"
+        return {"n": f"--res ({parts[2]} cells)", "lo": f"--{parts[2]} LO",
+                "hi": f"--{parts[2]} HI"}.get(parts[3], f"{parts[2]} {parts[3]}")
     if parts[0] == "sweep":
         return {"dims": "swept axes", "chunk": "--chunk", "fixed": "fixed initial value",
                 "mirror": "mirrored axes (none: --no-mirror)"}.get(
@@ -187,6 +186,8 @@ def differences(stored: dict, wanted: dict) -> list[str]:
     out = []
     # the sweep first, then in the attributes' own order (the axes as swept: vy, then vphi)
     for key in sorted(dict.fromkeys([*a, *b]), key=lambda k: k.split(".")[0] != "sweep"):
+        if key.startswith("sweep.axes.") and key.endswith((".units", ".long_name")):
+            continue  # they follow from the axis's name, which differs too
         if a.get(key, "absent") != b.get(key, "absent"):
             out.append(f"{_display_name(key)} = {show_value(a.get(key))} in the store, "
                        f"{show_value(b.get(key))} here")

@@ -4,7 +4,7 @@ initial conditions (y0, phi0, vx, vy, vphi) are drawn from distributions, with 9
 The public entry point is :func:`coincli.fractions` (:func:`coincli.api.fractions`)::
 
     import coincli
-    result = coincli.fractions(coincli.load_preset("paper"), phi0="0:2pi", precision=0.001)
+    result = coincli.fractions(coincli.load_preset("paper"), phi0="-pi:pi", precision=0.001)
     result.standing        # {"probability": ..., "low": ..., "high": ..., "count": ..., "of": ...}
 
 This package holds the pure computation (no files, no threads, no terminal): the distributions
