@@ -12,7 +12,7 @@ parity differs (lying against standing), the only ones that can move P(standing)
 of the latter among C certain labels, their rate is below 3 / C at 95 % (the rule of three).
 
     python benchmarks/fractions_labels.py              # 262,144 throws, about 2 min on 2 cores
-    python benchmarks/fractions_labels.py --preset thick --samples 65536   # about 3 min
+    python benchmarks/fractions_labels.py --preset thick --samples 65536 --rk4 600  # 6 min
 
 The reference shares its stepping code with the default method; `ladder_design.py --box` judges
 the same kind of throws against fixed-step RK4, which shares none. Writes
@@ -56,6 +56,33 @@ def on_threads(run, states: np.ndarray, threads: int) -> list:
         return list(pool.map(lambda idx: run(states[idx]), parts))
 
 
+def against_rk4(scene, states, n, n_ref, judged, differs, sampled: int, threads: int) -> dict:
+    """The independent reference on the throws where the default and the event reference
+    differ, and on ``sampled`` judged throws drawn at random (how many of them are robust:
+    RK4 settled with the event reference's n), so that the certain-and-wrong rate over the
+    robust throws can be estimated, as the ladder study defines it."""
+    from ladder_design import reference_labels
+
+    picked = np.flatnonzero(differs)
+    q, st = reference_labels(scene, states[picked], threads)
+    q = q.astype(int)
+    settled = st == 0
+    robust_wrong = settled & (q == n_ref[picked])
+    draw = np.sort(np.random.default_rng(7).choice(np.flatnonzero(judged),
+                                                   min(sampled, int(judged.sum())),
+                                                   replace=False))
+    qs, sts = reference_labels(scene, states[draw], threads)
+    robust_fraction = float(((sts == 0) & (qs.astype(int) == n_ref[draw])).mean())
+    robust = robust_fraction * int(judged.sum())
+    return {"differing_reference": int(robust_wrong.sum()),
+            "differing_default": int((settled & (q == n[picked])).sum()),
+            "differing_neither": int((~robust_wrong & ~(settled & (q == n[picked]))).sum()),
+            "differing_reference_parity": int((robust_wrong & (n[picked] % 2 != n_ref[picked]
+                                                               % 2)).sum()),
+            "sampled": int(draw.size), "robust_fraction": robust_fraction,
+            "wrong_robust_rate": float(robust_wrong.sum() / robust) if robust else None}
+
+
 def main() -> None:
     import coincli
     from coincli.enums import Certainty, Method, Status
@@ -67,6 +94,10 @@ def main() -> None:
     parser.add_argument("--preset", default="paper", help="a preset name or TOML file")
     parser.add_argument("--samples", type=int, default=262_144)
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--rk4", type=int, default=0, metavar="N",
+                        help="also judge the differing throws, and N certain ones drawn at "
+                             "random, against fixed-step RK4 (the ladder study's independent "
+                             "reference, about a second a throw on the thick coin)")
     args = parser.parse_args()
     scene = coincli.load_preset(args.preset)
     states = box_throws(scene, args.samples)
@@ -114,8 +145,11 @@ def main() -> None:
         "differing": [{"sample": int(i), "n": int(n[i]), "n_reference": int(n12[i]),
                        "rung": int(rung[i])} for i in np.flatnonzero(n_differs)],
         "default_seconds": default_seconds,
-        "seconds": time.time() - started, "command": " ".join(sys.argv),
     }
+    if args.rk4:
+        result["rk4"] = against_rk4(scene, states, n, n12, judged, n_differs, args.rk4,
+                                    args.threads)
+    result.update(seconds=time.time() - started, command=" ".join(sys.argv))
     here = Path(__file__).resolve().parent
     name = "" if args.preset == "paper" else f"-{Path(args.preset).stem}"
     (here / f"fractions-labels{name}.json").write_text(json.dumps(result, indent=2) + "\n")
@@ -128,6 +162,14 @@ def main() -> None:
     if flips == 0:
         print(f"rate of lying/standing errors below {3 / count:.2e} "
               f"({100 * 3 / count:.4f} percentage points) at 95 %")
+    if args.rk4:
+        r = result["rk4"]
+        print(f"RK4 on the {result['n_differs']} that differ: {r['differing_reference']} as the "
+              f"reference (robust: the default is wrong), {r['differing_default']} as the "
+              f"default, {r['differing_neither']} neither; on {r['sampled']} certain throws "
+              f"drawn at random, {r['robust_fraction']:.1%} robust: the default is certain and "
+              f"wrong on about {r['wrong_robust_rate']:.3%} of the robust throws "
+              f"({r['differing_reference_parity']} of them lying for standing)")
     print(f"{result['seconds']:.0f} s ({default_seconds:.0f} s the default labels)")
 
 
