@@ -28,7 +28,7 @@ from .common import (
     print_json,
     user_errors,
 )
-from .text import say
+from .text import percent, say
 
 
 def parse_range(text: str, option: str) -> tuple[float, float]:
@@ -142,10 +142,11 @@ def accuracy_command(
 
 def print_study(study) -> None:
     cells = study.robust.size
-    say(console, f"References on {cells} cells: event rtol=1e-12 and rk4 h=2.5e-7 agree on "
-                 f"{study.reference_agreement:.1%}; the {study.robust_cells} cells where both "
+    say(console, f"References on {cells} cells: event at rtol = 1e-12 and rk4 at h = 2.5e-7 "
+                 f"agree on {percent(study.reference_agreement)}; the {study.robust_cells} "
+                 "cells where both "
                  f"settle to the same n are the robust cells.")
-    say(console, f"Trajectory reference: event and dopri5 at rtol=1e-12 differ by "
+    say(console, f"Trajectory reference: event and dopri5 at rtol = 1e-12 differ by "
                  f"{study.trajectory_reference_gap:.1e} (median state error, natural units).")
     table = Table(title="Work and precision (labels: robust cells)", title_justify="left",
                   box=box.SIMPLE_HEAD, pad_edge=False)
@@ -157,11 +158,11 @@ def print_study(study) -> None:
         table.add_row(p.setting.method.label, f"{'rtol' if p.setting.adaptive else 'h'}="
                       f"{p.setting.knob:g}" + (" *" if best is p else ""),
                       f"{p.cpu_per_trajectory * 1e3:.3g}", f"{p.trajectory_error:.2e}",
-                      f"{p.label_error:.2%}", f"{p.nonfinite + p.unsettled:,}")
+                      percent(p.label_error), f"{p.nonfinite + p.unsettled:,}")
     if study.paper_point is not None:
         pp = study.paper_point
         table.add_row("[bold]paper[/]", "h=1e-6, 2 s", f"{pp.cpu_per_trajectory * 1e3:.3g}",
-                      f"{pp.trajectory_error:.2e}", f"{pp.label_error:.2%}", "")
+                      f"{pp.trajectory_error:.2e}", percent(pp.label_error), "")
     console.print(table)
     if best is not None:
         say(console, "* the cheapest setting whose label error is below 1 % with 95 % "
@@ -173,8 +174,8 @@ def print_study(study) -> None:
     if vp is not None:
         say(console, f"[bold]Default, verified[/] ({vp.setting.label}): "
                      f"{vp.cpu_per_trajectory * 1e3:.3g} ms a cell; of the {study.robust_cells} "
-                     f"robust cells {vp.label_error:.2%} certain and wrong, "
-                     f"{vp.uncertain:.2%} uncertain.")
+                     f"robust cells {percent(vp.label_error)} certain and wrong, "
+                     f"{percent(vp.uncertain)} uncertain.")
 
 
 def run_stability(scene, json_out: bool) -> None:
