@@ -27,6 +27,20 @@ class _Named(IntEnum):
             return int.__format__(self, spec)
         return format(self.label, spec)
 
+    @classmethod
+    def parse(cls, value):
+        """A member from its name (``"event"``, any case) or the member itself; ValueError
+        otherwise, naming the members."""
+        if isinstance(value, cls):
+            return value
+        if isinstance(value, str):
+            try:
+                return cls[value.strip().upper()]
+            except KeyError:
+                pass
+        raise ValueError(f"unknown {cls.__name__.lower()} {value!r}; available: "
+                         f"{', '.join(m.label for m in cls)}")
+
 
 class Status(_Named):
     """How a run (or a basin cell) ended. Only SETTLED gives a final count of quarter turns."""
@@ -80,24 +94,6 @@ class Method(_Named):
     RK4 = 2
     DOPRI5 = 3
     EVENT = 4
-
-    @property
-    def label(self) -> str:
-        """The name a user types: ``symplectic_euler``, ``event``..."""
-        return super().label
-
-    @classmethod
-    def parse(cls, value: str | int | Method) -> Method:
-        """A member from its name (``"event"``), its member or its id; ValueError otherwise."""
-        if isinstance(value, cls):
-            return value
-        if isinstance(value, str):
-            try:
-                return cls[value.strip().upper()]
-            except KeyError:
-                pass
-        raise ValueError(f"unknown method {value!r}; available: "
-                         f"{', '.join(m.label for m in cls)}")
 
 
 class Certainty(_Named):

@@ -170,8 +170,8 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     integ = scene.integration
     _check_sample_dt(sample_dt, integ.t_end)
     try:
-        engine = Engine[engine.upper()] if isinstance(engine, str) else Engine(engine)
-    except (KeyError, ValueError):
+        engine = Engine.parse(engine)
+    except ValueError:
         raise ParameterError(f"engine must be one of {', '.join(e.label for e in Engine)}, "
                              f"got {engine!r}") from None
     p = model_params(scene)

@@ -144,8 +144,7 @@ def print_study(study) -> None:
     cells = study.robust.size
     say(console, f"References on {cells} cells: event at rtol = 1e-12 and rk4 at h = 2.5e-7 "
                  f"agree on {percent(study.reference_agreement)}; the {study.robust_cells} "
-                 "cells where both "
-                 f"settle to the same n are the robust cells.")
+                 "cells where both settle to the same n are the robust cells.")
     say(console, f"Trajectory reference: event and dopri5 at rtol = 1e-12 differ by "
                  f"{study.trajectory_reference_gap:.1e} (median state error, natural units).")
     table = Table(title="Work and precision (labels: robust cells)", title_justify="left",

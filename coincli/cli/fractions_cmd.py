@@ -233,6 +233,12 @@ def _header(plan, samples: int) -> str:
     return f"{samples:,} samples ({how}, seed {s.seed})"
 
 
+def _from_store(cost: dict) -> str:
+    """What a resumed run found counted in its store already, for its cost line."""
+    held = cost.get("from_store")
+    return f"; {held:,} samples were in the store already" if held else ""
+
+
 def _stopped(result) -> str:
     goal = result.goal
     if result.stopped is StopReason.PRECISION:
@@ -282,9 +288,7 @@ def _print_result(plan, r) -> None:
                                  f"{cost['wall_seconds']:.1f} s wall on {where} "
                                  f"({cost['trajectories_per_second']:,.0f} a second; "
                                  f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each, every "
-                                 "rung of the ladder counted)"
-                                 + (f"; {cost['from_store']:,} samples were in the store "
-                                    "already" if cost.get("from_store") else "")))
+                                 f"rung of the ladder counted){_from_store(cost)}"))
     else:
         summary.append(("cost", "nothing computed: every batch was in the store"))
     if r.store:
@@ -330,9 +334,7 @@ def _print_over(plan, res) -> None:
     if cost.get("computed"):
         say(console, f"cost: {cost['computed']:,} trajectories in {cost['wall_seconds']:.1f} s "
                      f"wall ({cost['trajectories_per_second']:,.0f} a second, "
-                     f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each)"
-                     + (f"; {cost['from_store']:,} samples were in the store already"
-                        if cost.get("from_store") else ""))
+                     f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each){_from_store(cost)}")
     if res.store:
         say(console, f"store: {res.store}")
 
