@@ -2,9 +2,12 @@
 ladders, on the robust cells of a grid (where two independent converged references agree).
 
 For every cell of a (vy0, vphi0) grid it runs the event method once at each tolerance of a
-long ladder and keeps each run's label, status, steps and the time of its last change of well;
-then it replays candidate designs (first rung, floor, agreement rule) on those runs, so that
-every design is judged on the same trajectories. The references are the event method at rtol
+long ladder, and DOP853 (``event_dop853``) at each from 1e-6 down, and keeps each run's label,
+status, steps and the time of its last change of well; then it replays candidate designs (first
+rung, floor, agreement rule, the pair of the rungs past the first) on those runs, so that every
+design is judged on the same trajectories. The default ladder's cost is then measured through
+the real kernel against the same ladder on Dormand-Prince 5(4) alone, interleaved, one thread
+(steps of the two pairs cost different amounts). The references are the event method at rtol
 1e-12 and fixed-step RK4 at h = 2.5e-7 (no shared stepping code); "wrong" is judged against
 RK4. RK4 is slow (about a second a cell on the thick coin): its labels are saved beside the
 output and reused when the same grid is asked again.
@@ -27,6 +30,7 @@ import argparse
 import json
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -34,17 +38,22 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
-DESIGNS = [  # (first rung, floor, change tolerance, settle tolerance in s; inf: not compared)
-    (1e-6, 1e-10, np.inf, np.inf), (1e-6, 1e-10, 1e-3, np.inf), (1e-6, 1e-12, np.inf, np.inf),
-    (1e-6, 1e-12, 1e-2, np.inf), (1e-6, 1e-12, 1e-3, np.inf), (1e-6, 1e-12, 1e-4, np.inf),
-    (1e-5, 1e-12, 1e-3, np.inf), (1e-6, 1e-12, 1e-3, 1e-2), (1e-6, 1e-12, 1e-3, 1e-3),
-    (1e-6, 1e-12, np.inf, 1e-3)]
+DOP853_RTOLS = RTOLS[1:]
+EVENT, DOP853 = "event", "event_dop853"
+DESIGNS = [  # (first rung, floor, change tolerance, settle tolerance in s (inf: not compared),
+    # the method of the rungs past the first)
+    (1e-6, 1e-10, np.inf, np.inf, EVENT), (1e-6, 1e-10, 1e-3, np.inf, EVENT),
+    (1e-6, 1e-12, np.inf, np.inf, EVENT), (1e-6, 1e-12, 1e-2, np.inf, EVENT),
+    (1e-6, 1e-12, 1e-3, np.inf, EVENT), (1e-6, 1e-12, 1e-4, np.inf, EVENT),
+    (1e-5, 1e-12, 1e-3, np.inf, EVENT), (1e-6, 1e-12, 1e-3, 1e-2, EVENT),
+    (1e-6, 1e-12, 1e-3, 1e-3, EVENT), (1e-6, 1e-12, np.inf, 1e-3, EVENT),
+    (1e-6, 1e-12, 1e-3, 1e-2, DOP853)]
 BOX = {"y0": "r:5r", "phi0": "-pi:pi", "vx": "-0.5:0.5"}  # the README's 5-D fractions box
 
 
-def runs(scene, states):
-    """Per rung and cell: label, status, steps, last change of well, settle time (one compiled
-    call each)."""
+def runs(scene, states, rtols=RTOLS):
+    """Per rtol and cell: label, status, steps, last change of well, settle time (one compiled
+    call each), with the scene's method."""
     from coincli.integrators import integrate, new_control
     from coincli.integrators.batch import outcome_label
     from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
@@ -55,9 +64,9 @@ def runs(scene, states):
     kernel = compiled(integrate)
     no_samples, no_events, control = (np.empty((0, SAMPLE_COLUMNS)),
                                       np.empty((0, EVENT_COLUMNS)), new_control())
-    out = {name: np.empty((len(RTOLS), len(states))) for name in ("q", "st", "steps", "tc", "ts")}
+    out = {name: np.empty((len(rtols), len(states))) for name in ("q", "st", "steps", "tc", "ts")}
     final = np.empty(6)
-    for k, rtol in enumerate(RTOLS):
+    for k, rtol in enumerate(rtols):
         settings = base._replace(rtol=rtol)
         for i, state in enumerate(states):
             r = kernel(p, settings, state, no_samples, no_events, final, control)
@@ -67,29 +76,64 @@ def runs(scene, states):
     return out
 
 
-def replay(data, robust, rk4, first, floor, tolerance, settle_tolerance):
+def rung_runs(data, data8, first, floor, upper):
+    """The saved runs of a design's rungs, coarse to fine: (label, status, steps, last change,
+    settle time) per rung; the first on the event method, the others on ``upper``'s runs."""
+    def run(table, rtols, rtol):
+        k = rtols.index(rtol)
+        return tuple(table[name][k] for name in ("q", "st", "steps", "tc", "ts"))
+
+    rungs = [run(data, RTOLS, first)]
+    for k in range(RTOLS.index(first) + 1, RTOLS.index(floor) + 1):
+        rungs.append(run(data, RTOLS, RTOLS[k]) if upper == EVENT
+                     else run(data8, DOP853_RTOLS, RTOLS[k]))
+    return rungs
+
+
+def replay(data, data8, robust, rk4, first, floor, tolerance, settle_tolerance, upper):
     """A design replayed on the saved runs: its verdicts and cost."""
-    q, st, tc, ts, steps = data["q"], data["st"], data["tc"], data["ts"], data["steps"]
-    k0, k1 = RTOLS.index(first), RTOLS.index(floor)
-    n = q.shape[1]
+    rungs = rung_runs(data, data8, first, floor, upper)
+    q0 = rungs[0][0]
+    n = q0.shape[0]
     certain, open_ = np.zeros(n, bool), np.ones(n, bool)
-    label, cost = q[k0].copy(), steps[k0].copy()
-    for k in range(k0 + 1, k1 + 1):
-        cost += np.where(open_, steps[k], 0)
-        gap = np.abs(tc[k] - tc[k - 1])
-        gap[np.isnan(tc[k]) & np.isnan(tc[k - 1])] = 0.0  # neither ever changed well
-        agree = ((q[k] == q[k - 1]) & (st[k] == 0) & (st[k - 1] == 0) & (gap <= tolerance)
-                 & (np.abs(ts[k] - ts[k - 1]) <= settle_tolerance))
-        label = np.where(open_, q[k], label)
+    label, cost = q0.copy(), rungs[0][2].copy()
+    successive = zip(rungs[:-1], rungs[1:], strict=True)
+    for (q_a, st_a, _, tc_a, ts_a), (q_b, st_b, steps_b, tc_b, ts_b) in successive:
+        cost += np.where(open_, steps_b, 0)
+        gap = np.abs(tc_b - tc_a)
+        gap[np.isnan(tc_b) & np.isnan(tc_a)] = 0.0  # neither ever changed well
+        agree = ((q_b == q_a) & (st_b == 0) & (st_a == 0) & (gap <= tolerance)
+                 & (np.abs(ts_b - ts_a) <= settle_tolerance))
+        label = np.where(open_, q_b, label)
         certain |= open_ & agree
         open_ &= ~agree
     return {"first": first, "floor": floor, "change_tolerance": tolerance,
-            "settle_tolerance": settle_tolerance,
+            "settle_tolerance": settle_tolerance, "upper_rungs": upper,
             "certain_and_wrong_robust": float((certain & (label != rk4) & robust).sum()
                                               / robust.sum()),
             "uncertain_robust": float((~certain & robust).sum() / robust.sum()),
             "uncertain_all": float((~certain).mean()), "steps_per_cell": float(cost.mean()),
-            "single_pass_steps": float(steps[RTOLS.index(first)].mean())}
+            "single_pass_steps": float(rungs[0][2].mean())}
+
+
+def measured_cost(scene, states, rounds=3):
+    """Seconds a throw of the default ladder (DOP853 past its first rung) and of the same ladder
+    on Dormand-Prince 5(4) alone, through the real kernel on one thread, interleaved rounds
+    (medians)."""
+    from coincli.integrators.batch import verified_labels
+    from coincli.integrators.ladder import ladder_of
+    from coincli.params import model_params, run_settings
+
+    p, settings = model_params(scene), run_settings(scene.integration)
+    default = ladder_of(scene.integration)
+    dp5_only = replace(default, methods=(default.methods[0],) * len(default))
+    seconds = {"default": [], "dp5_only": []}
+    for _ in range(rounds):
+        for name, ladder in (("default", default), ("dp5_only", dp5_only)):
+            started = time.perf_counter()
+            verified_labels(p, settings, ladder, states)
+            seconds[name].append((time.perf_counter() - started) / len(states))
+    return {name: float(np.median(values)) for name, values in seconds.items()}
 
 
 def box_states(scene, n):
@@ -142,6 +186,7 @@ def main() -> None:
         states = grid.states()
     started = time.time()
     data = runs(scene, states)
+    data8 = runs(scene.with_overrides(method=DOP853), states, DOP853_RTOLS)
     cache = here / f"rk4-{name}.npz"
     if cache.exists():
         saved = np.load(cache)
@@ -155,12 +200,15 @@ def main() -> None:
         np.savez(cache, q=rk4_q, st=rk4_st)
     tight = RTOLS.index(1e-12)
     robust = ((data["st"][tight] == 0) & (rk4_st == 0) & (data["q"][tight] == rk4_q))
-    rows = [replay(data, robust, rk4_q, *design) for design in DESIGNS]
+    rows = [replay(data, data8, robust, rk4_q, *design) for design in DESIGNS]
+    cost = measured_cost(scene, states)
     single = {f"{r:g}": float(((data["q"][k] != rk4_q) & robust).sum() / robust.sum())
               for k, r in enumerate(RTOLS)}
     result = {"preset": args.preset, "res": args.res, "box": dict(BOX, n=args.box) if args.box
               else None, "robust_cells": int(robust.sum()),
               "cells": int(robust.size), "single_pass_wrong_robust": single, "designs": rows,
+              "default_seconds_per_throw": cost["default"],
+              "dp5_only_seconds_per_throw": cost["dp5_only"],
               "seconds": time.time() - started, "command": " ".join(sys.argv)}
     (here / f"ladder-{name}.json").write_text(json.dumps(result, indent=2))
     where = (f"{args.box} throws of the 5-D box" if args.box
@@ -168,18 +216,22 @@ def main() -> None:
     print(f"{args.preset}, {where}: {robust.sum()} robust cells of {robust.size}")
     print("single pass, wrong on robust cells: "
           + ", ".join(f"rtol {k} {v:.2%}" for k, v in single.items()))
-    print("| first rung | floor | last change within | settled within | certain and wrong "
-          "| uncertain (robust) | uncertain (all) | steps a cell |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| first rung | floor | upper rungs | last change within | settled within "
+          "| certain and wrong | uncertain (robust) | uncertain (all) | steps a cell |")
+    print("|---|---|---|---|---|---|---|---|---|")
 
     def within(seconds):
         return f"{seconds * 1e3:g} ms" if np.isfinite(seconds) else "-"
 
     for r in rows:
-        print(f"| {r['first']:g} | {r['floor']:g} | {within(r['change_tolerance'])} "
+        print(f"| {r['first']:g} | {r['floor']:g} | {r['upper_rungs']} "
+              f"| {within(r['change_tolerance'])} "
               f"| {within(r['settle_tolerance'])} | {r['certain_and_wrong_robust']:.2%} "
               f"| {r['uncertain_robust']:.2%} | {r['uncertain_all']:.1%} "
               f"| {r['steps_per_cell']:.0f} |")
+    print(f"default ladder (DOP853 past the first rung): {cost['default'] * 1e6:.1f} us a throw, "
+          f"the same ladder on Dormand-Prince 5(4) alone {cost['dp5_only'] * 1e6:.1f} us "
+          f"({cost['dp5_only'] / cost['default']:.2f}x; one thread, median of 3 interleaved)")
 
 
 if __name__ == "__main__":

@@ -73,6 +73,7 @@ LADDERS: dict[Method, list[float]] = {
     Method.RK4: [2e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6],
     Method.DOPRI5: [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
     Method.EVENT: [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
+    Method.EVENT_DOP853: [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
 }
 PAPER_SETTING = Setting(Method.SYMPLECTIC_EULER, 1e-6, 1e-7)
 

@@ -94,6 +94,7 @@ class Method(_Named):
     RK4 = 2
     DOPRI5 = 3
     EVENT = 4
+    EVENT_DOP853 = 5
 
 
 class Certainty(_Named):

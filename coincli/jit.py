@@ -35,16 +35,19 @@ import inspect
 import os
 import sys
 import threading
+import types
 from pathlib import Path
 
 _PACKAGE = Path(__file__).resolve().parent
 # Every module that defines kernels: all are imported before numba sees any of them, so that a
 # kernel's callees are dispatchers whatever was imported first.
 KERNEL_MODULES = ("coincli.model", "coincli.integrators.common", "coincli.integrators.fixed",
-                  "coincli.integrators.dopri", "coincli.integrators.flight",
-                  "coincli.integrators.adaptive", "coincli.integrators.batch")
+                  "coincli.integrators.dopri", "coincli.integrators.dop853",
+                  "coincli.integrators.flight", "coincli.integrators.adaptive",
+                  "coincli.integrators.pairs", "coincli.integrators.batch")
 _KERNELS: list = []  # the registered Python functions, in definition order
 _INLINE: set = set()  # kernels numba inlines into their callers (small helpers on hot paths)
+_NAMESPACES: list = []  # the globals of derived kernels (see derive), rebound like modules'
 _DISPATCHERS: dict = {}  # Python function -> numba dispatcher (after activation)
 _LOCK = threading.Lock()
 _SKIP_BLAS_PROBE = False  # see skip_blas_probe
@@ -63,6 +66,36 @@ def kernel(fn=None, *, inline: bool = False):
     if inline:
         _INLINE.add(fn)
     return fn
+
+
+def derive(module, suffix: str, **substitutions) -> types.SimpleNamespace:
+    """Another instance of every kernel defined in ``module``, in which the global names given
+    as keywords mean something else: e.g. the adaptive driver with another Runge-Kutta pair's
+    ``step``. One source, several compiled kernels: each copy shares the original's code but
+    looks its globals up in a copy of the module's namespace with the substitutions, and so do
+    the copies of the module's other kernels it calls. The copies are named with ``suffix``
+    (numba keys its cache on the name, so they cannot load each other's machine code).
+    Returns the namespace of the copies (attribute access)."""
+    if _DISPATCHERS:
+        raise RuntimeError(f"derive({module.__name__}) after numba was activated: add the "
+                           "deriving module to coincli.jit.KERNEL_MODULES")
+    namespace = dict(vars(module))
+    unknown = set(substitutions) - set(namespace)
+    if unknown:
+        raise NameError(f"{module.__name__} has no global {sorted(unknown)}")
+    namespace.update(substitutions)
+    originals = [(name, fn) for name, fn in vars(module).items()
+                 if callable(fn) and fn in _KERNELS
+                 and getattr(fn, "__module__", None) == module.__name__]
+    for name, fn in originals:
+        copy = types.FunctionType(fn.__code__, namespace, fn.__name__ + suffix,
+                                  fn.__defaults__, fn.__closure__)
+        copy.__qualname__ = fn.__qualname__ + suffix
+        copy.__doc__ = fn.__doc__
+        copy.__module__ = fn.__module__
+        namespace[name] = kernel(copy, inline=fn in _INLINE)
+    _NAMESPACES.append(namespace)
+    return types.SimpleNamespace(**{name: namespace[name] for name, _ in originals})
 
 
 def skip_blas_probe() -> None:
@@ -176,12 +209,13 @@ def _activate() -> None:
                        for fn in _KERNELS}
         # rebind every name in the package that refers to a kernel, so that numba finds
         # dispatchers when it resolves a kernel's callees and Python callers run compiled code
-        for name, module in list(sys.modules.items()):
-            if module is None or not (name == "coincli" or name.startswith("coincli.")):
-                continue
-            for attr, value in list(vars(module).items()):
+        namespaces = [vars(module) for name, module in list(sys.modules.items())
+                      if module is not None and (name == "coincli"
+                                                 or name.startswith("coincli."))]
+        for namespace in namespaces + _NAMESPACES:
+            for attr, value in list(namespace.items()):
                 if callable(value) and value in dispatchers:
-                    setattr(module, attr, dispatchers[value])
+                    namespace[attr] = dispatchers[value]
         _DISPATCHERS.update(dispatchers)
 
 
@@ -215,5 +249,5 @@ def _install_locator(numba) -> None:
     CacheImpl._locator_classes.insert(0, CoincliCacheLocator)
 
 
-__all__ = ["FIRST_COMPILE_SECONDS", "cache_dir", "compiled", "is_active", "kernel",
+__all__ = ["FIRST_COMPILE_SECONDS", "cache_dir", "compiled", "derive", "is_active", "kernel",
            "kernels_cached", "mark_cached", "python", "sources_digest"]

@@ -330,7 +330,7 @@ def step_budget(integration: Integration) -> int:
     """The run's step budget: ``max_steps`` if given, else the method's default."""
     if integration.max_steps is not None:
         return int(integration.max_steps)
-    if integration.method in (Method.DOPRI5, Method.EVENT):
+    if integration.method in (Method.DOPRI5, Method.EVENT, Method.EVENT_DOP853):
         return ADAPTIVE_MAX_STEPS
     return int(math.ceil(integration.t_end / integration.dt - 1e-9))
 

@@ -193,7 +193,8 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     wall = 0.0
     previous = None  # the last rung's RunResult and label
     for k in range(len(ladder)):
-        settings = base._replace(rtol=ladder.rtols[k], dt=ladder.dts[k])
+        settings = base._replace(method=int(ladder.methods[k]), rtol=ladder.rtols[k],
+                                 dt=ladder.dts[k])
         result, seconds, engine = _run(p, settings, state0, samples, events, final, control,
                                        engine)
         wall += seconds

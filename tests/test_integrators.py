@@ -81,7 +81,8 @@ def test_verlet_is_second_order_without_damping():
     assert all(abs(q - 2) < 0.3 for q in observed), observed
 
 
-@pytest.mark.parametrize("name", ADAPTIVE)
+# DOP853 reaches its order only below rtol 1e-8: tested in test_dop853.py, on a tighter reference
+@pytest.mark.parametrize("name", [m for m in ADAPTIVE if m != "event_dop853"])
 def test_adaptive_convergence_order(paper, smooth_reference, name):
     """Error against work: an order-5 method's error falls like steps^-5, and each decade of
     rtol buys about a decade of error."""

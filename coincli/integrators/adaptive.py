@@ -1,6 +1,11 @@
 """Adaptive Dormand-Prince 5(4) with contact events (``dopri5``), and the event-driven method built
 on it (``event``): closed-form flight between contacts.
 
+The Runge-Kutta pair is whatever the names imported from :mod:`.dopri` below mean (``ORDER``,
+``step``, ``step_factor``, ``dense_coefficients``, ``dense_point``, with ``FIRST_STEP`` here):
+:mod:`.pairs` derives a copy of this driver in which they are DOP853's (``event-dop853``), so the
+logic is written once for both pairs.
+
 The right-hand side is smooth as long as the set of penetrating corners (the *mode*) does not
 change; it jumps when a corner touches (the damping force appears at full strength) or lifts off.
 So the integrator keeps the mode fixed during a step (the force law of a corner in the mode is
@@ -253,13 +258,14 @@ def may_cross(mode, heights_start, heights_end, rates_start, rates_end, h):
 
 @kernel
 def integrate_adaptive(p, settings, state, samples, events, final, control):
-    """Dormand-Prince 5(4) with located contact events; for the ``event`` method, closed-form
-    flight between contacts. Same contract as :func:`coincli.integrators.fixed.integrate_fixed`."""
+    """Dormand-Prince 5(4) (or, in the copy of :mod:`.pairs`, DOP853) with located contact
+    events; for the event methods, closed-form flight between contacts. Same contract as
+    :func:`coincli.integrators.fixed.integrate_fixed`."""
     rtol = settings.rtol
     t_end = settings.t_end
     stop_on_settle = settings.stop_on_settle
     budget = settings.max_steps
-    exact_flight = settings.method == Method.EVENT
+    exact_flight = settings.method != Method.DOPRI5
     sample_dt = settings.sample_dt
     record = samples.shape[0] > 0 and sample_dt > 0.0
     scales = error_scales(p, rtol)
@@ -354,7 +360,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
         dense = (pieces > 1 or may_cross(mode, heights, heights_end, rates, rates_end, h)
                  or (record and next_sample <= t + h))
         if dense:
-            rc = dense_coefficients(st, end, h, stages)
+            rc = dense_coefficients(p, mode, st, end, h, stages, c, s)
             theta, event_mask = find_event(p, rc, h, mode, pieces, heights, heights_end, rates,
                                            rates_end, c, s)
             t_new = t + theta * h if event_mask != 0 else t + h

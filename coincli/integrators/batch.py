@@ -18,6 +18,7 @@ from ..params import RunSettings
 from .adaptive import integrate_adaptive
 from .common import EVENT_COLUMNS, NO_WELL, SAMPLE_COLUMNS
 from .fixed import integrate_fixed
+from .pairs import integrate_adaptive_dop853
 
 NO_LABEL = NO_WELL  # quarter_turns of a cell without a count (int16 fill of the stores)
 
@@ -29,6 +30,8 @@ def integrate(p, settings, state, samples, events, final, control):
     stops it with status INTERRUPTED."""
     if settings.method == Method.DOPRI5 or settings.method == Method.EVENT:
         return integrate_adaptive(p, settings, state, samples, events, final, control)
+    if settings.method == Method.EVENT_DOP853:
+        return integrate_adaptive_dop853(p, settings, state, samples, events, final, control)
     return integrate_fixed(p, settings, state, samples, events, final, control)
 
 
@@ -62,9 +65,10 @@ def run_batch(p, settings, states, quarter_turns, status, settle_time, steps, co
 
 
 @kernel(inline=True)
-def rung_settings(settings, rtols, dts, k):
-    """The settings of rung k of a ladder: the base settings with that rung's rtol and dt."""
-    return RunSettings(settings.method, dts[k], rtols[k], settings.t_end,
+def rung_settings(settings, methods, rtols, dts, k):
+    """The settings of rung k of a ladder: the base settings with that rung's method, rtol and
+    dt."""
+    return RunSettings(methods[k], dts[k], rtols[k], settings.t_end,
                        settings.stop_on_settle, settings.max_steps, settings.sample_dt)
 
 
@@ -93,10 +97,10 @@ def rungs_agree(label_a, run_a, label_b, run_b, change_tolerance, settle_toleran
 
 
 @kernel
-def run_ladder(p, settings, rtols, dts, change_tolerance, settle_tolerance, states, quarter_turns,
-               status, settle_time, steps, certainty, rung, control):
-    """Verified labels: each row of ``states`` is run at rung 0, 1, ... of the ladder (rtols,
-    dts: the rungs' settings, coarse to fine) until two successive rungs agree
+def run_ladder(p, settings, methods, rtols, dts, change_tolerance, settle_tolerance, states,
+               quarter_turns, status, settle_time, steps, certainty, rung, control):
+    """Verified labels: each row of ``states`` is run at rung 0, 1, ... of the ladder (methods,
+    rtols, dts: the rungs' settings, coarse to fine) until two successive rungs agree
     (:func:`rungs_agree`). Writes the finest run's outcome, the total steps, the certainty
     (CERTAIN, UNCERTAIN if no two rungs agreed, UNVERIFIED for a one-rung ladder) and the index
     of the last rung run. Releases the GIL; ``control[0]`` set stops it."""
@@ -105,8 +109,8 @@ def run_ladder(p, settings, rtols, dts, change_tolerance, settle_tolerance, stat
     final = np.empty(6)
     n_rungs = rtols.shape[0]
     for row in range(states.shape[0]):
-        result = integrate(p, rung_settings(settings, rtols, dts, 0), states[row], no_samples,
-                           no_events, final, control)
+        result = integrate(p, rung_settings(settings, methods, rtols, dts, 0), states[row],
+                           no_samples, no_events, final, control)
         label = outcome_label(result.status, result.n_well, final[2])
         total = result.steps
         verdict = Certainty.UNVERIFIED if n_rungs == 1 else Certainty.UNCERTAIN
@@ -114,8 +118,8 @@ def run_ladder(p, settings, rtols, dts, change_tolerance, settle_tolerance, stat
         for k in range(1, n_rungs):
             if result.status == Status.BUDGET or result.status == Status.INTERRUPTED:
                 break  # a tighter rung would need more steps still, or was told to stop
-            finer = integrate(p, rung_settings(settings, rtols, dts, k), states[row], no_samples,
-                              no_events, final, control)
+            finer = integrate(p, rung_settings(settings, methods, rtols, dts, k), states[row],
+                              no_samples, no_events, final, control)
             finer_label = outcome_label(finer.status, finer.n_well, final[2])
             total += finer.steps
             last = k
@@ -159,7 +163,8 @@ def verified_labels(p, settings, ladder, states, control=None) -> VerifiedLabels
     n = states.shape[0]
     out = VerifiedLabels(np.empty(n, np.int16), np.empty(n, np.uint8), np.empty(n, np.float32),
                          np.empty(n, np.int64), np.empty(n, np.uint8), np.empty(n, np.int8))
-    compiled(run_ladder)(p, settings, np.asarray(ladder.rtols, dtype=np.float64),
+    compiled(run_ladder)(p, settings, np.asarray(ladder.methods, dtype=np.int64),
+                         np.asarray(ladder.rtols, dtype=np.float64),
                          np.asarray(ladder.dts, dtype=np.float64),
                          float(ladder.change_tolerance), float(ladder.settle_tolerance),
                          np.ascontiguousarray(states, dtype=np.float64), *out,
@@ -239,8 +244,8 @@ def warm_up(p, settings, state, runs=None) -> None:
     if label_states in runs:
         label_states(p, short._replace(stop_on_settle=True), states)
     if verified_labels in runs:
-        verified_labels(p, short, Ladder((settings.rtol,) * 2, (settings.dt,) * 2, True),
-                        states)
+        verified_labels(p, short, Ladder((settings.method,) * 2, (settings.rtol,) * 2,
+                                         (settings.dt,) * 2, True), states)
     if runs == every:
         mark_cached()
 

@@ -119,8 +119,9 @@ def step_factor(err, largest):
 
 
 @kernel(inline=True)
-def dense_coefficients(start, end, h, stages):
-    """The five 6-tuples of the continuous extension of an accepted step."""
+def dense_coefficients(p, mode, start, end, h, stages, c, s):
+    """The five 6-tuples of the continuous extension of an accepted step (p, mode, c, s: unused
+    here; a pair whose extension needs more stages takes them, see :mod:`.dop853`)."""
     k1 = stages[0]
     k7 = stages[6]
     r1 = (end[0] - start[0], end[1] - start[1], end[2] - start[2], end[3] - start[3],

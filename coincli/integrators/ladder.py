@@ -10,6 +10,10 @@ climb.
 
 Adaptive methods climb in tolerance, rtol, rtol / 10, ... down to the floor; fixed-step methods
 in step, dt / 10^(1/p) (a tenfold smaller error for a method of order p) for FIXED_RUNGS rungs.
+The ``event`` method climbs on DOP853 (``event_dop853``, the same driver with an 8th-order pair)
+past its first rung: from rtol 1e-7 down it needs fewer right-hand sides than Dormand-Prince
+5(4) for the same accuracy, and a rung computed by another pair is a more independent check of
+the one below it (README, "Verified labels").
 A single pass (``verify=False``) is a ladder of one rung: its labels are UNVERIFIED.
 """
 
@@ -17,6 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..enums import Method
 from ..params import Integration
 from .registry import info, setting_text
 
@@ -24,12 +29,14 @@ RTOL_FLOOR = 1e-12  # the tightest tolerance a ladder climbs to (README: "Verifi
 FIXED_RUNGS = 3
 CHANGE_TOLERANCE = 1e-3  # s: two agreeing runs enter their final well this close in time
 SETTLE_TOLERANCE = 1e-2  # s: and fall below E_crit this close in time
+UPPER_RUNGS = {Method.EVENT: Method.EVENT_DOP853}  # the method of the rungs past the first
 
 
 @dataclass(frozen=True)
 class Ladder:
     """The rungs of one integration's verification, coarse to fine."""
 
+    methods: tuple[Method, ...]
     rtols: tuple[float, ...]
     dts: tuple[float, ...]
     adaptive: bool
@@ -44,12 +51,15 @@ class Ladder:
         return len(self.rtols)
 
     def rung_text(self, k: int) -> str:
-        """``rtol = 1e-07`` or ``dt = 5e-07 s``: what rung k sets."""
-        return f"rtol = {self.rtols[k]:g}" if self.adaptive else f"dt = {self.dts[k]:g} s"
+        """``rtol = 1e-07`` or ``dt = 5e-07 s``: what rung k sets, and its method if it is not
+        the first rung's (``rtol = 1e-07 with event_dop853``)."""
+        text = f"rtol = {self.rtols[k]:g}" if self.adaptive else f"dt = {self.dts[k]:g} s"
+        return text if self.methods[k] == self.methods[0] else f"{text} with {self.methods[k]}"
 
     def to_dict(self) -> dict:
         knob = "rtol" if self.adaptive else "dt"
-        return {"rungs": [{knob: (self.rtols if self.adaptive else self.dts)[k]}
+        return {"rungs": [{"method": self.methods[k].label,
+                           knob: (self.rtols if self.adaptive else self.dts)[k]}
                           for k in range(len(self))],
                 "change_tolerance": self.change_tolerance,
                 "settle_tolerance": self.settle_tolerance,
@@ -62,15 +72,18 @@ class Ladder:
 def ladder_of(integration: Integration) -> Ladder:
     """The ladder of an integration's settings (one rung if it does not verify)."""
     method = info(integration.method)
+    first = method.method
     if not integration.verify:
-        return Ladder((integration.rtol,), (integration.dt,), method.adaptive)
+        return Ladder((first,), (integration.rtol,), (integration.dt,), method.adaptive)
     if method.adaptive:
         rtols = [integration.rtol]
         while rtols[-1] / 10.0 >= RTOL_FLOOR * (1 - 1e-9) or len(rtols) < 2:
             rtols.append(rtols[-1] / 10.0)
-        return Ladder(tuple(rtols), (integration.dt,) * len(rtols), True)
+        upper = UPPER_RUNGS.get(first, first)
+        return Ladder((first,) + (upper,) * (len(rtols) - 1), tuple(rtols),
+                      (integration.dt,) * len(rtols), True)
     dts = tuple(integration.dt / 10.0 ** (k / method.order) for k in range(FIXED_RUNGS))
-    return Ladder((integration.rtol,) * FIXED_RUNGS, dts, False)
+    return Ladder((first,) * FIXED_RUNGS, (integration.rtol,) * FIXED_RUNGS, dts, False)
 
 
 def describe(integration: Integration) -> str:
@@ -84,4 +97,4 @@ def describe(integration: Integration) -> str:
     return f"{base}, verified up to {ladder.rung_text(len(ladder) - 1)}"
 
 
-__all__ = ["FIXED_RUNGS", "Ladder", "RTOL_FLOOR", "describe", "ladder_of"]
+__all__ = ["FIXED_RUNGS", "Ladder", "RTOL_FLOOR", "UPPER_RUNGS", "describe", "ladder_of"]

@@ -100,6 +100,10 @@ METHODS: dict[Method, MethodInfo] = {
         MethodInfo(Method.EVENT, 5, True, False,
                    "dopri5 in contact, closed-form flight between contacts, stops once "
                    "the outcome is decided (E < E_crit)"),
+        MethodInfo(Method.EVENT_DOP853, 8, True, False,
+                   "event with Hairer's DOP853 in contact (12 stages, 7th-order dense output "
+                   "from 3 more): fewer steps from rtol 1e-7 down; the verified ladder's upper "
+                   "rungs"),
     )
 }
 

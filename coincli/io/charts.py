@@ -12,7 +12,7 @@ from ..version import __version__
 from .paths import atomic_output, save_figure
 
 COLOURS = {Method.SYMPLECTIC_EULER: "#d62728", Method.VERLET: "#ff7f0e", Method.RK4: "#2ca02c",
-           Method.DOPRI5: "#1f77b4", Method.EVENT: "#9467bd"}
+           Method.DOPRI5: "#1f77b4", Method.EVENT: "#9467bd", Method.EVENT_DOP853: "#8c564b"}
 
 
 def study_rows(study) -> list[dict]:
