@@ -41,13 +41,14 @@ RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
 DOP853_RTOLS = RTOLS[1:]
 EVENT, DOP853 = "event", "event_dop853"
 DESIGNS = [  # (first rung, floor, change tolerance, settle tolerance in s (inf: not compared),
-    # the method of the rungs past the first)
-    (1e-6, 1e-10, np.inf, np.inf, EVENT), (1e-6, 1e-10, 1e-3, np.inf, EVENT),
-    (1e-6, 1e-12, np.inf, np.inf, EVENT), (1e-6, 1e-12, 1e-2, np.inf, EVENT),
-    (1e-6, 1e-12, 1e-3, np.inf, EVENT), (1e-6, 1e-12, 1e-4, np.inf, EVENT),
-    (1e-5, 1e-12, 1e-3, np.inf, EVENT), (1e-6, 1e-12, 1e-3, 1e-2, EVENT),
-    (1e-6, 1e-12, 1e-3, 1e-3, EVENT), (1e-6, 1e-12, np.inf, 1e-3, EVENT),
-    (1e-6, 1e-12, 1e-3, 1e-2, DOP853)]
+    # the method of the rungs past the first, and their first rtol (None: a decade down))
+    (1e-6, 1e-10, np.inf, np.inf, EVENT, None), (1e-6, 1e-10, 1e-3, np.inf, EVENT, None),
+    (1e-6, 1e-12, np.inf, np.inf, EVENT, None), (1e-6, 1e-12, 1e-2, np.inf, EVENT, None),
+    (1e-6, 1e-12, 1e-3, np.inf, EVENT, None), (1e-6, 1e-12, 1e-4, np.inf, EVENT, None),
+    (1e-5, 1e-12, 1e-3, np.inf, EVENT, None), (1e-6, 1e-12, 1e-3, 1e-2, EVENT, None),
+    (1e-6, 1e-12, 1e-3, 1e-3, EVENT, None), (1e-6, 1e-12, np.inf, 1e-3, EVENT, None),
+    (1e-6, 1e-12, 1e-3, 1e-2, DOP853, None), (1e-6, 1e-12, 1e-3, 1e-2, DOP853, 1e-8),
+    (1e-6, 1e-12, 1e-3, 1e-2, DOP853, 1e-9), (1e-5, 1e-12, 1e-3, 1e-2, DOP853, 1e-8)]
 BOX = {"y0": "r:5r", "phi0": "-pi:pi", "vx": "-0.5:0.5"}  # the README's 5-D fractions box
 
 
@@ -76,23 +77,26 @@ def runs(scene, states, rtols=RTOLS):
     return out
 
 
-def rung_runs(data, data8, first, floor, upper):
+def rung_runs(data, data8, first, floor, upper, upper_start):
     """The saved runs of a design's rungs, coarse to fine: (label, status, steps, last change,
-    settle time) per rung; the first on the event method, the others on ``upper``'s runs."""
+    settle time) per rung; the first on the event method, the others on ``upper``'s runs, from
+    ``upper_start`` (or a decade below the first) to the floor."""
     def run(table, rtols, rtol):
         k = rtols.index(rtol)
         return tuple(table[name][k] for name in ("q", "st", "steps", "tc", "ts"))
 
     rungs = [run(data, RTOLS, first)]
-    for k in range(RTOLS.index(first) + 1, RTOLS.index(floor) + 1):
+    start = RTOLS.index(upper_start) if upper_start else RTOLS.index(first) + 1
+    for k in range(start, RTOLS.index(floor) + 1):
         rungs.append(run(data, RTOLS, RTOLS[k]) if upper == EVENT
                      else run(data8, DOP853_RTOLS, RTOLS[k]))
     return rungs
 
 
-def replay(data, data8, robust, rk4, first, floor, tolerance, settle_tolerance, upper):
+def replay(data, data8, robust, rk4, first, floor, tolerance, settle_tolerance, upper,
+           upper_start):
     """A design replayed on the saved runs: its verdicts and cost."""
-    rungs = rung_runs(data, data8, first, floor, upper)
+    rungs = rung_runs(data, data8, first, floor, upper, upper_start)
     q0 = rungs[0][0]
     n = q0.shape[0]
     certain, open_ = np.zeros(n, bool), np.ones(n, bool)
@@ -109,6 +113,7 @@ def replay(data, data8, robust, rk4, first, floor, tolerance, settle_tolerance, 
         open_ &= ~agree
     return {"first": first, "floor": floor, "change_tolerance": tolerance,
             "settle_tolerance": settle_tolerance, "upper_rungs": upper,
+            "upper_start": upper_start or RTOLS[RTOLS.index(first) + 1],
             "certain_and_wrong_robust": float((certain & (label != rk4) & robust).sum()
                                               / robust.sum()),
             "uncertain_robust": float((~certain & robust).sum() / robust.sum()),
@@ -117,22 +122,24 @@ def replay(data, data8, robust, rk4, first, floor, tolerance, settle_tolerance, 
 
 
 def measured_cost(scene, states, rounds=3):
-    """Seconds a throw of the default ladder (DOP853 past its first rung) and of the same ladder
-    on Dormand-Prince 5(4) alone, through the real kernel on one thread, interleaved rounds
-    (medians)."""
+    """Seconds a throw of the default ladder (DOP853 past its first rung) and of the former one
+    (Dormand-Prince 5(4) alone, rtol 1e-6, 1e-7, ... 1e-12), through the real kernel on one
+    thread, thread time, interleaved rounds (medians)."""
     from coincli.integrators.batch import verified_labels
     from coincli.integrators.ladder import ladder_of
     from coincli.params import model_params, run_settings
 
     p, settings = model_params(scene), run_settings(scene.integration)
     default = ladder_of(scene.integration)
-    dp5_only = replace(default, methods=(default.methods[0],) * len(default))
+    rtols = tuple(r for r in RTOLS if r <= default.rtols[0])
+    dp5_only = replace(default, methods=(default.methods[0],) * len(rtols), rtols=rtols,
+                       dts=default.dts[:1] * len(rtols))
     seconds = {"default": [], "dp5_only": []}
     for _ in range(rounds):
         for name, ladder in (("default", default), ("dp5_only", dp5_only)):
-            started = time.perf_counter()
+            started = time.thread_time()
             verified_labels(p, settings, ladder, states)
-            seconds[name].append((time.perf_counter() - started) / len(states))
+            seconds[name].append((time.thread_time() - started) / len(states))
     return {name: float(np.median(values)) for name, values in seconds.items()}
 
 
@@ -224,13 +231,13 @@ def main() -> None:
         return f"{seconds * 1e3:g} ms" if np.isfinite(seconds) else "-"
 
     for r in rows:
-        print(f"| {r['first']:g} | {r['floor']:g} | {r['upper_rungs']} "
+        print(f"| {r['first']:g} | {r['floor']:g} | {r['upper_rungs']} from {r['upper_start']:g} "
               f"| {within(r['change_tolerance'])} "
               f"| {within(r['settle_tolerance'])} | {r['certain_and_wrong_robust']:.2%} "
               f"| {r['uncertain_robust']:.2%} | {r['uncertain_all']:.1%} "
               f"| {r['steps_per_cell']:.0f} |")
-    print(f"default ladder (DOP853 past the first rung): {cost['default'] * 1e6:.1f} us a throw, "
-          f"the same ladder on Dormand-Prince 5(4) alone {cost['dp5_only'] * 1e6:.1f} us "
+    print(f"default ladder (DOP853 from 1e-8): {cost['default'] * 1e6:.1f} us a throw, "
+          f"Dormand-Prince 5(4) alone from 1e-7 {cost['dp5_only'] * 1e6:.1f} us "
           f"({cost['dp5_only'] / cost['default']:.2f}x; one thread, median of 3 interleaved)")
 
 

@@ -95,7 +95,7 @@ def test_simulate_and_classify_give_named_results():
     outcome = coincli.classify(scene)
     assert outcome == (6, Status.SETTLED, run.settle_time, Certainty.CERTAIN)
     assert outcome.pose == "lying" and run.certainty is Certainty.CERTAIN
-    assert [r.setting for r in run.rungs] == ["rtol = 1e-06", "rtol = 1e-07 with event_dop853"]
+    assert [r.setting for r in run.rungs] == ["rtol = 1e-06", "rtol = 1e-08 with event_dop853"]
     recorded = coincli.simulate(scene, sample_dt=1e-3, record_events=True)
     assert recorded.samples.shape[1] == 7 and recorded.events.shape[1] == 9
     assert recorded.quarter_turns == run.quarter_turns
@@ -213,7 +213,7 @@ def test_results_print_in_one_short_line():
     scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
     run = coincli.simulate(scene, sample_dt=1e-3, record_events=True)
     assert repr(run) == ("Trajectory(n = 6 (lying), settled at 0.3623 s, certain at rtol = "
-                         f"1e-07 with event_dop853, 66 steps, {len(run.samples):,} samples, "
+                         f"1e-08 with event_dop853, 70 steps, {len(run.samples):,} samples, "
                          f"{len(run.events):,} events)")
     result = coincli.fractions(scene, samples=256, batch=256)
     assert repr(result).startswith("Fractions(P(standing) = ") and "\n" not in repr(result)
