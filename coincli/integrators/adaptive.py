@@ -3,7 +3,7 @@ on it (``event``): closed-form flight between contacts.
 
 The Runge-Kutta pair is whatever the names imported from :mod:`.dopri` below mean (``ORDER``,
 ``step``, ``step_factor``, ``dense_coefficients``, ``dense_point``, with ``FIRST_STEP`` here):
-:mod:`.pairs` derives a copy of this driver in which they are DOP853's (``event-dop853``), so the
+:mod:`.pairs` derives a copy of this driver in which they are DOP853's (``event_dop853``), so the
 logic is written once for both pairs.
 
 The right-hand side is smooth as long as the set of penetrating corners (the *mode*) does not

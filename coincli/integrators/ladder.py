@@ -16,7 +16,7 @@ rtol 1e-8 costs less than Dormand-Prince 5(4) at 1e-7 and is far more accurate, 
 comparison, which decides most labels, is against a nearly converged run computed by another
 pair. On the README's 5-D box that ladder is certain with another n than the event method at
 rtol 1e-11 and 1e-12 on 1 of 262,119 paper-coin throws (17 with Dormand-Prince 5(4) alone) and
-70 of 57,767 thick-coin throws (103), at 1.12 and 2.2 times less CPU (README, "Verified
+70 of 57,767 thick-coin throws (103), at 1.07-1.14 and 2.0-2.1 times less CPU (README, "Verified
 labels").
 A single pass (``verify=False``) is a ladder of one rung: its labels are UNVERIFIED.
 """
@@ -56,8 +56,8 @@ class Ladder:
         return len(self.rtols)
 
     def rung_text(self, k: int) -> str:
-        """``rtol = 1e-07`` or ``dt = 5e-07 s``: what rung k sets, and its method if it is not
-        the first rung's (``rtol = 1e-07 with event_dop853``)."""
+        """``rtol = 1e-06`` or ``dt = 5e-07 s``: what rung k sets, and its method if it is not
+        the first rung's (``rtol = 1e-08 with event_dop853``)."""
         text = f"rtol = {self.rtols[k]:g}" if self.adaptive else f"dt = {self.dts[k]:g} s"
         return text if self.methods[k] == self.methods[0] else f"{text} with {self.methods[k]}"
 
