@@ -143,13 +143,17 @@ FIRST_COMPILE_SECONDS = 150  # about how long the first compilation takes on 2 c
 
 
 def _marker() -> Path:
+    """The file that says these sources are compiled for this installation: numba's cache entries
+    are keyed by the path of the source file, so a second checkout of the same version compiles
+    afresh, and must say so as well."""
     from importlib.metadata import PackageNotFoundError, version
 
     try:
         numba_version = version("numba")
     except PackageNotFoundError:
         numba_version = "unknown"
-    return cache_dir() / f"numba-{numba_version}" / f"compiled-{sources_digest()}"
+    place = hashlib.sha256(str(_PACKAGE).encode()).hexdigest()[:8]
+    return cache_dir() / f"numba-{numba_version}" / f"compiled-{sources_digest()}-{place}"
 
 
 def kernels_cached() -> bool:
