@@ -231,11 +231,12 @@ def sweep_command(
         est = start.estimate
         if est is not None and est.seconds > 60:
             say(err_console, f"estimate: {_estimate_text(est, plan, scheduler)}")
-        if start.cells_todo:
-            announce_compilation()
-            if not quiet:
-                progress.start()
+        if start.cells_todo and not quiet:
+            progress.start()
 
+    # before the sweep: its pilot estimate is the first run of the kernels (a store that is
+    # already complete on a fresh install is the one case that is told so without need)
+    announce_compilation()
     try:
         with _Stop() as stop:
             try:
