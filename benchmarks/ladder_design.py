@@ -37,9 +37,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from coincli.enums import Method  # noqa: E402  (light: no numpy, no numba)
+
 RTOLS = (1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12)
 DOP853_RTOLS = RTOLS[1:]
-EVENT, DOP853 = "event", "event_dop853"
+EVENT, DOP853 = Method.EVENT, Method.EVENT_DOP853
 DESIGNS = [  # (first rung, floor, change tolerance, settle tolerance in s (inf: not compared),
     # the method of the rungs past the first, and their first rtol (None: a decade down))
     (1e-6, 1e-10, np.inf, np.inf, EVENT, None), (1e-6, 1e-10, 1e-3, np.inf, EVENT, None),
@@ -112,7 +114,7 @@ def replay(data, data8, robust, rk4, first, floor, tolerance, settle_tolerance, 
         certain |= open_ & agree
         open_ &= ~agree
     return {"first": first, "floor": floor, "change_tolerance": tolerance,
-            "settle_tolerance": settle_tolerance, "upper_rungs": upper,
+            "settle_tolerance": settle_tolerance, "upper_rungs": upper.label,
             "upper_start": upper_start or RTOLS[RTOLS.index(first) + 1],
             "certain_and_wrong_robust": float((certain & (label != rk4) & robust).sum()
                                               / robust.sum()),

@@ -33,8 +33,9 @@ RTOL_FLOOR = 1e-12  # the tightest tolerance a ladder climbs to (README: "Verifi
 FIXED_RUNGS = 3
 CHANGE_TOLERANCE = 1e-3  # s: two agreeing runs enter their final well this close in time
 SETTLE_TOLERANCE = 1e-2  # s: and fall below E_crit this close in time
-UPPER_RUNGS = {Method.EVENT: Method.EVENT_DOP853}  # the method of the rungs past the first
-UPPER_START = {Method.EVENT: 100.0}  # their first rtol: the first rung's divided by this
+# the rungs past the first: their method, and their first rtol as a divisor of the first rung's
+# (a method not named climbs on itself, a decade a rung)
+UPPER_RUNGS = {Method.EVENT: (Method.EVENT_DOP853, 100.0)}
 
 
 @dataclass(frozen=True)
@@ -82,12 +83,12 @@ def ladder_of(integration: Integration) -> Ladder:
         return Ladder((first,), (integration.rtol,), (integration.dt,), method.adaptive)
     if method.adaptive:
         rtol = integration.rtol
-        # the second rung: UPPER_START below the first, but not below the floor unless the
-        # first is within a decade of it
-        rtols = [rtol, max(rtol / UPPER_START.get(first, 10.0), min(rtol / 10.0, RTOL_FLOOR))]
+        upper, start = UPPER_RUNGS.get(first, (first, 10.0))
+        # the second rung: `start` below the first, but not below the floor unless the first is
+        # within a decade of it
+        rtols = [rtol, max(rtol / start, min(rtol / 10.0, RTOL_FLOOR))]
         while rtols[-1] / 10.0 >= RTOL_FLOOR * (1 - 1e-9):
             rtols.append(rtols[-1] / 10.0)
-        upper = UPPER_RUNGS.get(first, first)
         return Ladder((first,) + (upper,) * (len(rtols) - 1), tuple(rtols),
                       (integration.dt,) * len(rtols), True)
     dts = tuple(integration.dt / 10.0 ** (k / method.order) for k in range(FIXED_RUNGS))
@@ -105,5 +106,4 @@ def describe(integration: Integration) -> str:
     return f"{base}, verified up to {ladder.rung_text(len(ladder) - 1)}"
 
 
-__all__ = ["FIXED_RUNGS", "Ladder", "RTOL_FLOOR", "UPPER_RUNGS", "UPPER_START", "describe",
-           "ladder_of"]
+__all__ = ["FIXED_RUNGS", "Ladder", "RTOL_FLOOR", "UPPER_RUNGS", "describe", "ladder_of"]
