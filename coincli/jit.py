@@ -1,15 +1,15 @@
 """Kernels: plain Python functions that numba compiles on first use, with a cache that cannot go
 stale and that leaves numba's settings for other code alone.
 
-Why kernels are not ``numba.njit`` at import: importing numba costs about 0.4 s and loading the
-cached machine code as much again, and most commands need neither (``coin --help``, a table, one
-short throw). So :func:`kernel` only registers a function and returns it unchanged: it runs as
-ordinary Python until :func:`compiled` is first called. That call imports numba, wraps every
-registered kernel in a cached ``njit`` dispatcher and rebinds the names in the ``coincli``
-modules to the dispatchers (numba resolves a kernel's callees through its module's globals), so
-from then on every caller in the package runs compiled code. Kernels are written in the subset
-of Python that numba compiles and CPython runs alike, with the same operations in the same
-order.
+Why kernels are not ``numba.njit`` at import: importing numba costs about 0.3 s and loading the
+cached machine code 0.1 s more (0.3 s more as numba itself loads it, :func:`_refresh_on_miss`), and
+most commands need neither (``coin --help``, a table, one short throw). So :func:`kernel` only
+registers a function and returns it unchanged: it runs as ordinary Python until :func:`compiled` is
+first called. That call imports numba, wraps every registered kernel in a cached ``njit``
+dispatcher and rebinds the names in the ``coincli`` modules to the dispatchers (numba resolves a
+kernel's callees through its module's globals), so from then on every caller in the package runs
+compiled code. Kernels are written in the subset of Python that numba compiles and CPython runs
+alike, with the same operations in the same order.
 
 Compiled, a multiply followed by an add may be fused into one FMA instruction (numba's
 ``fastmath={"contract"}``, nothing else of fast-math: no reassociation, NaN and infinity keep
@@ -99,12 +99,12 @@ def derive(module, suffix: str, **substitutions) -> types.SimpleNamespace:
 
 
 def skip_blas_probe() -> None:
-    """Have this process load numba without its BLAS probe: when numba first loads any compiled
-    code it imports ``numba.np.arraymath``, which imports scipy.linalg (0.2 s) to learn whether
-    ``np.convolve`` and ``np.correlate`` may call BLAS. No kernel of ours uses them, so the
-    ``coin`` command (a process that runs only our kernels) hides scipy.linalg during that one
-    import; the two functions would then fall back to plain loops. A library user's process
-    keeps numba's behaviour: only the CLI calls this."""
+    """Have this process compile without numba's BLAS probe: when numba first compiles (loading
+    cached code does not, see _refresh_on_miss) it imports ``numba.np.arraymath``, which imports
+    scipy.linalg (0.2 s) to learn whether ``np.convolve`` and ``np.correlate`` may call BLAS. No
+    kernel of ours uses them, so the ``coin`` command (a process that runs only our kernels) hides
+    scipy.linalg during that one import; the two functions would then fall back to plain loops. A
+    library user's process keeps numba's behaviour: only the CLI calls this."""
     global _SKIP_BLAS_PROBE
     _SKIP_BLAS_PROBE = True
 
@@ -112,7 +112,7 @@ def skip_blas_probe() -> None:
 def _import_numba_lowering() -> None:
     """Import ``numba.np.arraymath`` now, without the BLAS probe if asked (skip_blas_probe)."""
     if not _SKIP_BLAS_PROBE or "scipy.linalg" in sys.modules:
-        return  # numba imports it when it first loads code; with scipy.linalg loaded, cheaply
+        return  # numba imports it when it first compiles; with scipy.linalg loaded, cheaply
     sys.modules["scipy.linalg"] = None  # `import scipy.linalg.cython_blas` raises ImportError
     try:
         import numba.np.arraymath  # noqa: F401
@@ -204,13 +204,14 @@ def _activate() -> None:
             return
         import numba
 
-        _import_numba_lowering()
         _import_kernel_modules()
 
         _install_locator(numba)
         dispatchers = {fn: numba.njit(cache=True, nogil=True, fastmath={"contract"},
                                       inline="always" if fn in _INLINE else "never")(fn)
                        for fn in _KERNELS}
+        for dispatcher in dispatchers.values():
+            _refresh_on_miss(dispatcher)
         # rebind every name in the package that refers to a kernel, so that numba finds
         # dispatchers when it resolves a kernel's callees and Python callers run compiled code
         namespaces = [vars(module) for name, module in list(sys.modules.items())
@@ -221,6 +222,31 @@ def _activate() -> None:
                 if callable(value) and value in dispatchers:
                     namespace[attr] = dispatchers[value]
         _DISPATCHERS.update(dispatchers)
+
+
+def _refresh_on_miss(dispatcher) -> None:
+    """Have ``dispatcher`` load its machine code from the cache without first loading all of
+    numba's compiler (its target context's ``refresh``: 0.2-0.3 s of imports, numba.np.arraymath
+    among them), which only compiling needs: the cached code is complete and linked. Numba
+    refreshes before every cache lookup; here the lookup comes first, and a miss refreshes before
+    numba compiles."""
+    cache = getattr(dispatcher, "_cache", None)
+    if cache is None or not hasattr(cache, "_load_overload") or not hasattr(
+            cache, "_guard_against_spurious_io_errors"):
+        return  # another numba layout: its own behaviour
+    from numba.core.runtime import rtsys
+
+    def load_overload(sig, target_context):
+        rtsys.initialize(target_context)  # numba's runtime: the code allocates through it
+        with cache._guard_against_spurious_io_errors():
+            result = cache._load_overload(sig, target_context)
+            if result is not None:
+                return result
+        _import_numba_lowering()
+        target_context.refresh()
+        return None
+
+    cache.load_overload = load_overload
 
 
 def _install_locator(numba) -> None:

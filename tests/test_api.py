@@ -152,19 +152,25 @@ def test_import_is_light_and_leaves_numba_alone():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
-def test_the_command_loads_kernels_without_numbas_blas_probe(tmp_path):
+def test_the_command_loads_kernels_without_numbas_compiler_or_blas_probe(tmp_path):
     """`coin basin` (through the CLI's main, as the console script runs it) loads and runs its
-    kernels without importing scipy.linalg, which numba imports only to probe for BLAS; a
-    library user's process keeps that probe (numba's np.convolve may use BLAS there)."""
-    store = tmp_path / "s.zarr"
-    cli = ("import sys, coincli.cli\n"
-           f"sys.argv = ['coin', 'basin', {str(store)!r}, '--res', '4', '-q']\n"
-           "try:\n    coincli.cli.main()\nexcept SystemExit as e:\n    assert not e.code, e\n"
-           "assert 'coincli.integrators.batch' in sys.modules and 'numba' in sys.modules\n"
-           "assert 'scipy.linalg' not in sys.modules\n"
-           "import numba.np.arraymath as m; assert m._HAVE_BLAS is False")
-    subprocess.run([sys.executable, "-c", cli], check=True, capture_output=True)
-    assert coincli.open_basin(store).quarter_turns.shape == (4, 4)
+    kernels without importing scipy.linalg, which numba imports only to probe for BLAS, and,
+    once they are compiled, without numba's compiler registries (numba.np.arraymath among them,
+    0.2-0.3 s: jit._refresh_on_miss); a library user's process keeps that probe (numba's
+    np.convolve may use BLAS there)."""
+    def cli(store, warm: bool) -> str:
+        return ("import sys, coincli.cli\n"
+                f"sys.argv = ['coin', 'basin', {str(store)!r}, '--res', '4', '-q']\n"
+                "try:\n    coincli.cli.main()\nexcept SystemExit as e:\n    assert not e.code, e\n"
+                "assert 'coincli.integrators.batch' in sys.modules and 'numba' in sys.modules\n"
+                "assert 'scipy.linalg' not in sys.modules\n"
+                + ("assert 'numba.np.arraymath' not in sys.modules\n" if warm else ""))
+
+    for store, warm in ((tmp_path / "a.zarr", False), (tmp_path / "b.zarr", True)):
+        done = subprocess.run([sys.executable, "-c", cli(store, warm)], capture_output=True,
+                              text=True)
+        assert done.returncode == 0, done.stderr[-2000:]
+        assert coincli.open_basin(store).quarter_turns.shape == (4, 4)
     library = ("import coincli\n"
                "coincli.classify(coincli.load_preset('paper').with_overrides(vy=0.5))\n"
                "import numba.np.arraymath as m; assert m._HAVE_BLAS is True")

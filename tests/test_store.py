@@ -234,13 +234,87 @@ def test_stats_read_a_store_tile_by_tile(tmp_path, clean, monkeypatch):
         reads.append(tile)
         return real(view, tile)
 
-    monkeypatch.setattr(store, "BATCH_CELLS", 16)  # one tile at a time
     monkeypatch.setattr(store, "_read_tile", spy)
     monkeypatch.setattr(store, "read_basin", lambda *_: pytest.fail("whole arrays read"))
     streamed = coincli.basin_stats(clean)
     assert sorted(reads) == [(0, 0), (0, 1), (1, 0), (1, 1)]
     assert {**streamed, "cost": None} == {**whole, "cost": None}
     assert streamed["cost"]["cpu_seconds"] == whole["cost"]["cpu_seconds"]
+
+
+def _zarr_template(attrs: dict, grid) -> dict[str, bytes]:
+    """What Zarr itself writes for an empty store of ``grid`` (the reference for ours)."""
+    import warnings
+
+    import zarr
+    from zarr.codecs import Crc32cCodec, ZstdCodec
+    from zarr.storage import MemoryStore
+
+    def compressors():
+        return [ZstdCodec(level=store.ZSTD_LEVEL, checksum=False), Crc32cCodec()]
+
+    mem = MemoryStore()
+    group = zarr.open_group(mem, mode="w-", zarr_format=3, attributes=attrs)
+    for axis in grid.axes:
+        arr = group.create_array(axis.name, shape=(axis.n,), chunks=(axis.n,), dtype="float64",
+                                 fill_value=0.0, dimension_names=(axis.name,),
+                                 compressors=compressors(),
+                                 attributes={"units": axis.units, "long_name": axis.long_name,
+                                             "cell_centres": store.COORD_NOTE})
+        arr[:] = axis.coords
+    for name in store.ARRAY_NAMES:
+        dtype, fill, array_attrs = store.VARIABLES[name]
+        group.create_array(name, shape=grid.shape, chunks=grid.chunk, dtype=dtype,
+                           fill_value=fill, dimension_names=grid.dims, attributes=array_attrs,
+                           compressors=compressors())
+    group.create_array("done", shape=grid.tile_grid, chunks=(1, 1), dtype=store.DONE_DTYPE,
+                       fill_value=0, dimension_names=store.tile_dims(grid),
+                       attributes=store.DONE_ATTRS, compressors=compressors())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # "consolidated metadata is not part of the v3 spec"
+        zarr.consolidate_metadata(mem)
+    return {key: buf.to_bytes() for key, buf in mem._store_dict.items()}
+
+
+@pytest.mark.parametrize("res", ["8", "5x3"])
+def test_the_template_is_what_zarr_writes(tmp_path, res):
+    """The store's metadata and coordinate chunks, made without Zarr, against Zarr's own:
+    every file byte for byte (a grid cut by its tiles, and one that is not)."""
+    path = tmp_path / "s.zarr"
+    coin_ok(path, "--res", res, "--chunk", "4x2", "--no-mirror", "-q")
+    view = store.open_view(path)
+    ours = store.template(view.attrs, view.grid)
+    theirs = _zarr_template(view.attrs, view.grid)
+    assert sorted(ours) == sorted(theirs)
+    assert [k for k in ours if ours[k] != theirs[k]] == []
+
+
+def test_reads_are_what_zarr_reads(clean):
+    """Every array as this module reads it (tile by tile, through decode_chunk) against Zarr's
+    reading of the same store, value for value and dtype for dtype."""
+    import zarr
+
+    group = zarr.open_group(str(clean), mode="r")
+    basin = store.read_basin(clean)
+    assert basin.done.all()
+    for name in store.ARRAY_NAMES:
+        theirs = group[name][:]
+        assert basin.arrays[name].dtype == theirs.dtype, name
+        assert basin.arrays[name].tobytes() == theirs.tobytes(), name
+    view = store.open_view(clean)
+    flags, unreadable = store._done_flags(view)
+    assert not unreadable and (flags == group["done"][:]).all()
+    assert dict(group.attrs) == view.attrs
+
+
+def test_a_sweep_does_not_import_zarr(tmp_path):
+    """`coin basin` writes and checks its store without Zarr (a quarter of a second to import)."""
+    code = ("import sys; from coincli.cli import run\n"
+            "assert run(['basin', sys.argv[1], '--res', '8', '--chunk', '4', '-q']) == 0\n"
+            "assert 'zarr' not in sys.modules, 'zarr imported'")
+    done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "s.zarr")], cwd=ROOT,
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
 
 
 # -- several processes ---------------------------------------------------------------------------

@@ -31,19 +31,24 @@ its chunks read back as (:func:`scan`); otherwise it is recomputed on resume (re
 the same bytes), counted as not computed by ``stats`` and ``render``, and listed by
 ``coin basin verify``.
 
-A tile's chunks are encoded here, as the template's codecs say (:func:`encode_chunk`: bytes
+The store is Zarr v3, but this module writes and reads it without importing Zarr, whose import
+alone takes a quarter of a second of every `coin basin` (the layout is fixed: one chunk per tile,
+the codecs of :data:`CODECS`). A tile's chunks are encoded here (:func:`encode_chunk`: bytes
 little-endian, zstd level 0, crc32c, with numcodecs and google-crc32c, the libraries Zarr's own
 codecs call), and written to ``CHUNK.HOST-PID-THREAD.partial``, then renamed: Zarr's ``arr[...] =``
-takes 4 ms a chunk, nearly all of it in its asyncio machinery, against 0.5 ms, and the bytes are
-the same (tests/test_store.py). Every chunk of a tile is written, also one equal to the fill value.
-A ``.partial`` file left by a killed writer is removed by the next writer of that tile. Reading
-goes through Zarr. The store is created from a template built in memory (:func:`template`: every
-metadata file and the coordinate chunks), in ``.NAME.creating-HOST-PID`` beside it, renamed into
-place under a lock (``.NAME.lock``, ``flock``), so that processes racing to create one store all
-end up in the winner's. Metadata is consolidated once at creation and never changes afterwards, so
-``xarray.open_zarr(path)`` opens it directly; a metadata file or coordinate chunk that differs from
-the template is rewritten on resume. ``quarter_turns`` carries ``missing_value`` so xarray masks
-cells without a label to NaN (``mask_and_scale=False`` keeps the int16 values).
+takes 4 ms a chunk, nearly all of it in its asyncio machinery, against 0.5 ms. Every chunk of a
+tile is written, also one equal to the fill value. A ``.partial`` file left by a killed writer is
+removed by the next writer of that tile. Reading decodes the same chunks (:func:`decode_chunk`,
+which checks their CRC and length). The store is created from a template built in memory
+(:func:`template`: every metadata file and the coordinate chunks), in
+``.NAME.creating-HOST-PID`` beside it, renamed into place under a lock (``.NAME.lock``,
+``flock``), so that processes racing to create one store all end up in the winner's. Chunks,
+metadata and what is read back are the same, byte for byte and value for value, as Zarr's
+(tests/test_store.py). Metadata is consolidated once at creation and never changes afterwards, so
+``xarray.open_zarr(path)`` and ``zarr.open_group(path)`` open it directly; a metadata file or
+coordinate chunk that differs from the template is rewritten on resume. ``quarter_turns``
+carries ``missing_value`` so xarray masks cells without a label to NaN (``mask_and_scale=False``
+keeps the int16 values).
 """
 
 from __future__ import annotations
@@ -59,7 +64,6 @@ import shutil
 import socket
 import threading
 import time
-import warnings
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -82,22 +86,17 @@ from .schema import (
 
 ARRAY_NAMES = SweepSpec.array_names  # the data arrays, in the order of the digest
 DONE_DTYPE = "uint32"  # the digests; fill 0 = not done
-BATCH_CELLS = 1 << 20  # cells read at once when checking tiles (a row of tiles at most)
-
-
-def _zarr():
-    import zarr
-
-    return zarr
 
 
 ZSTD_LEVEL = 0  # the store's compression: a tile compresses 3-10x at level 0 already
+# Every array's codecs, as Zarr v3 names them: bytes little-endian, zstd, then a CRC-32C
+CODECS = ({"name": "bytes", "configuration": {"endian": "little"}},
+          {"name": "zstd", "configuration": {"level": ZSTD_LEVEL, "checksum": False}},
+          {"name": "crc32c"})
 
 
-def _compressors():
-    from zarr.codecs import Crc32cCodec, ZstdCodec
-
-    return [ZstdCodec(level=ZSTD_LEVEL, checksum=False), Crc32cCodec()]
+class ChunkError(ValueError):
+    """A chunk file that does not decode (checksum, length)."""
 
 
 @functools.cache
@@ -107,17 +106,36 @@ def _zstd():
     return Zstd(level=ZSTD_LEVEL, checksum=False)
 
 
-def encode_chunk(block: np.ndarray, dtype: str, fill, chunk: tuple[int, int]) -> bytes:
-    """The bytes of one chunk as Zarr writes it under :func:`_compressors`: the block padded
-    with ``fill`` to the chunk's shape (a tile at the grid's far edge is smaller), its values
-    little-endian in C order, zstd-compressed, then the CRC-32C of the compressed bytes
-    (little-endian uint32)."""
+def _crc32c(data: bytes) -> bytes:
     import google_crc32c
 
+    return np.array([google_crc32c.value(data)], dtype="<u4").tobytes()
+
+
+def encode_chunk(block: np.ndarray, dtype: str, fill, chunk: tuple[int, ...]) -> bytes:
+    """The bytes of one chunk as Zarr writes it under :data:`CODECS`: the block padded with
+    ``fill`` to the chunk's shape (a tile at the grid's far edge is smaller), its values
+    little-endian in C order, zstd-compressed, then the CRC-32C of the compressed bytes
+    (little-endian uint32)."""
     full = np.full(chunk, fill, dtype=np.dtype(dtype).newbyteorder("<"))
-    full[:block.shape[0], :block.shape[1]] = block
+    full[tuple(slice(0, n) for n in block.shape)] = block
     compressed = bytes(_zstd().encode(full.tobytes()))
-    return compressed + np.array([google_crc32c.value(compressed)], dtype="<u4").tobytes()
+    return compressed + _crc32c(compressed)
+
+
+def decode_chunk(data: bytes, dtype: str, chunk: tuple[int, ...]) -> np.ndarray:
+    """The values of a chunk written by :func:`encode_chunk` (the whole chunk, padding
+    included); ChunkError if its checksum or its length is wrong."""
+    if len(data) < 4 or _crc32c(data[:-4]) != data[-4:]:
+        raise ChunkError("checksum mismatch")
+    try:
+        raw = _zstd().decode(data[:-4])
+    except Exception as exc:  # noqa: BLE001 - undecodable bytes are damage
+        raise ChunkError(f"zstd: {exc}") from None
+    wanted = np.dtype(dtype).newbyteorder("<")
+    if len(raw) != wanted.itemsize * math.prod(chunk):
+        raise ChunkError(f"{len(raw)} bytes where {wanted.itemsize * math.prod(chunk)} belong")
+    return np.frombuffer(raw, dtype=wanted).reshape(chunk).astype(np.dtype(dtype))
 
 
 def is_store(path: str | os.PathLike) -> bool:
@@ -217,35 +235,62 @@ def grid_of(attrs: dict) -> Grid:
     return Grid(axes=axes, base_state=(0.0,) * 6, chunk=tuple(int(c) for c in sweep["chunk"]))
 
 
+def _fill_json(fill):
+    """A fill value as Zarr v3 writes it in JSON (NaN and infinities as strings)."""
+    if isinstance(fill, float) and not math.isfinite(fill):
+        return "NaN" if math.isnan(fill) else ("Infinity" if fill > 0 else "-Infinity")
+    return fill
+
+
+def _codecs(dtype: str) -> list[dict]:
+    """CODECS as Zarr writes them for ``dtype``: single bytes have no byte order."""
+    if np.dtype(dtype).itemsize == 1:
+        return [{"name": "bytes"}, *CODECS[1:]]
+    return list(CODECS)
+
+
+def _array_metadata(shape, chunks, dtype: str, fill, dims, attributes: dict) -> dict:
+    """The zarr.json of one array, key for key as Zarr v3 writes it."""
+    return {"shape": list(shape), "data_type": dtype,
+            "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": list(chunks)}},
+            "chunk_key_encoding": {"name": "default", "configuration": {"separator": "/"}},
+            "fill_value": _fill_json(fill), "codecs": _codecs(dtype),
+            "attributes": attributes, "dimension_names": list(dims), "zarr_format": 3,
+            "node_type": "array", "storage_transformers": []}
+
+
+def _json_bytes(document: dict) -> bytes:
+    return json.dumps(document, indent=2, allow_nan=True).encode()  # as Zarr writes metadata
+
+
 def template(attrs: dict, grid: Grid) -> dict[str, bytes]:
     """Every file of an empty store, by key ('zarr.json', 'vy/c/0', ...): the metadata of the
-    group and its arrays (consolidated) and the coordinate chunks. Built in memory, so that
-    creating a store is writing these files, and checking one is comparing with them."""
-    zarr = _zarr()
-    from zarr.storage import MemoryStore
-
-    mem = MemoryStore()
-    group = zarr.open_group(mem, mode="w-", zarr_format=3, attributes=attrs)
+    group and its arrays (consolidated into the group's) and the coordinate chunks, byte for
+    byte what Zarr writes for them (tests/test_store.py), without importing Zarr (a quarter of
+    a second). Creating a store is writing these files; checking one, comparing with them."""
     d0, d1 = grid.dims
+    arrays = {}
+    files = {}
     for axis in grid.axes:
-        arr = group.create_array(axis.name, shape=(axis.n,), chunks=(axis.n,), dtype="float64",
-                                 fill_value=0.0, dimension_names=(axis.name,),
-                                 compressors=_compressors(),
-                                 attributes={"units": axis.units, "long_name": axis.long_name,
-                                             "cell_centres": COORD_NOTE})
-        arr[:] = axis.coords
+        arrays[axis.name] = _array_metadata(
+            (axis.n,), (axis.n,), "float64", 0.0, (axis.name,),
+            {"units": axis.units, "long_name": axis.long_name, "cell_centres": COORD_NOTE})
+        files[f"{axis.name}/c/0"] = encode_chunk(np.asarray(axis.coords, dtype=np.float64),
+                                                 "float64", 0.0, (axis.n,))
     for name in ARRAY_NAMES:
         dtype, fill, array_attrs = VARIABLES[name]
-        group.create_array(name, shape=grid.shape, chunks=grid.chunk, dtype=dtype,
-                           fill_value=fill, dimension_names=(d0, d1), attributes=array_attrs,
-                           compressors=_compressors(), config={"write_empty_chunks": True})
-    group.create_array("done", shape=grid.tile_grid, chunks=(1, 1), dtype=DONE_DTYPE,
-                       fill_value=0, dimension_names=tile_dims(grid), attributes=DONE_ATTRS,
-                       compressors=_compressors())
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # "consolidated metadata is not part of the v3 spec"
-        zarr.consolidate_metadata(mem)
-    return {key: buf.to_bytes() for key, buf in mem._store_dict.items()}
+        arrays[name] = _array_metadata(grid.shape, grid.chunk, dtype, fill, (d0, d1),
+                                       array_attrs)
+    arrays["done"] = _array_metadata(grid.tile_grid, (1, 1), DONE_DTYPE, 0, tile_dims(grid),
+                                     DONE_ATTRS)
+    group = {"attributes": attrs, "zarr_format": 3,
+             "consolidated_metadata": {"kind": "inline", "must_understand": False,
+                                       "metadata": {k: arrays[k] for k in sorted(arrays)}},
+             "node_type": "group"}
+    files["zarr.json"] = _json_bytes(group)
+    for name, metadata in arrays.items():
+        files[f"{name}/zarr.json"] = _json_bytes(metadata)
+    return files
 
 
 def _write_files(root: Path, files: dict[str, bytes]) -> None:
@@ -385,23 +430,25 @@ class StoreCheck:
 
 @dataclass
 class StoreView:
-    """An opened store: its group, attributes and grid."""
+    """An opened store: the metadata of its arrays (name -> zarr.json), attributes and grid."""
 
     path: Path
-    group: object
+    arrays: dict[str, dict]
     attrs: dict
     grid: Grid
 
 
 def open_view(path: str | os.PathLike, grid: Grid | None = None) -> StoreView:
     """Open a basin store for reading; ParameterError (one line) if it is none, or if its
-    metadata cannot be read. ``grid``: the sweep's grid when known (else from the attributes)."""
-    zarr = _zarr()
+    metadata cannot be read. ``grid``: the sweep's grid when known (else from the attributes).
+    Read from the group's consolidated metadata, as Zarr opens it."""
     p = Path(path)
     check_is_store(p)
     try:
-        group = zarr.open_group(str(p), mode="r")
-        attrs = dict(group.attrs)
+        root = json.loads((p / "zarr.json").read_bytes())
+        attrs = dict(root["attributes"])
+        arrays = {name: meta for name, meta in root["consolidated_metadata"]["metadata"].items()
+                  if meta.get("node_type") == "array"}
     except Exception as exc:  # noqa: BLE001 - any failure to parse is damage
         raise StoreDamaged(f"{path}: its metadata cannot be read ({_short(exc)}): the store is "
                            "damaged; --overwrite starts the sweep again") from None
@@ -415,14 +462,14 @@ def open_view(path: str | os.PathLike, grid: Grid | None = None) -> StoreView:
                              f"reads format {FORMAT}: recompute it (--overwrite)")
     try:
         grid = grid or grid_of(attrs)
-        missing = [n for n in (*ARRAY_NAMES, "done") if n not in set(group.array_keys())]
     except Exception as exc:  # noqa: BLE001
         raise StoreDamaged(f"{path}: its metadata cannot be read ({_short(exc)}): the store is "
                            "damaged; --overwrite starts the sweep again") from None
+    missing = [n for n in (*ARRAY_NAMES, "done") if n not in arrays]
     if missing:
         raise StoreDamaged(f"{path} is damaged: array '{missing[0]}' is missing; "
                            "--overwrite starts it again")
-    return StoreView(p, group, attrs, grid)
+    return StoreView(p, arrays, attrs, grid)
 
 
 def _short(exc: BaseException) -> str:
@@ -432,19 +479,21 @@ def _short(exc: BaseException) -> str:
     return text if len(text) <= 100 else text[:97] + "..."
 
 
-def _check_layout(group, grid: Grid, path: Path) -> None:
+def _check_layout(view: StoreView) -> None:
+    grid = view.grid
     expected = {**{name: (grid.shape, grid.chunk) for name in ARRAY_NAMES},
                 "done": (grid.tile_grid, (1, 1))}
-    present = set(group.array_keys())
     for name, (shape, chunks) in expected.items():
-        if name not in present:
-            raise ParameterError(f"{path} is damaged: array '{name}' is missing; "
-                                 "--overwrite starts it again")
-        arr = group[name]
-        if tuple(arr.shape) != tuple(shape) or tuple(arr.chunks) != tuple(chunks):
-            raise ParameterError(f"{path} is damaged: array '{name}' has shape {arr.shape} "
-                                 f"chunks {arr.chunks}, expected {shape} {chunks}; "
-                                 "--overwrite starts it again")
+        meta = view.arrays[name]
+        try:
+            found = (tuple(meta["shape"]), tuple(meta["chunk_grid"]["configuration"]
+                                                 ["chunk_shape"]))
+        except (KeyError, TypeError):
+            found = None
+        if found != (tuple(shape), tuple(chunks)):
+            have = f"shape {found[0]} chunks {found[1]}" if found else "no readable shape"
+            raise ParameterError(f"{view.path} is damaged: array '{name}' has {have}, expected "
+                                 f"{shape} {chunks}; --overwrite starts it again")
 
 
 def _compare_metadata(path: Path, files: dict[str, bytes]) -> list[str]:
@@ -473,40 +522,49 @@ def _chunk_file(root: Path, name: str, tile: tuple[int, int]) -> Path:
     return root / name / "c" / str(tile[0]) / str(tile[1])
 
 
-def _done_flags(group, tile_grid, tiles=None) -> tuple[np.ndarray, set]:
-    """The ``done`` digests (of ``tiles`` only, if given), and the tiles whose digest cannot
-    be read."""
-    arr = group["done"]
-    flags = np.zeros(tile_grid, dtype=np.uint32)
-    if tiles is None:
-        try:
-            return np.asarray(arr[:], dtype=np.uint32), set()
-        except Exception:  # noqa: BLE001 - a damaged chunk: read them one by one
-            tiles = [(i, j) for i in range(tile_grid[0]) for j in range(tile_grid[1])]
+def _read_chunk(view: StoreView, name: str, tile: tuple[int, int]) -> np.ndarray:
+    """One tile's chunk of array ``name``, cut to the tile (ChunkError, OSError if it cannot
+    be read; a missing chunk file is FileNotFoundError)."""
+    dtype = DONE_DTYPE if name == "done" else DTYPES[name]
+    chunk = (1, 1) if name == "done" else view.grid.chunk
+    values = decode_chunk(_chunk_file(view.path, name, tile).read_bytes(), dtype, chunk)
+    if name == "done":
+        return values
+    s0, s1 = view.grid.tile_slices(tile)
+    return values[:s0.stop - s0.start, :s1.stop - s1.start]
+
+
+def _done_flags(view: StoreView, tiles=None) -> tuple[np.ndarray, set]:
+    """The ``done`` digests (of ``tiles`` only, if given; 0 where a tile has none), and the
+    tiles whose digest cannot be read."""
+    t0, t1 = view.grid.tile_grid
+    flags = np.zeros((t0, t1), dtype=np.uint32)
     unreadable = set()
-    for i, j in tiles:
+    for tile in ([(i, j) for i in range(t0) for j in range(t1)] if tiles is None else tiles):
         try:
-            flags[i, j] = np.asarray(arr[i:i + 1, j:j + 1])[0, 0]
-        except Exception:  # noqa: BLE001
-            unreadable.add((i, j))
+            flags[tile] = _read_chunk(view, "done", tile)[0, 0]
+        except FileNotFoundError:
+            pass  # not done
+        except Exception:  # noqa: BLE001 - any failure to read is damage
+            unreadable.add(tuple(tile))
     return flags, unreadable
 
 
 def _read_tile(view: StoreView, tile: tuple[int, int]) -> tuple[dict | None, str | None]:
     """One tile's arrays, or why they cannot be read."""
-    s0, s1 = view.grid.tile_slices(tile)
     out = {}
     for name in ARRAY_NAMES:
-        if not _chunk_file(view.path, name, tile).is_file():
-            return None, f"chunk {name}/c/{tile[0]}/{tile[1]} is missing"
+        key = f"chunk {name}/c/{tile[0]}/{tile[1]}"
         try:
-            out[name] = np.asarray(view.group[name][s0, s1])
+            out[name] = _read_chunk(view, name, tile)
+        except FileNotFoundError:
+            return None, f"{key} is missing"
         except Exception as exc:  # noqa: BLE001 - any failure to read is damage
-            return None, f"chunk {name}/c/{tile[0]}/{tile[1]} cannot be read ({_short(exc)})"
+            return None, f"{key} cannot be read ({_short(exc)})"
     return out, None
 
 
-def _judge(view: StoreView, tile, flag: int, data: dict | None, why: str | None):
+def _judge(tile, flag: int, data: dict | None, why: str | None):
     if data is None:
         return Tile.DAMAGED, None, why
     if tile_digest(tile, data) != flag:
@@ -518,52 +576,21 @@ def _judge(view: StoreView, tile, flag: int, data: dict | None, why: str | None)
 def scan(view: StoreView, *, with_data: bool = False,
          tiles: Iterable[tuple[int, int]] | None = None) -> Iterator[tuple]:
     """Check every tile (or ``tiles``): yield (tile, Tile state, arrays or None, why damaged).
-    Arrays are given for DONE tiles when ``with_data``. Tiles are read a row of tiles at a time
-    (at most BATCH_CELLS cells), one by one where a read fails, so memory stays flat."""
-    grid = view.grid
-    wanted = None if tiles is None else {tuple(t) for t in tiles}
-    flags, unreadable = _done_flags(view.group, grid.tile_grid, wanted)
-    c0, c1 = grid.chunk
-    t0, t1 = grid.tile_grid
-    batch = max(1, BATCH_CELLS // (c0 * c1))
-    for i in range(t0):
-        for j0 in range(0, t1, batch):
-            row = [(i, j) for j in range(j0, min(j0 + batch, t1))
-                   if wanted is None or (i, j) in wanted]
-            flagged = [t for t in row if flags[t] and t not in unreadable]
-            blocks = None
-            if len(flagged) > 1:
-                lo, hi = flagged[0][1], flagged[-1][1]
-                rows = grid.tile_slices((i, lo))[0]
-                cols = slice(lo * c1, min((hi + 1) * c1, grid.shape[1]))
-                try:
-                    blocks = {name: np.asarray(view.group[name][rows, cols])
-                              for name in ARRAY_NAMES}
-                except Exception:  # noqa: BLE001 - a damaged chunk: tile by tile below
-                    blocks = None
-            for tile in row:
-                if tile in unreadable:
-                    yield tile, Tile.DAMAGED, None, "its done digest cannot be read"
-                    continue
-                if not flags[tile]:
-                    yield tile, Tile.MISSING, None, None
-                    continue
-                missing = next((name for name in ARRAY_NAMES
-                                if not _chunk_file(view.path, name, tile).is_file()), None)
-                if missing is not None:
-                    yield (tile, Tile.DAMAGED, None,
-                           f"chunk {missing}/c/{tile[0]}/{tile[1]} is missing")
-                    continue
-                if blocks is not None:
-                    s1 = grid.tile_slices(tile)[1]
-                    off = lo * c1
-                    data = {name: b[:, s1.start - off:s1.stop - off]
-                            for name, b in blocks.items()}
-                    why = None
-                else:
-                    data, why = _read_tile(view, tile)
-                state, data, why = _judge(view, tile, int(flags[tile]), data, why)
-                yield tile, state, (data if with_data else None), why
+    Arrays are given for DONE tiles when ``with_data``. Tiles are read one at a time (one
+    chunk file per array), so memory stays flat."""
+    t0, t1 = view.grid.tile_grid
+    wanted = None if tiles is None else [tuple(t) for t in tiles]
+    flags, unreadable = _done_flags(view, wanted)
+    for tile in ([(i, j) for i in range(t0) for j in range(t1)] if wanted is None else wanted):
+        if tile in unreadable:
+            yield tile, Tile.DAMAGED, None, "its done digest cannot be read"
+            continue
+        if not flags[tile]:
+            yield tile, Tile.MISSING, None, None
+            continue
+        data, why = _read_tile(view, tile)
+        state, data, why = _judge(tile, int(flags[tile]), data, why)
+        yield tile, state, (data if with_data else None), why
 
 
 def _leftovers(path: Path) -> int:
@@ -619,7 +646,7 @@ def prepare(path: str | os.PathLike, attrs: dict, spec: SweepSpec,
                              f"{' ...' if len(diff) > 4 else ''}. Run again with the "
                              "store's parameters to resume it, or --overwrite to "
                              "replace it")
-    _check_layout(view.group, spec.grid, path)
+    _check_layout(view)
     cost_dir(path).mkdir(exist_ok=True)
     return check(path, repair_with=attrs, view=view)
 
