@@ -156,8 +156,8 @@ def test_the_command_loads_kernels_without_numbas_compiler_or_blas_probe(tmp_pat
     """`coin basin` (through the CLI's main, as the console script runs it) loads and runs its
     kernels without importing scipy.linalg, which numba imports only to probe for BLAS, and,
     once they are compiled, without numba's compiler registries (numba.np.arraymath among them,
-    0.2-0.3 s: jit._refresh_on_miss); a library user's process keeps that probe (numba's
-    np.convolve may use BLAS there)."""
+    0.2-0.3 s: jit._refresh_on_miss, on the numba versions it was tried on); a library user's
+    process keeps that probe (numba's np.convolve may use BLAS there)."""
     def cli(store, warm: bool) -> str:
         return ("import sys, coincli.cli\n"
                 f"sys.argv = ['coin', 'basin', {str(store)!r}, '--res', '4', '-q']\n"
@@ -166,7 +166,10 @@ def test_the_command_loads_kernels_without_numbas_compiler_or_blas_probe(tmp_pat
                 "assert 'scipy.linalg' not in sys.modules\n"
                 + ("assert 'numba.np.arraymath' not in sys.modules\n" if warm else ""))
 
-    for store, warm in ((tmp_path / "a.zarr", False), (tmp_path / "b.zarr", True)):
+    from coincli.jit import loads_without_refresh
+
+    for store, warm in ((tmp_path / "a.zarr", False), (tmp_path / "b.zarr",
+                                                        loads_without_refresh())):
         done = subprocess.run([sys.executable, "-c", cli(store, warm)], capture_output=True,
                               text=True)
         assert done.returncode == 0, done.stderr[-2000:]
