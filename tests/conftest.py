@@ -18,6 +18,22 @@ from coincli.params import RunSettings, model_params
 from coincli.presets import load
 
 
+def pytest_configure(config):
+    """Compile the kernels once, here, before pytest-xdist starts its workers, which on a cold
+    cache would each compile all of them at the same time (warm_up compiles its two drivers in
+    two processes: one core each)."""
+    from coincli.jit import kernels_cached
+
+    if hasattr(config, "workerinput") or kernels_cached():
+        return  # a worker: the controller has compiled them
+    from coincli.integrators import warm_up
+    from coincli.params import run_settings
+
+    scene = load("paper").scene
+    warm_up(model_params(scene), run_settings(scene.integration),
+            np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+
+
 # The scenes of the integrator and model tests run a single pass (verify=False): they test one
 # method at one setting. Verification itself is tested on the presets as shipped.
 @pytest.fixture(scope="session")

@@ -190,3 +190,30 @@ def test_same_labels_as_dopri_at_tight_tolerance(paper):
         b = simulate(scene.with_overrides(method="event_dop853"))
         assert a.settled and b.settled
         assert a.quarter_turns == b.quarter_turns, (vy, vphi)
+
+
+def test_the_driver_compiled_beside_is_the_one_integrate_calls():
+    """A first compilation builds the DOP853 driver in a second process (batch._compile_beside)
+    from arrays typed as integrate passes them: had the types differed, integrate would compile
+    a second specialisation of its own and the split would gain nothing. The driver's cache holds
+    one specialisation, and the helper's call finds it there (a hit, not a compilation)."""
+    from coincli.integrators import batch
+    from coincli.jit import compiled
+
+    driver = compiled(batch.integrate_adaptive_dop853)
+    batch.final_state(*_paper_dop853_run())  # integrate, which calls the driver: loaded
+    batch.compile_dop853_driver()  # the helper's call, in this process
+    assert dict(driver._cache_misses) == {} and sum(driver._cache_hits.values()) == 1
+    assert len(driver._cache._cache_file._load_index()) == 1
+    helper = batch._compile_beside()
+    assert helper is not None and helper.wait(timeout=600) == 0
+
+
+def _paper_dop853_run():
+    from coincli.enums import Method
+    from coincli.params import Scene, model_params, run_settings
+
+    scene = Scene()
+    settings = run_settings(scene.integration)._replace(method=int(Method.EVENT_DOP853),
+                                                        t_end=1e-3)
+    return model_params(scene), settings, np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0])

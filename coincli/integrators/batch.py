@@ -226,17 +226,76 @@ def final_state(p, settings, state) -> tuple[np.ndarray, Status]:
     return final, Status(result.status)
 
 
+def _run_driver(driver, p, settings, state) -> None:
+    """One short run of an integration driver, its arrays typed as :func:`integrate` passes
+    them, so that compiling it here compiles (and caches) the specialisation integrate calls."""
+    compiled(driver)(p, settings._replace(t_end=settings.dt * 4),
+                     np.ascontiguousarray(state, dtype=np.float64),
+                     np.empty((0, SAMPLE_COLUMNS)), np.empty((0, EVENT_COLUMNS)), np.empty(6),
+                     new_control())
+
+
+def compile_dop853_driver() -> None:
+    """Compile the DOP853 driver into the cache (what :func:`_compile_beside` runs in another
+    process; the values do not matter, only the types)."""
+    from ..params import Scene, model_params, run_settings
+
+    scene = Scene()
+    settings = run_settings(scene.integration)._replace(method=int(Method.EVENT_DOP853))
+    _run_driver(integrate_adaptive_dop853, model_params(scene), settings,
+                np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+
+
+def _compile_beside():
+    """Start compiling the DOP853 driver in another process, on the other core: it takes two
+    thirds of a first compilation (195 of 298 s on a loaded host, Dormand-Prince 5(4)'s 91 s),
+    so both drivers compile at once. None if no process can be started (this one then compiles
+    both)."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    # Ctrl-C reaches the whole process group: the helper ignores it, so that a first Ctrl-C (the
+    # command then stops after the compilation) does not leave this process to compile both
+    # drivers; warm_up kills it when this process is interrupted for good.
+    code = ("import signal; signal.signal(signal.SIGINT, signal.SIG_IGN); "
+            "from coincli.integrators.batch import compile_dop853_driver; compile_dop853_driver()")
+    # this process's coincli first on the helper's path, whatever put it on this one's: the
+    # same sources, so the same cache
+    package_root = str(Path(__file__).parents[2])  # as numba keys the cache: unresolved
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        part for part in (package_root, os.environ.get("PYTHONPATH")) if part)}
+    try:
+        return subprocess.Popen([sys.executable, "-c", code], env=env, stdin=subprocess.DEVNULL,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:
+        return None
+
+
 def warm_up(p, settings, state, runs=None) -> None:
     """Load the compiled kernels behind ``runs`` (some of final_state, label_states and
     verified_labels; default all three) from numba's cache before a clock starts. Each is
     loaded by a short call whose arrays have the same types as in every real call, so the same
     specialisations load. A command loads only those it runs (after the first, each costs
     another 0.03 s), except on the first run of this version on this machine, which compiles
-    all three at once, as the notice before it says (:func:`coincli.jit.kernels_cached`)."""
+    all three at once, as the notice before it says (:func:`coincli.jit.kernels_cached`), the
+    two integration drivers in two processes (:func:`_compile_beside`); if the other process
+    fails, this one compiles its driver too, when integrate needs it."""
     from ..integrators.ladder import Ladder
 
     every = (final_state, label_states, verified_labels)
     runs = every if runs is None or not kernels_cached() else runs
+    if runs == every and not kernels_cached():
+        beside = _compile_beside()
+        try:
+            _run_driver(integrate_adaptive, p, settings._replace(method=int(Method.EVENT)), state)
+            if beside is not None:
+                beside.wait()
+        finally:
+            if beside is not None and beside.poll() is None:  # interrupted: stop it too
+                beside.kill()
+                beside.wait()
     short = settings._replace(t_end=settings.dt * 4)
     states = np.array([state], dtype=np.float64)
     if final_state in runs:
