@@ -205,6 +205,8 @@ def _activate() -> None:
             return
         import numba
 
+        if not loads_without_refresh():
+            _import_numba_lowering()  # numba's own loading refreshes, and imports it, at once
         _import_kernel_modules()
 
         _install_locator(numba)

@@ -285,8 +285,9 @@ def warm_up(p, settings, state, runs=None) -> None:
     from ..integrators.ladder import Ladder
 
     every = (final_state, label_states, verified_labels)
-    runs = every if runs is None or not kernels_cached() else runs
-    if runs == every and not kernels_cached():
+    first = not kernels_cached()
+    runs = every if runs is None or first else runs
+    if first:
         beside = _compile_beside()
         try:
             _run_driver(integrate_adaptive, p, settings._replace(method=int(Method.EVENT)), state)
