@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 
 from ..jit import kernel
-from ..model import corner_heights, corner_offset
+from ..model import corner_heights, corner_offset, rotate
 
 LANDING_GAP = 1e-14  # m, how close conservative advancement brings a corner before touch-down
 
@@ -37,11 +37,11 @@ def time_to_touchdown(p, state, t_max, budget):
     w = state[5]
     bound = g + w * w * p.r
     tau = 0.0
+    c = math.cos(state[2])
+    s = math.sin(state[2])
     for iterations in range(1, budget + 1):
         y = state[1] + (state[4] - 0.5 * g * tau) * tau
         vy = state[4] - g * tau
-        c = math.cos(state[2] + w * tau)
-        s = math.sin(state[2] + w * tau)
         advance = math.inf
         touching = 0  # corners on the surface (within LANDING_GAP) and not rising
         lowest = 0
@@ -67,6 +67,7 @@ def time_to_touchdown(p, state, t_max, budget):
             # resting on the surface with no downward speed: a touch-down of the lowest corner
             return tau, 1 << lowest, iterations
         tau += advance
+        c, s = rotate(c, s, w * advance)  # the angle's trig carried along, no libm call
         if tau >= t_max:
             return t_max, 0, iterations
     return tau, 0, budget
