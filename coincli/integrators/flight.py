@@ -6,7 +6,10 @@ second-order conservative advancement: each corner's height h obeys h'' >= -(g +
 (gravity, and the centripetal term of a point at distance r turning at vphi), so
 h(t + s) >= h + h' s - (g + vphi^2 r) s^2 / 2, and advancing by the first root of that bound
 can never step over a contact, however grazing. Near a transversal root the bound is tight to
-O(s^2), so convergence is quadratic (3-5 iterations per flight).
+O(s^2), so convergence is quadratic (3-5 iterations per flight). The angle's cosine and sine
+are carried from one iteration to the next by rotation (:func:`coincli.model.rotate`, exact to
+rounding) rather than taken from the library at each: a box throw's flights iterate about 54
+times, and libm's sincos at angles of up to 100 rad was a tenth of a single pass.
 """
 
 from __future__ import annotations
