@@ -205,7 +205,8 @@ def _activate() -> None:
             return
         import numba
 
-        if not loads_without_refresh():
+        fast_load = loads_without_refresh()
+        if not fast_load:
             _import_numba_lowering()  # numba's own loading refreshes, and imports it, at once
         _import_kernel_modules()
 
@@ -213,8 +214,9 @@ def _activate() -> None:
         dispatchers = {fn: numba.njit(cache=True, nogil=True, fastmath={"contract"},
                                       inline="always" if fn in _INLINE else "never")(fn)
                        for fn in _KERNELS}
-        for dispatcher in dispatchers.values():
-            _refresh_on_miss(dispatcher)
+        if fast_load:
+            for dispatcher in dispatchers.values():
+                _refresh_on_miss(dispatcher)
         # rebind every name in the package that refers to a kernel, so that numba finds
         # dispatchers when it resolves a kernel's callees and Python callers run compiled code
         namespaces = [vars(module) for name, module in list(sys.modules.items())
@@ -244,9 +246,8 @@ def _refresh_on_miss(dispatcher) -> None:
     numba's compiler (its target context's ``refresh``: 0.2-0.3 s of imports, numba.np.arraymath
     among them), which only compiling needs: the cached code is complete and linked. Numba
     refreshes before every cache lookup; here the lookup comes first, and a miss refreshes before
-    numba compiles."""
-    if not loads_without_refresh():
-        return  # untried: what cached code needs loaded first may change, numba's way is safe
+    numba compiles. Only on the numba versions of LOADS_WITHOUT_REFRESH: on others what cached
+    code needs loaded first may change, and numba's own way is safe."""
     cache = getattr(dispatcher, "_cache", None)
     if cache is None or not hasattr(cache, "_load_overload") or not hasattr(
             cache, "_guard_against_spurious_io_errors"):

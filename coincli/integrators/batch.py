@@ -217,22 +217,22 @@ def label_states(p, settings, states, control=None) -> Labels:
     return out
 
 
-def final_state(p, settings, state) -> tuple[np.ndarray, Status]:
-    """(final state, status) of one compiled run, nothing recorded on the way."""
+def _run_once(kernel_fn, p, settings, state):
+    """(final state, RunResult) of one compiled run of ``kernel_fn`` (integrate or one of the
+    drivers it calls, which take the same arguments), nothing recorded on the way: the arrays
+    typed as integrate passes them on, so that a driver compiled by this call is the
+    specialisation integrate calls."""
     final = np.empty(6)
-    result = compiled(integrate)(p, settings, np.ascontiguousarray(state, dtype=np.float64),
+    result = compiled(kernel_fn)(p, settings, np.ascontiguousarray(state, dtype=np.float64),
                                  np.empty((0, SAMPLE_COLUMNS)), np.empty((0, EVENT_COLUMNS)),
                                  final, new_control())
+    return final, result
+
+
+def final_state(p, settings, state) -> tuple[np.ndarray, Status]:
+    """(final state, status) of one compiled run, nothing recorded on the way."""
+    final, result = _run_once(integrate, p, settings, state)
     return final, Status(result.status)
-
-
-def _run_driver(driver, p, settings, state) -> None:
-    """One short run of an integration driver, its arrays typed as :func:`integrate` passes
-    them, so that compiling it here compiles (and caches) the specialisation integrate calls."""
-    compiled(driver)(p, settings._replace(t_end=settings.dt * 4),
-                     np.ascontiguousarray(state, dtype=np.float64),
-                     np.empty((0, SAMPLE_COLUMNS)), np.empty((0, EVENT_COLUMNS)), np.empty(6),
-                     new_control())
 
 
 def compile_dop853_driver() -> None:
@@ -241,9 +241,10 @@ def compile_dop853_driver() -> None:
     from ..params import Scene, model_params, run_settings
 
     scene = Scene()
-    settings = run_settings(scene.integration)._replace(method=int(Method.EVENT_DOP853))
-    _run_driver(integrate_adaptive_dop853, model_params(scene), settings,
-                np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+    settings = run_settings(scene.integration)
+    settings = settings._replace(method=int(Method.EVENT_DOP853), t_end=settings.dt * 4)
+    _run_once(integrate_adaptive_dop853, model_params(scene), settings,
+              np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
 
 
 def _compile_beside():
@@ -290,7 +291,8 @@ def warm_up(p, settings, state, runs=None) -> None:
     if first:
         beside = _compile_beside()
         try:
-            _run_driver(integrate_adaptive, p, settings._replace(method=int(Method.EVENT)), state)
+            _run_once(integrate_adaptive, p,
+                      settings._replace(method=int(Method.EVENT), t_end=settings.dt * 4), state)
             if beside is not None:
                 beside.wait()
         finally:
