@@ -222,7 +222,7 @@ def test_results_print_in_one_short_line():
     scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
     run = coincli.simulate(scene, sample_dt=1e-3, record_events=True)
     assert repr(run) == ("Trajectory(n = 6 (lying), settled at 0.3623 s, certain at rtol = "
-                         f"1e-08 with event_dop853, 70 steps, {len(run.samples):,} samples, "
+                         f"1e-08 with event_dop853, 72 steps, {len(run.samples):,} samples, "
                          f"{len(run.events):,} events)")
     result = coincli.fractions(scene, samples=256, batch=256)
     assert repr(result).startswith("Fractions(P(standing) = ") and "\n" not in repr(result)

@@ -2,9 +2,9 @@
 on it (``event``): closed-form flight between contacts.
 
 The Runge-Kutta pair is whatever the names imported from :mod:`.dopri` below mean (``ORDER``,
-``step``, ``step_factor``, ``dense_coefficients``, ``dense_point``, with ``FIRST_STEP`` here):
-:mod:`.pairs` derives a copy of this driver in which they are DOP853's (``event_dop853``), so the
-logic is written once for both pairs.
+``step``, ``step_factor``, ``controller_memory``, ``dense_coefficients``, ``dense_point``, with
+``FIRST_STEP`` here): :mod:`.pairs` derives a copy of this driver in which they are DOP853's
+(``event_dop853``), so the logic is written once for both pairs.
 
 The right-hand side is smooth as long as the set of penetrating corners (the *mode*) does not
 change; it jumps when a corner touches (the damping force appears at full strength) or lifts off.
@@ -53,6 +53,7 @@ from ..model import (
 from .common import NO_WELL, RunResult, is_finite_state, record_events, record_sample
 from .dopri import (
     ORDER,
+    controller_memory,
     dense_coefficients,
     dense_point,
     derivative,
@@ -292,6 +293,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
     work = 0  # steps tried (accepted and rejected) and flight iterations: the budget's count
     last_change = math.nan
     h = settings.dt if mode == 0 else min(settings.dt, first_step)
+    memory = controller_memory(1e-4)  # the step-size controller's, as if the last error was 1e-4
     k1 = derivative(p, mode, st, c, s)
     if energy_with_heights(p, st[1], st[3], st[4], st[5], heights) < p.e_crit:
         status = Status.SETTLED
@@ -305,7 +307,8 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             status = Status.INTERRUPTED
             break
         if mode == 0 and exact_flight:
-            tau, touching, iterations = time_to_touchdown(p, st, t_end - t, budget - work)
+            tau, touching, iterations, c_tau, s_tau = time_to_touchdown(p, st, c, s, t_end - t,
+                                                                        budget - work)
             work += iterations
             if touching == 0 and tau < t_end - t:
                 status = Status.BUDGET
@@ -320,8 +323,11 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             if crossed == crossed:  # not NaN: exact, the flight turns uniformly
                 last_change = t + (crossed - st[2]) / st[5]
             st = flight_state(p, st, tau)
-            c = math.cos(st[2])
-            s = math.sin(st[2])
+            if touching != 0:
+                c, s = c_tau, s_tau
+            else:  # tau is t_max, short of the search's last angle
+                c = math.cos(st[2])
+                s = math.sin(st[2])
             heights = corner_heights(p, st[1], c, s)
             rates = corner_rates(p, st[4], st[5], c, s)
             t = t + tau if touching != 0 else t_end
@@ -349,7 +355,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             if not (err == err) or h < H_MIN:
                 status = Status.NONFINITE
                 break
-            h *= step_factor(err, 1.0)
+            h *= step_factor(err, 1.0, 1.0)
             continue
         steps += 1
         heights_end = corner_heights(p, end[1], c7, s7)
@@ -372,8 +378,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
                     next_sample += sample_dt
             if event_mask != 0:
                 end = dense_point(rc, theta)
-                c7 = math.cos(end[2])
-                s7 = math.sin(end[2])
+                c7, s7 = rotate(c, s, end[2] - st[2])
                 heights_end = corner_heights(p, end[1], c7, s7)
                 rates_end = corner_rates(p, end[4], end[5], c7, s7)
         else:
@@ -406,7 +411,8 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             settle_time = t
             n_well = well_index(p, st[2])
         if event_mask == 0 or mode != 0:
-            h *= step_factor(err, 5.0)
+            h *= step_factor(err, memory, 5.0)
+            memory = controller_memory(err)
     if record and n_samples > 0 and samples[n_samples - 1, 0] < t:
         n_samples = record_sample(samples, n_samples, t, st[0], st[1], st[2], st[3], st[4],
                                   st[5])

@@ -247,6 +247,28 @@ def compile_dop853_driver() -> None:
               np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
 
 
+def compile_beside_main(parent: int) -> None:
+    """The helper process of :func:`_compile_beside`: compile the DOP853 driver unless the
+    process ``parent`` that started it is gone. Ctrl-C reaches the whole process group: the
+    helper ignores it, so that a first Ctrl-C (the command then stops after the compilation)
+    does not leave the parent to compile both drivers; warm_up kills it when the parent is
+    interrupted for good, and on Linux the kernel kills it when the parent dies otherwise
+    (kill, kill -9), so that no compilation outlives the command that needed it."""
+    import os
+    import signal
+    import sys
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        PR_SET_PDEATHSIG = 1
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL))
+    if os.getppid() != parent:  # the parent died before the line above took effect
+        return
+    compile_dop853_driver()
+
+
 def _compile_beside():
     """Start compiling the DOP853 driver in another process, on the other core: it takes two
     thirds of a first compilation (195 of 298 s on a loaded host, Dormand-Prince 5(4)'s 91 s),
@@ -257,11 +279,8 @@ def _compile_beside():
     import sys
     from pathlib import Path
 
-    # Ctrl-C reaches the whole process group: the helper ignores it, so that a first Ctrl-C (the
-    # command then stops after the compilation) does not leave this process to compile both
-    # drivers; warm_up kills it when this process is interrupted for good.
-    code = ("import signal; signal.signal(signal.SIGINT, signal.SIG_IGN); "
-            "from coincli.integrators.batch import compile_dop853_driver; compile_dop853_driver()")
+    code = ("from coincli.integrators.batch import compile_beside_main; "
+            f"compile_beside_main({os.getpid()})")
     # this process's coincli first on the helper's path, whatever put it on this one's: the
     # same sources, so the same cache
     package_root = str(Path(__file__).parents[2])  # as numba keys the cache: unresolved

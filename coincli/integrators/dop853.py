@@ -153,12 +153,25 @@ def step(p, mode, h, start, k1, c, s, scales, rtol):
 
 
 @kernel(inline=True)
-def step_factor(err, largest):
-    """The factor for the next step, 0.9 err^(-1/8) within [0.2, largest] (three square roots,
-    no pow())."""
+def controller_memory(err):
+    """What the step-size controller keeps of an accepted step for the next one:
+    max(err, 1e-4)^(1/32) (five square roots, off the next step's critical path)."""
+    return math.sqrt(math.sqrt(math.sqrt(math.sqrt(math.sqrt(max(err, 1e-4))))))
+
+
+@kernel(inline=True)
+def step_factor(err, memory, largest):
+    """The factor for the next step, 0.9 err^(-1/8) err_prev^(1/32) within [0.2, largest]
+    (three square roots, no pow()): Gustafsson's PI control, beta = 1/32 (Hairer's dop853.f
+    offers it, default off: "positive values of beta (<= 0.04) make the step size control more
+    stable"), with ``memory`` the previous accepted step's :func:`controller_memory` (1 after a
+    rejection: the step is then cut as its error alone says). After a step whose error fell
+    below the last one's the next grows less than that error alone would say: on the paper's box
+    throws at rtol 1e-8 this cuts the rejected steps from 7.3 to 2.7 a throw and the stages by
+    8 %, by 6.5 % on the thick coin's at 1e-9 (README, "Higher-order pairs")."""
     if err < 1e-16:
         return largest
-    return min(largest, max(0.2, 0.9 / math.sqrt(math.sqrt(math.sqrt(err)))))
+    return min(largest, max(0.2, 0.9 * memory / math.sqrt(math.sqrt(math.sqrt(err)))))
 
 
 @kernel(inline=True)
@@ -201,4 +214,5 @@ def dense_point(rc, theta):
     return (a0, a1, a2, a3, a4, a5)
 
 
-__all__ = ["FIRST_STEP", "ORDER", "dense_coefficients", "dense_point", "step", "step_factor"]
+__all__ = ["FIRST_STEP", "ORDER", "controller_memory", "dense_coefficients", "dense_point", "step",
+           "step_factor"]

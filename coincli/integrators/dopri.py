@@ -6,13 +6,18 @@ in registers: no arrays, no calls in the step (every helper here is inlined). Th
 the positions is the stage's velocity; only the accelerations need the model. The cosine and
 sine of each stage's angle come from those at the step's start by a small rotation
 (:func:`coincli.model.rotate`), and so are those at its end, which the next step, the event
-scan and the energy check start from; the driver takes them from the library afresh at each
-contact onset and event, so that rounding cannot accumulate over a contact phase.
+scan and the energy check start from. The driver takes them from the library once, at the start
+of a run, and carries them through flights (:mod:`.flight`) and events (a rotation over the
+step, as here): they follow the angle the run computes to within 2e-14 over whole 2 s box throws
+at rtol 1e-6 and 1e-10 (measured against the library's cos and sin of that angle at every
+contact onset and event), a few of its own rounding units at the tens of radians a throw turns.
 """
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
 
 from ..jit import kernel
 from ..model import contact_accelerations, rotate
@@ -102,20 +107,37 @@ def step(p, mode, h, start, k1, c, s, scales, rtol):
 # from 2^(-q) and a table of 2^(-r/5), e = 5 q + r
 _FIFTH = (-0.24092815, 0.23952843, -0.28218419, 1.059137)
 _TWO_FIFTHS = (1.0, 2.0 ** -0.2, 2.0 ** -0.4, 2.0 ** -0.6, 2.0 ** -0.8)
+_MANTISSA = (1 << 52) - 1  # the fraction bits of a float64
+_HALF = 1022 << 52  # the exponent bits of [0.5, 1)
 
 
 @kernel(inline=True)
-def step_factor(err, largest):
+def controller_memory(err):
+    """What the step-size controller keeps of an accepted step: nothing. This pair's controller
+    looks at the last error only: PI control (as DOP853's, beta 0.01 to 0.04) saved it at most
+    0.5 % of its steps on paper box throws at rtol 1e-6, and cost more at beta 0.04."""
+    return 1.0
+
+
+@kernel(inline=True)
+def step_factor(err, memory, largest):
     """The factor for the next step, 0.9 err^(-1/ORDER) within [0.2, largest] (err: the error
-    norm of the step just tried). err^(-1/5) by a short polynomial instead of pow(): it only
-    steers the step size (to 3e-4), and is worth 7 % of the run time."""
+    norm of the step just tried; memory: unused, see :func:`controller_memory`). err^(-1/5) by
+    a short polynomial instead of pow(): it only steers the step size (to 3e-4), and is worth 7 %
+    of the run time. The mantissa and exponent
+    (frexp) and the power of two (ldexp) are taken from the float's bits, not from libm calls,
+    which were 2 % of a single pass; err is positive and normal here (1e-10 <= err, or inf:
+    then the factor is 0.2), so the bits give exactly what frexp and ldexp would."""
     if err < 1e-10:
         return largest
-    m, e = math.frexp(err)
+    bits = np.float64(err).view(np.int64)
+    m = np.int64((bits & _MANTISSA) | _HALF).view(np.float64)  # err = m 2^e, 0.5 <= m < 1
+    e = (bits >> 52) - 1022
     q = e // 5
     x = m - 0.75
     root = ((_FIFTH[0] * x + _FIFTH[1]) * x + _FIFTH[2]) * x + _FIFTH[3]
-    return min(largest, max(0.2, 0.9 * math.ldexp(root * _TWO_FIFTHS[e - 5 * q], -q)))
+    power = np.int64((1023 - q) << 52).view(np.float64)  # 2^(-q), -7 <= q <= 205
+    return min(largest, max(0.2, 0.9 * (root * _TWO_FIFTHS[e - 5 * q]) * power))
 
 
 @kernel(inline=True)
@@ -146,5 +168,5 @@ def dense_point(rc, theta):
             r0[5] + theta * (r1[5] + u * (r2[5] + theta * (r3[5] + u * r4[5]))))
 
 
-__all__ = ["ORDER", "dense_coefficients", "dense_point", "derivative", "error_scales", "step",
-           "step_factor"]
+__all__ = ["ORDER", "controller_memory", "dense_coefficients", "dense_point", "derivative",
+           "error_scales", "step", "step_factor"]

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 
 from ..jit import kernel
-from ..model import corner_heights, corner_offset, rotate
+from ..model import corner_offset, rotate
 
 LANDING_GAP = 1e-14  # m, how close conservative advancement brings a corner before touch-down
 
@@ -30,18 +30,18 @@ def flight_state(p, state, tau):
 
 
 @kernel
-def time_to_touchdown(p, state, t_max, budget):
-    """(tau, touching, iterations): the time until the first corner touches the surface in
-    free flight from ``state`` (t_max if none does before) and the mask of the corners touching
-    then (0 if none). A coin landing flat touches with two corners at once, and taking only one
-    would add a spurious torque. ``budget`` bounds the iterations; a flight that needs more
-    returns touching = 0 and tau < t_max."""
+def time_to_touchdown(p, state, c, s, t_max, budget):
+    """(tau, touching, iterations, cos, sin): the time until the first corner touches the
+    surface in free flight from ``state`` (c, s: the trig of its angle) (t_max if none does
+    before), the mask of the corners touching then (0 if none), and the trig of the angle at
+    tau if a corner touches (the caller's next contact phase starts from them). A coin landing
+    flat touches with two corners at once, and taking only one would add a spurious torque.
+    ``budget`` bounds the iterations; a flight that needs more returns touching = 0 and
+    tau < t_max."""
     g = p.g
     w = state[5]
     bound = g + w * w * p.r
     tau = 0.0
-    c = math.cos(state[2])
-    s = math.sin(state[2])
     for iterations in range(1, budget + 1):
         y = state[1] + (state[4] - 0.5 * g * tau) * tau
         vy = state[4] - g * tau
@@ -65,21 +65,15 @@ def time_to_touchdown(p, state, t_max, budget):
                 sigma = math.inf
             advance = min(advance, sigma)
         if touching != 0:
-            return tau, touching, iterations
+            return tau, touching, iterations, c, s
         if advance < 1e-15:
             # resting on the surface with no downward speed: a touch-down of the lowest corner
-            return tau, 1 << lowest, iterations
+            return tau, 1 << lowest, iterations, c, s
         tau += advance
         c, s = rotate(c, s, w * advance)  # the angle's trig carried along, no libm call
         if tau >= t_max:
-            return t_max, 0, iterations
-    return tau, 0, budget
+            return t_max, 0, iterations, c, s
+    return tau, 0, budget, c, s
 
 
-@kernel(inline=True)
-def landing_heights(p, state):
-    """Corner heights of a state (its angle's trig from the library)."""
-    return corner_heights(p, state[1], math.cos(state[2]), math.sin(state[2]))
-
-
-__all__ = ["LANDING_GAP", "flight_state", "landing_heights", "time_to_touchdown"]
+__all__ = ["LANDING_GAP", "flight_state", "time_to_touchdown"]
