@@ -5,7 +5,11 @@ finds the same contact events and labels."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+import time
 from functools import cache
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -217,3 +221,35 @@ def _paper_dop853_run():
     settings = run_settings(scene.integration)._replace(method=int(Method.EVENT_DOP853),
                                                         t_end=1e-3)
     return model_params(scene), settings, np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0])
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the parent-death signal is Linux's")
+def test_the_compiling_helper_dies_with_its_command():
+    """A command killed (kill -9) during its first compilation takes the helper that compiles
+    the DOP853 driver with it, instead of leaving it to compile for a minute or two more: a
+    stand-in command starts the helper (whose compilation here just waits) and is killed."""
+    helper = ("import time, coincli.integrators.batch as b; "
+              "b.compile_dop853_driver = lambda: (print('compiling', flush=True), time.sleep(60)); "
+              "b.compile_beside_main({parent})")
+    command = (f"import os, subprocess, sys, time; code = {helper!r}.format(parent=os.getpid()); "
+               "print(subprocess.Popen([sys.executable, '-c', code]).pid, flush=True); "
+               "time.sleep(60)")
+    parent = subprocess.Popen([sys.executable, "-c", command], stdout=subprocess.PIPE, text=True)
+    try:
+        pid = int(parent.stdout.readline())
+        assert parent.stdout.readline().strip() == "compiling"  # past its prctl and pid check
+    finally:
+        parent.kill()
+        parent.wait()
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline and _running(pid):
+        time.sleep(0.05)
+    assert not _running(pid)
+
+
+def _running(pid: int) -> bool:
+    """Whether process pid exists and is not a zombie (the container's init may not reap it)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (FileNotFoundError, ProcessLookupError):
+        return False

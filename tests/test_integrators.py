@@ -472,3 +472,29 @@ def test_unsettled_run_is_reported_unsettled(paper, name):
     summary = tr.summary()
     assert summary["settled"] is False and summary["settle_time"] is None
     assert any("E_crit" in note for note in tr.notes)
+
+
+def test_the_step_factor_reads_frexp_and_ldexp_from_the_bits():
+    """Dormand-Prince 5(4)'s step-size factor takes err's mantissa and exponent, and the power of
+    two it scales by, from the float's bits: the same factor, bit for bit, as the plainly
+    written frexp and ldexp below, over the whole range of errors it meets (1e-10 up, and inf)."""
+    from coincli.integrators import dopri
+
+    fifth, two_fifths = dopri._FIFTH, dopri._TWO_FIFTHS
+
+    def reference(err, largest):
+        if err < 1e-10:
+            return largest
+        m, e = math.frexp(err)
+        q = e // 5
+        x = m - 0.75
+        root = ((fifth[0] * x + fifth[1]) * x + fifth[2]) * x + fifth[3]
+        return min(largest, max(0.2, 0.9 * math.ldexp(root * two_fifths[e - 5 * q], -q)))
+
+    factor = python(dopri.step_factor)
+    rng = np.random.default_rng(0)
+    errors = np.concatenate([np.geomspace(1e-11, 1e6, 4000), 10.0 ** rng.uniform(-10, 6, 4000),
+                             [1e-10, 0.5, 1.0, 2.0 ** -33, 2.0 ** 20, 1e300, math.inf]])
+    for err in errors:
+        for largest in (1.0, 5.0):
+            assert factor(float(err), 1.0, largest) == reference(float(err), largest), err

@@ -15,8 +15,8 @@ past its first rung, starting two decades below it (rtol 1e-6, then 1e-8, 1e-9, 
 rtol 1e-8 costs less than Dormand-Prince 5(4) at 1e-7 and is far more accurate, so the first
 comparison, which decides most labels, is against a nearly converged run computed by another
 pair. On the README's 5-D box that ladder is certain with another n than the event method at
-rtol 1e-11 and 1e-12 on 1 of 262,119 paper-coin throws (17 with Dormand-Prince 5(4) alone) and
-70 of 57,767 thick-coin throws (103), at 1.07-1.14 and 2.0-2.1 times less CPU (README, "Verified
+rtol 1e-11 and 1e-12 on 2 of 262,121 paper-coin throws (17 with Dormand-Prince 5(4) alone) and
+74 of 57,922 thick-coin throws (103), at 1.07-1.14 and 2.0-2.1 times less CPU (README, "Verified
 labels").
 A single pass (``verify=False``) is a ladder of one rung: its labels are UNVERIFIED.
 """
