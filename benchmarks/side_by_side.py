@@ -72,9 +72,10 @@ def main() -> None:
     args = parser.parse_args()
 
     sys.path.insert(0, str(copy_as_coinold(args.old.resolve())))
+    from fractions_labels import box_throws
+
     import coincli
     from coincli.enums import Certainty
-    from fractions_labels import box_throws
 
     states = box_throws(coincli.load_preset(args.preset), args.samples)
     run = {name: runners(name, args.preset, states) for name in ("coinold", "coincli")}

@@ -32,6 +32,7 @@ def main() -> None:
     args = parser.parse_args()
 
     import numpy as np
+    from fractions_labels import box_throws
 
     import coincli
     from coincli import jit
@@ -40,7 +41,6 @@ def main() -> None:
     from coincli.integrators.batch import integrate
     from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
     from coincli.params import model_params, run_settings
-    from fractions_labels import box_throws
 
     # the DOP853 copy of the driver looks its pair's names up in this namespace
     driver = pairs.integrate_adaptive_dop853

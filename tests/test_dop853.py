@@ -223,7 +223,8 @@ def _paper_dop853_run():
     return model_params(scene), settings, np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0])
 
 
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the parent-death signal is Linux's")
+@pytest.mark.skipif(not sys.platform.startswith("linux"),
+                    reason="the parent-death signal is Linux's")
 def test_the_compiling_helper_dies_with_its_command():
     """A command killed (kill -9) during its first compilation takes the helper that compiles
     the DOP853 driver with it, instead of leaving it to compile for a minute or two more: a
