@@ -124,10 +124,10 @@ def step_factor(err, memory, largest):
     """The factor for the next step, 0.9 err^(-1/ORDER) within [0.2, largest] (err: the error
     norm of the step just tried; memory: unused, see :func:`controller_memory`). err^(-1/5) by
     a short polynomial instead of pow(): it only steers the step size (to 3e-4), and is worth 7 %
-    of the run time. The mantissa and exponent
-    (frexp) and the power of two (ldexp) are taken from the float's bits, not from libm calls,
-    which were 2 % of a single pass; err is positive and normal here (1e-10 <= err, or inf:
-    then the factor is 0.2), so the bits give exactly what frexp and ldexp would."""
+    of the run time. The mantissa and exponent (frexp) and the power of two (ldexp) are taken
+    from the float's bits, not from libm calls, which were 2 % of a single pass; err is positive
+    and normal here (1e-10 <= err, or inf: then the factor is 0.2), so the bits give exactly
+    what frexp and ldexp would (tests/test_integrators.py)."""
     if err < 1e-10:
         return largest
     bits = np.float64(err).view(np.int64)
