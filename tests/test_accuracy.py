@@ -95,3 +95,18 @@ def test_bench_side_by_side_on_a_few_cells(paper):
     assert check.robust.all()
     assert all(r.label_agreement == 1.0 for r in rows)
     assert check.reference.shape == (2, 2)
+
+
+def test_bench_times_the_basin_command_with_its_own_peak_memory(tmp_path):
+    """`coin bench`'s basin row runs the real command and reports that child's own peak memory
+    (os.wait4), not the largest of every child run before it; a failing command is an error
+    naming it."""
+    from coincli.cli import bench_cmd
+
+    wall, peak = bench_cmd._run(["--help"], str(tmp_path))
+    assert wall > 0 and peak > 0
+    row = bench_cmd.time_basin_command(16, lambda message: None)
+    assert row["cells"] == 256 and row["wall_seconds"] > row["kernel_seconds"] > 0
+    assert 20 < row["peak_rss_mb"] < 800
+    with pytest.raises(RuntimeError, match="--res 0 failed: error: --res must be at least 2"):
+        bench_cmd._run(["basin", str(tmp_path / "s.zarr"), "--res", "0"], str(tmp_path))

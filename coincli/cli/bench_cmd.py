@@ -2,7 +2,6 @@
 
 import json
 import os
-import resource
 import shutil
 import statistics
 import subprocess
@@ -126,14 +125,26 @@ def bench_command(
 STARTUP_RUNS = 5
 
 
+def _run(args: list[str], cwd: str) -> tuple[float, float]:
+    """(wall seconds, peak resident MB) of one `coin` command run as a child process. The peak
+    is that child's own (os.wait4), not the largest of every child so far, which
+    RUSAGE_CHILDREN gives: a first compilation earlier in the run peaks at about a gigabyte."""
+    with tempfile.TemporaryFile() as errors:
+        start = time.perf_counter()
+        proc = subprocess.Popen([sys.executable, "-m", "coincli", *args], cwd=cwd,
+                                stdout=subprocess.DEVNULL, stderr=errors)
+        _, status, usage = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - start
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        if proc.returncode != 0:
+            errors.seek(0)
+            tail = errors.read().decode(errors="replace").strip()[-300:]
+            raise RuntimeError(f"coin {' '.join(args)} failed: {tail}")
+    return wall, usage.ru_maxrss / 1024
+
+
 def _wall(args: list[str], cwd: str) -> float:
-    start = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "coincli", *args], cwd=cwd,
-                          capture_output=True, text=True)
-    wall = time.perf_counter() - start
-    if proc.returncode != 0:
-        raise RuntimeError(f"coin {' '.join(args)} failed: {proc.stderr.strip()[-300:]}")
-    return wall
+    return _run(args, cwd)[0]
 
 
 def time_startup(report) -> dict:
@@ -162,9 +173,8 @@ def time_basin_command(res: int, report) -> dict:
     scratch = tempfile.mkdtemp(prefix="coin-bench-")
     store = os.path.join(scratch, "basin.zarr")
     try:
-        wall = _wall(["basin", store, "--res", str(res), "--quiet"], scratch)
+        wall, peak = _run(["basin", store, "--res", str(res), "--quiet"], scratch)
         record = json.loads((Path(f"{store}.cost") / "runs.jsonl").read_text().splitlines()[-1])
-        peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     threads = max(1, record["workers"])
