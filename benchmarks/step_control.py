@@ -35,16 +35,15 @@ def main() -> None:
     from fractions_labels import box_throws
 
     import coincli
-    from coincli import jit
     from coincli.enums import Method
     from coincli.integrators import pairs
     from coincli.integrators.batch import integrate
     from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
     from coincli.params import model_params, run_settings
 
-    # the DOP853 copy of the driver looks its pair's names up in this namespace
-    driver = pairs.integrate_adaptive_dop853
-    namespace = driver.__globals__ if hasattr(driver, "__globals__") else jit._NAMESPACES[0]
+    # the DOP853 copy of the driver (a plain function here) looks its pair's names up in its
+    # globals, a namespace of its own (coincli.jit.derive)
+    namespace = pairs.integrate_adaptive_dop853.__globals__
     shipped = {name: namespace[name] for name in ("step", "dense_coefficients",
                                                   "controller_memory")}
     counts = collections.Counter()

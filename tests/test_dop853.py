@@ -205,22 +205,12 @@ def test_the_driver_compiled_beside_is_the_one_integrate_calls():
     from coincli.jit import compiled
 
     driver = compiled(batch.integrate_adaptive_dop853)
-    batch.final_state(*_paper_dop853_run())  # integrate, which calls the driver: loaded
+    batch.final_state(*batch.dop853_sample_run())  # integrate, which calls the driver: loaded
     batch.compile_dop853_driver()  # the helper's call, in this process
     assert dict(driver._cache_misses) == {} and sum(driver._cache_hits.values()) == 1
     assert len(driver._cache._cache_file._load_index()) == 1
     helper = batch._compile_beside()
     assert helper is not None and helper.wait(timeout=600) == 0
-
-
-def _paper_dop853_run():
-    from coincli.enums import Method
-    from coincli.params import Scene, model_params, run_settings
-
-    scene = Scene()
-    settings = run_settings(scene.integration)._replace(method=int(Method.EVENT_DOP853),
-                                                        t_end=1e-3)
-    return model_params(scene), settings, np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0])
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"),

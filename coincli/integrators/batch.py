@@ -235,16 +235,21 @@ def final_state(p, settings, state) -> tuple[np.ndarray, Status]:
     return final, Status(result.status)
 
 
-def compile_dop853_driver() -> None:
-    """Compile the DOP853 driver into the cache (what :func:`_compile_beside` runs in another
-    process; the values do not matter, only the types)."""
+def dop853_sample_run():
+    """(p, settings, state) of a short DOP853 throw of the default scene: what compiles the
+    DOP853 driver (only the argument types matter)."""
     from ..params import Scene, model_params, run_settings
 
     scene = Scene()
     settings = run_settings(scene.integration)
     settings = settings._replace(method=int(Method.EVENT_DOP853), t_end=settings.dt * 4)
-    _run_once(integrate_adaptive_dop853, model_params(scene), settings,
-              np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+    return model_params(scene), settings, np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0])
+
+
+def compile_dop853_driver() -> None:
+    """Compile the DOP853 driver into the cache (what :func:`_compile_beside` runs in another
+    process)."""
+    _run_once(integrate_adaptive_dop853, *dop853_sample_run())
 
 
 def compile_beside_main(parent: int) -> None:
