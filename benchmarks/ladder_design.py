@@ -58,17 +58,15 @@ def runs(scene, states, rtols=RTOLS):
     """Per rtol and cell: label, status, steps, last change of well, settle time (one compiled
     call each), with the scene's method."""
     from coincli.integrators import integrate, new_control
-    from coincli.integrators.batch import outcome_label
-    from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
+    from coincli.integrators.batch import outcome_label, unrecorded
     from coincli.jit import compiled
     from coincli.params import model_params, run_settings
 
     p, base = model_params(scene), run_settings(scene.integration)
     kernel = compiled(integrate)
-    no_samples, no_events, control = (np.empty((0, SAMPLE_COLUMNS)),
-                                      np.empty((0, EVENT_COLUMNS)), new_control())
+    no_samples, no_events, final = unrecorded()
+    control = new_control()
     out = {name: np.empty((len(rtols), len(states))) for name in ("q", "st", "steps", "tc", "ts")}
-    final = np.empty(6)
     for k, rtol in enumerate(rtols):
         settings = base._replace(rtol=rtol)
         for i, state in enumerate(states):

@@ -37,8 +37,7 @@ def main() -> None:
     import coincli
     from coincli.enums import Method
     from coincli.integrators import pairs
-    from coincli.integrators.batch import integrate
-    from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
+    from coincli.integrators.batch import integrate, unrecorded
     from coincli.params import model_params, run_settings
 
     # the DOP853 copy of the driver (a plain function here) looks its pair's names up in its
@@ -71,8 +70,7 @@ def main() -> None:
         namespace["controller_memory"] = memory
         counts.clear()
         labels[name] = np.array([
-            integrate(p, settings, s.copy(), np.empty((0, SAMPLE_COLUMNS)),
-                      np.empty((0, EVENT_COLUMNS)), np.empty(6), np.zeros(1, np.int64)).n_well
+            integrate(p, settings, s.copy(), *unrecorded(), np.zeros(1, np.int64)).n_well
             for s in states])
         stages = 12 * (counts["accepted"] + counts["rejected"]) + 3 * counts["extensions"]
         print(f"  {name:20s} accepted {counts['accepted'] / len(states):6.2f}  rejected "

@@ -21,6 +21,11 @@ after one bounce and to 1e-7 after a second of them, rounding growing along the 
 (tests/test_engines.py); on 5,632 throws of the paper and thick coins, no certain label changed.
 Compiled results are the same on every machine whose CPU has FMA (x86-64 since 2013, ARM64).
 
+Kernels are compiled without numba's runtime (NRT, numba's ``_nrt=False``): none allocates an
+array (callers pass every array in, :func:`coincli.integrators.batch.unrecorded`), so arrays
+passed between them carry no reference counts, and loading them needs no runtime. A kernel that
+allocated would fail to compile, not misbehave.
+
 The cache: numba checks only the timestamp of the file that defines a function, not of the
 files whose kernels it calls, so an edit to a callee could leave stale machine code in use. Our
 cache locator (used only for files of this package) stamps every entry with a hash of all kernel
@@ -29,6 +34,7 @@ sources and keeps it in ``~/.cache/coincli`` (or ``$NUMBA_CACHE_DIR/coincli``).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import inspect
@@ -50,7 +56,7 @@ _INLINE: set = set()  # kernels numba inlines into their callers (small helpers 
 _NAMESPACES: list = []  # the globals of derived kernels (see derive), rebound like modules'
 _DISPATCHERS: dict = {}  # Python function -> numba dispatcher (after activation)
 _LOCK = threading.Lock()
-_SKIP_BLAS_PROBE = False  # see skip_blas_probe
+_LEAN_IMPORTS = False  # see lean_imports
 
 
 def kernel(fn=None, *, inline: bool = False):
@@ -98,27 +104,47 @@ def derive(module, suffix: str, **substitutions) -> types.SimpleNamespace:
     return types.SimpleNamespace(**{name: namespace[name] for name, _ in originals})
 
 
-def skip_blas_probe() -> None:
-    """Have this process compile without numba's BLAS probe: when numba first compiles (loading
-    cached code does not, see _refresh_on_miss) it imports ``numba.np.arraymath``, which imports
-    scipy.linalg (0.2 s) to learn whether ``np.convolve`` and ``np.correlate`` may call BLAS. No
-    kernel of ours uses them, so the ``coin`` command (a process that runs only our kernels) hides
-    scipy.linalg during that one import; the two functions would then fall back to plain loops. A
-    library user's process keeps numba's behaviour: only the CLI calls this."""
-    global _SKIP_BLAS_PROBE
-    _SKIP_BLAS_PROBE = True
+def lean_imports() -> None:
+    """Have this process import numba without what only other processes may need. (1) When numba
+    first compiles (loading cached code does not, see _refresh_on_miss) it imports
+    ``numba.np.arraymath``, which imports scipy.linalg (0.2 s) to learn whether ``np.convolve``
+    and ``np.correlate`` may call BLAS. No kernel of ours uses them: they would fall back to plain
+    loops. (2) ``import numba`` imports pyyaml (0.02 s), to read a ``.numba_config.yaml`` in the
+    working directory, and scipy (0.01 s), to check its version. Both are hidden during that
+    import unless such a file is there. The ``coin`` command (a process that runs only our
+    kernels) calls this; a library user's process keeps numba's behaviour."""
+    global _LEAN_IMPORTS
+    _LEAN_IMPORTS = True
+
+
+@contextlib.contextmanager
+def _hidden(names):
+    """Within the block, importing any of ``names`` that is not loaded yet raises ImportError
+    (a None entry in sys.modules); afterwards it imports as usual."""
+    hidden = [name for name in names if name not in sys.modules]
+    for name in hidden:
+        sys.modules[name] = None
+    try:
+        yield
+    finally:
+        for name in hidden:
+            if sys.modules.get(name, 0) is None:
+                del sys.modules[name]
+
+
+def _import_numba():
+    lean = _LEAN_IMPORTS and not os.path.isfile(".numba_config.yaml")
+    with _hidden(("yaml", "scipy") if lean else ()):
+        import numba
+    return numba
 
 
 def _import_numba_lowering() -> None:
-    """Import ``numba.np.arraymath`` now, without the BLAS probe if asked (skip_blas_probe)."""
-    if not _SKIP_BLAS_PROBE or "scipy.linalg" in sys.modules:
+    """Import ``numba.np.arraymath`` now, without the BLAS probe if asked (lean_imports)."""
+    if not _LEAN_IMPORTS or "scipy.linalg" in sys.modules:
         return  # numba imports it when it first compiles; with scipy.linalg loaded, cheaply
-    sys.modules["scipy.linalg"] = None  # `import scipy.linalg.cython_blas` raises ImportError
-    try:
+    with _hidden(("scipy.linalg",)):  # `import scipy.linalg.cython_blas` raises ImportError
         import numba.np.arraymath  # noqa: F401
-    finally:
-        if sys.modules.get("scipy.linalg", 0) is None:
-            del sys.modules["scipy.linalg"]
 
 
 def is_active() -> bool:
@@ -203,15 +229,14 @@ def _activate() -> None:
     with _LOCK:
         if _DISPATCHERS:
             return
-        import numba
-
+        numba = _import_numba()
         fast_load = loads_without_refresh()
         if not fast_load:
             _import_numba_lowering()  # numba's own loading refreshes, and imports it, at once
         _import_kernel_modules()
 
         _install_locator(numba)
-        dispatchers = {fn: numba.njit(cache=True, nogil=True, fastmath={"contract"},
+        dispatchers = {fn: numba.njit(cache=True, nogil=True, fastmath={"contract"}, _nrt=False,
                                       inline="always" if fn in _INLINE else "never")(fn)
                        for fn in _KERNELS}
         if fast_load:
@@ -246,16 +271,16 @@ def _refresh_on_miss(dispatcher) -> None:
     numba's compiler (its target context's ``refresh``: 0.2-0.3 s of imports, numba.np.arraymath
     among them), which only compiling needs: the cached code is complete and linked. Numba
     refreshes before every cache lookup; here the lookup comes first, and a miss refreshes before
-    numba compiles. Only on the numba versions of LOADS_WITHOUT_REFRESH: on others what cached
-    code needs loaded first may change, and numba's own way is safe."""
+    numba compiles. Nor is numba's runtime started for it (which compiles the runtime's own
+    functions, 0.04 s): the kernels are compiled without it (see the module docstring). Only on
+    the numba versions of LOADS_WITHOUT_REFRESH: on others what cached code needs loaded first
+    may change, and numba's own way is safe."""
     cache = getattr(dispatcher, "_cache", None)
     if cache is None or not hasattr(cache, "_load_overload") or not hasattr(
             cache, "_guard_against_spurious_io_errors"):
         return  # another numba layout: its own behaviour
-    from numba.core.runtime import rtsys
 
     def load_overload(sig, target_context):
-        rtsys.initialize(target_context)  # numba's runtime: the code allocates through it
         with cache._guard_against_spurious_io_errors():
             result = cache._load_overload(sig, target_context)
             if result is not None:

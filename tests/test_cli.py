@@ -233,6 +233,34 @@ def test_a_mistyped_command_line_is_one_error_line(args, fragment):
     assert "--help')" in lines[0]
 
 
+def test_the_command_exits_at_once_after_its_exit_handlers_and_output(tmp_path):
+    """main() ends the process without the interpreter's teardown (cli.exit_now), but only
+    after the atexit handlers have run and the output is flushed: a large stdout arrives whole
+    through a pipe, the exit code is the command's, and a non-daemon thread still running is
+    waited for as a normal exit would."""
+    script = ("import atexit, pathlib, sys, threading, time, coincli.cli\n"
+              "atexit.register(lambda: pathlib.Path('handler').write_text('ran'))\n"
+              "if sys.argv[1] == 'thread':\n"
+              "    threading.Thread(target=lambda: (time.sleep(0.5),\n"
+              "                     pathlib.Path('thread').write_text('done'))).start()\n"
+              "sys.argv = ['coin'] + sys.argv[2:]\n"
+              "coincli.cli.main()\n")
+    expected = run("methods", "--json").stdout
+    for mode, args, code in (("plain", ["methods", "--json"], 0),
+                             ("thread", ["methods", "--json"], 0),
+                             ("plain", ["simulate", "--mass", "-1", "--no-rrd"], 2)):
+        for name in ("handler", "thread"):
+            (tmp_path / name).unlink(missing_ok=True)
+        proc = subprocess.run([sys.executable, "-c", script, mode, *args], capture_output=True,
+                              text=True, cwd=tmp_path, timeout=120)
+        assert proc.returncode == code, proc.stderr
+        assert (tmp_path / "handler").read_text() == "ran"
+        if code == 0:
+            assert proc.stdout == expected
+        if mode == "thread":
+            assert (tmp_path / "thread").read_text() == "done"
+
+
 def test_an_unexpected_error_is_not_hidden_and_abort_is_exit_1():
     """A bug must surface as itself, not as an error of the usage-error handling."""
     import typer

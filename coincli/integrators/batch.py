@@ -48,14 +48,13 @@ def outcome_label(status, n_well, final_phi):
 
 
 @kernel
-def run_batch(p, settings, states, quarter_turns, status, settle_time, steps, control):
+def run_batch(p, settings, states, no_samples, no_events, final, quarter_turns, status,
+              settle_time, steps, control):
     """Integrate every row of ``states`` (N x 6) and write the outcome of each into the output
-    arrays (quarter_turns int16, status uint8, settle_time float32, steps int64). Releases the
-    GIL, so threads run batches on all cores; ``control[0]`` set stops every row still to run
-    (status INTERRUPTED)."""
-    no_samples = np.empty((0, SAMPLE_COLUMNS))
-    no_events = np.empty((0, EVENT_COLUMNS))
-    final = np.empty(6)
+    arrays (quarter_turns int16, status uint8, settle_time float32, steps int64); no_samples,
+    no_events and final are the runs' scratch (:func:`unrecorded`). Releases the GIL, so
+    threads run batches on all cores; ``control[0]`` set stops every row still to run (status
+    INTERRUPTED)."""
     for row in range(states.shape[0]):
         result = integrate(p, settings, states[row], no_samples, no_events, final, control)
         quarter_turns[row] = outcome_label(result.status, result.n_well, final[2])
@@ -98,15 +97,13 @@ def rungs_agree(label_a, run_a, label_b, run_b, change_tolerance, settle_toleran
 
 @kernel
 def run_ladder(p, settings, methods, rtols, dts, change_tolerance, settle_tolerance, states,
-               quarter_turns, status, settle_time, steps, certainty, rung, control):
+               no_samples, no_events, final, quarter_turns, status, settle_time, steps,
+               certainty, rung, control):
     """Verified labels: each row of ``states`` is run at rung 0, 1, ... of the ladder (methods,
     rtols, dts: the rungs' settings, coarse to fine) until two successive rungs agree
     (:func:`rungs_agree`). Writes the finest run's outcome, the total steps, the certainty
     (CERTAIN, UNCERTAIN if no two rungs agreed, UNVERIFIED for a one-rung ladder) and the index
     of the last rung run. Releases the GIL; ``control[0]`` set stops it."""
-    no_samples = np.empty((0, SAMPLE_COLUMNS))
-    no_events = np.empty((0, EVENT_COLUMNS))
-    final = np.empty(6)
     n_rungs = rtols.shape[0]
     for row in range(states.shape[0]):
         result = integrate(p, rung_settings(settings, methods, rtols, dts, 0), states[row],
@@ -167,7 +164,7 @@ def verified_labels(p, settings, ladder, states, control=None) -> VerifiedLabels
                          np.asarray(ladder.rtols, dtype=np.float64),
                          np.asarray(ladder.dts, dtype=np.float64),
                          float(ladder.change_tolerance), float(ladder.settle_tolerance),
-                         np.ascontiguousarray(states, dtype=np.float64), *out,
+                         np.ascontiguousarray(states, dtype=np.float64), *unrecorded(), *out,
                          new_control() if control is None else control)
     return out
 
@@ -212,20 +209,27 @@ def label_states(p, settings, states, control=None) -> Labels:
     n = states.shape[0]
     out = Labels(np.empty(n, np.int16), np.empty(n, np.uint8), np.empty(n, np.float32),
                  np.empty(n, np.int64))
-    compiled(run_batch)(p, settings, np.ascontiguousarray(states, dtype=np.float64), *out,
+    compiled(run_batch)(p, settings, np.ascontiguousarray(states, dtype=np.float64),
+                        *unrecorded(), *out,
                         new_control() if control is None else control)
     return out
 
 
+def unrecorded():
+    """(no_samples, no_events, final): what a run that records nothing on the way is given, the
+    arrays typed as the batch kernels pass them on. Made here rather than in the kernels: code
+    that allocates arrays brings numba's array module with it, which loading it from the cache
+    then imports (0.05 s of every command's start)."""
+    return np.empty((0, SAMPLE_COLUMNS)), np.empty((0, EVENT_COLUMNS)), np.empty(6)
+
+
 def _run_once(kernel_fn, p, settings, state):
     """(final state, RunResult) of one compiled run of ``kernel_fn`` (integrate or one of the
-    drivers it calls, which take the same arguments), nothing recorded on the way: the arrays
-    typed as integrate passes them on, so that a driver compiled by this call is the
-    specialisation integrate calls."""
-    final = np.empty(6)
+    drivers it calls, which take the same arguments), nothing recorded on the way, so that a
+    driver compiled by this call is the specialisation integrate calls."""
+    no_samples, no_events, final = unrecorded()
     result = compiled(kernel_fn)(p, settings, np.ascontiguousarray(state, dtype=np.float64),
-                                 np.empty((0, SAMPLE_COLUMNS)), np.empty((0, EVENT_COLUMNS)),
-                                 final, new_control())
+                                 no_samples, no_events, final, new_control())
     return final, result
 
 
