@@ -132,7 +132,8 @@ def _hidden(names):
                 del sys.modules[name]
 
 
-def _import_numba():
+def import_numba():
+    """``import numba`` as the kernels' activation does it (see lean_imports); the module."""
     lean = _LEAN_IMPORTS and not os.path.isfile(".numba_config.yaml")
     with _hidden(("yaml", "scipy") if lean else ()):
         import numba
@@ -229,7 +230,7 @@ def _activate() -> None:
     with _LOCK:
         if _DISPATCHERS:
             return
-        numba = _import_numba()
+        numba = import_numba()
         fast_load = loads_without_refresh()
         if not fast_load:
             _import_numba_lowering()  # numba's own loading refreshes, and imports it, at once
@@ -323,5 +324,5 @@ def _install_locator(numba) -> None:
 
 
 __all__ = ["FIRST_COMPILE_SECONDS", "LOADS_WITHOUT_REFRESH", "cache_dir", "compiled", "derive",
-           "is_active", "kernel", "kernels_cached", "loads_without_refresh", "mark_cached",
-           "python", "sources_digest"]
+           "import_numba", "is_active", "kernel", "kernels_cached", "lean_imports",
+           "loads_without_refresh", "mark_cached", "python", "sources_digest"]

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import math
+import subprocess
+import sys
 
 import pytest
 from typer.testing import CliRunner
@@ -110,3 +112,21 @@ def test_bench_times_the_basin_command_with_its_own_peak_memory(tmp_path):
     assert 20 < row["peak_rss_mb"] < 800
     with pytest.raises(RuntimeError, match="--res 0 failed: error: --res must be at least 2"):
         bench_cmd._run(["basin", str(tmp_path / "s.zarr"), "--res", "0"], str(tmp_path))
+
+
+def test_bench_measures_the_import_floor_of_a_kernel_command(tmp_path):
+    """The imports `coin bench` reports as the floor of a command's start-up are those a basin
+    command makes before its kernels load: numpy, typer, rich and numba (as it imports numba),
+    not the kernels or the store's libraries."""
+    from coincli.cli import bench_cmd
+
+    wall, _ = bench_cmd._run([], str(tmp_path), code=bench_cmd.IMPORT_FLOOR)
+    assert 0 < wall < 30
+    listing = bench_cmd.IMPORT_FLOOR.replace(
+        "os._exit(0)", "import sys; print(' '.join(sorted(sys.modules)))")
+    loaded = set(subprocess.run([sys.executable, "-c", listing], capture_output=True, text=True,
+                                check=True, cwd=tmp_path).stdout.split())
+    assert {"numpy", "typer", "rich.progress", "numba"} <= loaded
+    assert not loaded & {"coincli.integrators.batch", "numcodecs", "zarr", "yaml", "scipy"}
+    with pytest.raises(RuntimeError, match="the import floor failed"):
+        bench_cmd._run([], str(tmp_path), code="raise SystemExit(3)")

@@ -111,7 +111,9 @@ def bench_command(
                  "reference's label).")
     say(console, f"Start-up, median of {STARTUP_RUNS} runs: coin --help "
                  f"{startup['help_seconds']:.2f} s, coin simulate (fig. 2, warm, --no-rrd) "
-                 f"{startup['simulate_seconds']:.2f} s.")
+                 f"{startup['simulate_seconds']:.2f} s; importing what every command that "
+                 f"runs kernels needs (Python, numpy, typer, rich, numba) "
+                 f"{startup['import_floor_seconds']:.2f} s.")
     if basin:
         say(console,
             f"Default basin {basin_res} x {basin_res} ({basin['cells']:,} cells, verified), "
@@ -119,27 +121,41 @@ def bench_command(
             f"threads: start-up {basin['startup_seconds']:.2f} s, kernels "
             f"{basin['kernel_seconds']:.2f} s, tiles and store {basin['store_seconds']:.2f} s, "
             f"other {basin['other_seconds']:.2f} s; {basin['outside_kernels']:.0%} outside "
-            f"the kernels; peak memory {basin['peak_rss_mb']:.0f} MB.")
+            f"the kernels, of which those imports "
+            f"{startup['import_floor_seconds'] / basin['wall_seconds']:.0%}; peak memory "
+            f"{basin['peak_rss_mb']:.0f} MB.")
 
 
 STARTUP_RUNS = 5
 
 
-def _run(args: list[str], cwd: str) -> tuple[float, float]:
-    """(wall seconds, peak resident MB) of one `coin` command run as a child process. The peak
-    is that child's own (os.wait4), not the largest of every child so far, which
-    RUSAGE_CHILDREN gives: a first compilation earlier in the run peaks at about a gigabyte."""
+# What every command that runs kernels imports before it can do anything (Python, numpy, typer
+# and rich, numba as the command imports it), then an exit without the interpreter's teardown as
+# the command's (cli.exit_now): the part of its start-up no work of ours can remove.
+IMPORT_FLOOR = ("import os, numpy, typer, rich.console, rich.progress\n"
+                "from coincli import jit\n"
+                "jit.lean_imports()\n"
+                "jit.import_numba()\n"
+                "os._exit(0)")
+
+
+def _run(args: list[str], cwd: str, *, code: str | None = None) -> tuple[float, float]:
+    """(wall seconds, peak resident MB) of one `coin` command (or, given ``code``, of that
+    Python code) run as a child process. The peak is that child's own (os.wait4), not the
+    largest of every child so far, which RUSAGE_CHILDREN gives: a first compilation earlier in
+    the run peaks at about a gigabyte."""
+    command = [sys.executable, "-c", code] if code else [sys.executable, "-m", "coincli", *args]
     with tempfile.TemporaryFile() as errors:
         start = time.perf_counter()
-        proc = subprocess.Popen([sys.executable, "-m", "coincli", *args], cwd=cwd,
-                                stdout=subprocess.DEVNULL, stderr=errors)
+        proc = subprocess.Popen(command, cwd=cwd, stdout=subprocess.DEVNULL, stderr=errors)
         _, status, usage = os.wait4(proc.pid, 0)
         wall = time.perf_counter() - start
         proc.returncode = os.waitstatus_to_exitcode(status)
         if proc.returncode != 0:
             errors.seek(0)
             tail = errors.read().decode(errors="replace").strip()[-300:]
-            raise RuntimeError(f"coin {' '.join(args)} failed: {tail}")
+            raise RuntimeError(f"{'the import floor' if code else 'coin ' + ' '.join(args)} "
+                               f"failed: {tail}")
     return wall, usage.ru_maxrss / 1024
 
 
@@ -148,10 +164,10 @@ def _wall(args: list[str], cwd: str) -> float:
 
 
 def time_startup(report) -> dict:
-    """Wall time of `coin --help` and of a warm `coin simulate` (median of STARTUP_RUNS each,
-    the two interleaved)."""
+    """Wall time of `coin --help`, of a warm `coin simulate` and of IMPORT_FLOOR (median of
+    STARTUP_RUNS each, the three interleaved)."""
     scratch = tempfile.mkdtemp(prefix="coin-bench-")
-    help_times, simulate_times = [], []
+    help_times, simulate_times, floor_times = [], [], []
     simulate = ["simulate", "--vy", "1.197", "--vphi", "3.508", "--no-rrd"]
     try:
         _wall(simulate, scratch)  # warm: caches loaded once
@@ -159,11 +175,14 @@ def time_startup(report) -> dict:
             report(f"start-up {k + 1}/{STARTUP_RUNS}")
             help_times.append(_wall(["--help"], scratch))
             simulate_times.append(_wall(simulate, scratch))
+            floor_times.append(_run([], scratch, code=IMPORT_FLOOR)[0])
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     return {"help_seconds": statistics.median(help_times), "help_runs": help_times,
             "simulate_seconds": statistics.median(simulate_times),
-            "simulate_runs": simulate_times}
+            "simulate_runs": simulate_times,
+            "import_floor_seconds": statistics.median(floor_times),
+            "import_floor_runs": floor_times}
 
 
 def time_basin_command(res: int, report) -> dict:
