@@ -96,7 +96,7 @@ def main() -> None:
 
 def exit_now(code: int) -> None:
     """End the process with ``code`` without tearing the interpreter down: with numba and the
-    kernels loaded that takes 0.1-0.15 s (freeing every module and object one by one), a tenth
+    kernels loaded that takes 0.1-0.25 s (freeing every module and object one by one), a tenth
     of a short command. What a normal exit does that matters is done first: the atexit
     handlers (a Rerun recording's last flush, weakref finalizers, multiprocessing's clean-up)
     and the flush of stdout and stderr. Only when no other non-daemon thread is alive (a normal
