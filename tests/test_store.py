@@ -317,6 +317,30 @@ def test_a_sweep_does_not_import_zarr(tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
 
 
+def test_a_sweep_loads_only_numcodecs_zstd_and_numcodecs_still_imports_whole(tmp_path):
+    """The store's codec is numcodecs' zstd module, loaded without the numcodecs package (which
+    imports every codec and scans every installed distribution for plugins); afterwards
+    ``import numcodecs`` is the whole package, with the same Zstd, and Zarr reads the store. A
+    process that has numcodecs already uses it as it is."""
+    code = ("import sys; from coincli.cli import run\n"
+            "assert run(['basin', sys.argv[1], '--res', '8', '--chunk', '4', '-q']) == 0\n"
+            "assert 'numcodecs' not in sys.modules and 'numcodecs.blosc' not in sys.modules\n"
+            "from coincli.io import store\n"
+            "codec = store._zstd()\n"
+            "import numcodecs, zarr\n"
+            "assert type(codec) is numcodecs.Zstd is numcodecs.zstd.Zstd\n"
+            "assert type(numcodecs.get_codec({'id': 'zstd'})) is type(codec)\n"
+            "assert 'numcodecs.blosc' in sys.modules\n"
+            "assert zarr.open_group(sys.argv[1], mode='r')['quarter_turns'][:].shape == (8, 8)\n")
+    done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "s.zarr")], cwd=ROOT,
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    preloaded = ("import numcodecs\n"
+                 "from coincli.io import store\n"
+                 "assert type(store._zstd()) is numcodecs.Zstd\n")
+    subprocess.run([sys.executable, "-c", preloaded], cwd=ROOT, check=True, timeout=120)
+
+
 # -- several processes ---------------------------------------------------------------------------
 def start(*args) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "coincli", "basin", *map(str, args)],

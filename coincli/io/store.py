@@ -101,9 +101,48 @@ class ChunkError(ValueError):
 
 @functools.cache
 def _zstd():
+    return _zstd_class()(level=ZSTD_LEVEL, checksum=False)
+
+
+def _zstd_class():
+    """numcodecs' Zstd codec. ``import numcodecs`` imports every codec it has and scans every
+    installed distribution for codec plugins (0.07 s, most of what a store costs a short
+    command); its zstd module needs none of that. So unless numcodecs is loaded already, the
+    module is imported under a stand-in for the package, taken out of sys.modules at once,
+    while no other thread can import (the interpreter's import lock): a later ``import
+    numcodecs`` runs the package as usual and finds the same module. On any failure, the usual
+    import."""
+    import importlib.util
+    import sys
+    import types
+
+    try:
+        import _imp
+    except ImportError:
+        _imp = None
+    if _imp is not None and "numcodecs" not in sys.modules:
+        _imp.acquire_lock()
+        try:
+            spec = importlib.util.find_spec("numcodecs")
+            if spec is not None and spec.submodule_search_locations:
+                stand_in = types.ModuleType("numcodecs")
+                stand_in.__spec__ = spec
+                stand_in.__path__ = list(spec.submodule_search_locations)
+                sys.modules["numcodecs"] = stand_in
+                try:
+                    from numcodecs.zstd import Zstd
+
+                    return Zstd
+                except ImportError:
+                    pass
+                finally:
+                    if sys.modules.get("numcodecs") is stand_in:
+                        del sys.modules["numcodecs"]
+        finally:
+            _imp.release_lock()
     from numcodecs.zstd import Zstd
 
-    return Zstd(level=ZSTD_LEVEL, checksum=False)
+    return Zstd
 
 
 def _crc32c(data: bytes) -> bytes:
