@@ -307,23 +307,15 @@ def test_reads_are_what_zarr_reads(clean):
     assert dict(group.attrs) == view.attrs
 
 
-def test_a_sweep_does_not_import_zarr(tmp_path):
-    """`coin basin` writes and checks its store without Zarr (a quarter of a second to import)."""
+def test_a_sweep_does_not_import_zarr_and_loads_only_numcodecs_zstd(tmp_path):
+    """`coin basin` writes and checks its store without Zarr (a quarter of a second to import),
+    and with numcodecs' zstd module loaded without the numcodecs package (which imports every
+    codec and scans every installed distribution for plugins); afterwards ``import numcodecs``
+    is the whole package, with the same Zstd, and Zarr reads the store. A process that has
+    numcodecs already uses it as it is."""
     code = ("import sys; from coincli.cli import run\n"
             "assert run(['basin', sys.argv[1], '--res', '8', '--chunk', '4', '-q']) == 0\n"
-            "assert 'zarr' not in sys.modules, 'zarr imported'")
-    done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "s.zarr")], cwd=ROOT,
-                          capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0, done.stderr[-2000:]
-
-
-def test_a_sweep_loads_only_numcodecs_zstd_and_numcodecs_still_imports_whole(tmp_path):
-    """The store's codec is numcodecs' zstd module, loaded without the numcodecs package (which
-    imports every codec and scans every installed distribution for plugins); afterwards
-    ``import numcodecs`` is the whole package, with the same Zstd, and Zarr reads the store. A
-    process that has numcodecs already uses it as it is."""
-    code = ("import sys; from coincli.cli import run\n"
-            "assert run(['basin', sys.argv[1], '--res', '8', '--chunk', '4', '-q']) == 0\n"
+            "assert 'zarr' not in sys.modules, 'zarr imported'\n"
             "assert 'numcodecs' not in sys.modules and 'numcodecs.blosc' not in sys.modules\n"
             "from coincli.io import store\n"
             "codec = store._zstd()\n"

@@ -112,15 +112,12 @@ def _zstd_class():
     while no other thread can import (the interpreter's import lock): a later ``import
     numcodecs`` runs the package as usual and finds the same module. On any failure, the usual
     import."""
+    import _imp  # CPython's import lock (numba runs on CPython only)
     import importlib.util
     import sys
     import types
 
-    try:
-        import _imp
-    except ImportError:
-        _imp = None
-    if _imp is not None and "numcodecs" not in sys.modules:
+    if "numcodecs" not in sys.modules:
         _imp.acquire_lock()
         try:
             spec = importlib.util.find_spec("numcodecs")
