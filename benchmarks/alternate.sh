@@ -7,10 +7,17 @@
 #
 # Each tree is put first on PYTHONPATH and run as `python -m coincli` with this checkout's
 # .venv (each tree's kernels compile once, on its first run: do one run of each before timing).
+# PYTHONSAFEPATH keeps `-m` from putting the working directory first (run from a checkout, its
+# own coincli/ would win over PYTHONPATH), and each tree is checked to import its own package.
 # An argument ending in .zarr is removed before every run, so each run creates its store afresh.
 set -euo pipefail
 old=$(cd "$1" && pwd); new=$(cd "$2" && pwd); rounds=$3; shift 3
 python=${PYTHON:-$(cd "$(dirname "$0")/.." && pwd)/.venv/bin/python}
+export PYTHONSAFEPATH=1
+for tree in "$old" "$new"; do
+  package=$(PYTHONPATH=$tree "$python" -c 'import coincli; print(coincli.__path__[0])')
+  [[ $package == "$tree/coincli" ]] || { echo "$tree runs $package, not its own" >&2; exit 2; }
+done
 declare -A times
 for _ in $(seq "$rounds"); do
   for tree in "$old" "$new"; do

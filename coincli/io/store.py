@@ -108,35 +108,23 @@ def _zstd_class():
     """numcodecs' Zstd codec. ``import numcodecs`` imports every codec it has and scans every
     installed distribution for codec plugins (0.07 s, most of what a store costs a short
     command); its zstd module needs none of that. So unless numcodecs is loaded already, the
-    module is imported under a stand-in for the package, taken out of sys.modules at once,
-    while no other thread can import (the interpreter's import lock): a later ``import
-    numcodecs`` runs the package as usual and finds the same module. On any failure, the usual
-    import."""
-    import _imp  # CPython's import lock (numba runs on CPython only)
-    import importlib.util
+    module is imported under a stand-in for the package (:mod:`coincli.standins`): a later
+    ``import numcodecs`` runs the package as usual and finds the same module. On any failure,
+    the usual import."""
     import sys
-    import types
+
+    from ..standins import package_stand_in, standing_in
 
     if "numcodecs" not in sys.modules:
-        _imp.acquire_lock()
-        try:
-            spec = importlib.util.find_spec("numcodecs")
-            if spec is not None and spec.submodule_search_locations:
-                stand_in = types.ModuleType("numcodecs")
-                stand_in.__spec__ = spec
-                stand_in.__path__ = list(spec.submodule_search_locations)
-                sys.modules["numcodecs"] = stand_in
-                try:
+        stand_in = package_stand_in("numcodecs")
+        if stand_in is not None:
+            try:
+                with standing_in({"numcodecs": stand_in}):
                     from numcodecs.zstd import Zstd
 
                     return Zstd
-                except ImportError:
-                    pass
-                finally:
-                    if sys.modules.get("numcodecs") is stand_in:
-                        del sys.modules["numcodecs"]
-        finally:
-            _imp.release_lock()
+            except ImportError:
+                pass
     from numcodecs.zstd import Zstd
 
     return Zstd
