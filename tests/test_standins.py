@@ -6,12 +6,7 @@ import types
 
 import pytest
 
-from coincli.standins import (
-    deferred_classes,
-    import_with_stand_ins,
-    package_stand_in,
-    standing_in,
-)
+from coincli.standins import import_with_stand_ins, package_stand_in, standing_in
 
 
 def test_stand_ins_are_there_only_within_the_block_and_never_replace_a_loaded_module():
