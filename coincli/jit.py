@@ -29,7 +29,8 @@ allocated would fail to compile, not misbehave.
 The cache: numba checks only the timestamp of the file that defines a function, not of the
 files whose kernels it calls, so an edit to a callee could leave stale machine code in use. Our
 cache locator (used only for files of this package) stamps every entry with a hash of all kernel
-sources and keeps it in ``~/.cache/coincli`` (or ``$NUMBA_CACHE_DIR/coincli``).
+sources and keeps it in ``~/.cache/coincli`` (or ``$NUMBA_CACHE_DIR/coincli``). The first
+compilation of a version prunes there what no process can load any more (:func:`prune_cache`).
 """
 
 from __future__ import annotations
@@ -191,12 +192,85 @@ def kernels_cached() -> bool:
 
 
 def mark_cached() -> None:
-    """Record that the kernels of these sources are compiled and cached."""
+    """Record that the kernels of these sources are compiled and cached; the first time, prune
+    what other sources left in the cache (:func:`prune_cache`)."""
+    marker = _marker()
+    first = not marker.exists()
     try:
-        _marker().parent.mkdir(parents=True, exist_ok=True)
-        _marker().touch()
+        marker.parent.mkdir(parents=True, exist_ok=True)
+        marker.touch()
     except OSError:
-        pass  # an unwritable cache only means the notice shows again
+        return  # an unwritable cache only means the notice shows again
+    if first:
+        prune_cache()
+
+
+SOURCE_RECORD = "source.txt"  # in each cache directory of ours: the source directory it serves
+
+
+def prune_cache() -> None:
+    """Remove from the cache what no process can load any more. numba keeps a directory of
+    entries for each source directory, names an entry after its function's line, and finds an
+    entry stale only when it reads it; so every upgrade or edit of the package left its machine
+    code behind (3 MB a version), and so did every deleted checkout or environment. Removed: in
+    this installation's directories, the entries stamped with other sources and the data files
+    no current entry names; this installation's markers of other sources; and the directories
+    of installations whose sources are gone (each directory records its source directory, from
+    version 0.6.3 on: older ones are left alone). Never raises: a cache that cannot be pruned
+    only takes room."""
+    import numba
+
+    root = cache_dir() / f"numba-{numba.__version__}"
+    try:
+        _prune(root, _cache_dirs(root), sources_digest(), numba.__version__, _marker())
+    except OSError:
+        pass
+
+
+def _cache_dirs(root: Path) -> dict:
+    """This installation's cache directories under ``root`` (numba's locators name them after
+    the source directory), each with its source directory."""
+    from numba.core.caching import _CacheLocator
+
+    return {root / _CacheLocator.get_suitable_cache_subpath(name): Path(name).parent
+            for name in {inspect.getfile(fn) for fn in _KERNELS}}
+
+
+def _prune(root: Path, ours: dict, stamp: str, version: str, marker: Path) -> None:
+    """:func:`prune_cache` under ``root``: ``ours`` maps this installation's cache directories
+    to their source directories, ``stamp`` is the digest of the sources, ``version`` numba's,
+    ``marker`` the current marker."""
+    import pickle
+    import shutil
+
+    for directory, source in ours.items():
+        if not directory.is_dir():
+            continue
+        (directory / SOURCE_RECORD).write_text(str(source))
+        data = set(directory.glob("*.nbc"))  # listed before the indexes are read: numba
+        current = set()  # writes an index before the data file it names
+        for index in directory.glob("*.nbi"):
+            try:
+                with open(index, "rb") as f:
+                    header = pickle.load(f)
+                    body = f.read()
+                entry_stamp, entries = pickle.loads(body) if header == version else (None, {})
+            except Exception:  # noqa: BLE001 - unreadable: numba passes it over, and so do we
+                continue
+            if entry_stamp == stamp:
+                current |= {directory / name for name in entries.values()}
+            else:
+                index.unlink(missing_ok=True)
+        for path in data - current:
+            path.unlink(missing_ok=True)
+    for directory in root.iterdir():
+        record = directory / SOURCE_RECORD
+        if directory not in ours and record.is_file() and not Path(record.read_text()).is_dir():
+            shutil.rmtree(directory, ignore_errors=True)
+    place = marker.name.rsplit("-", 1)[-1]
+    for other in root.glob(f"compiled-*-{place}"):
+        if other != marker:
+            other.unlink(missing_ok=True)
 
 
 def cache_dir() -> Path:
@@ -325,4 +399,4 @@ def _install_locator(numba) -> None:
 
 __all__ = ["FIRST_COMPILE_SECONDS", "LOADS_WITHOUT_REFRESH", "cache_dir", "compiled", "derive",
            "import_numba", "is_active", "kernel", "kernels_cached", "lean_imports",
-           "loads_without_refresh", "mark_cached", "python", "sources_digest"]
+           "loads_without_refresh", "mark_cached", "prune_cache", "python", "sources_digest"]
