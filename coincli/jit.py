@@ -215,9 +215,9 @@ def prune_cache() -> None:
     code behind (3 MB a version), and so did every deleted checkout or environment. Removed: in
     this installation's directories, the entries stamped with other sources and the data files
     no current entry names; this installation's markers of other sources; and the directories
-    of installations whose sources are gone (each directory records its source directory, from
-    version 0.6.3 on: older ones are left alone). Never raises: a cache that cannot be pruned
-    only takes room."""
+    of installations whose sources are gone (each directory records its source directory, now;
+    directories from before are left alone). Never raises: a cache that cannot be pruned only
+    takes room."""
     import numba
 
     root = cache_dir() / f"numba-{numba.__version__}"
