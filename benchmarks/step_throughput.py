@@ -1,0 +1,139 @@
+"""What bounds a Dormand-Prince 5(4) contact step, compiled: the latency of its chains of
+dependent operations, or the number of instructions? Times a chain of steps of one coin rocking
+on its two lower corners, and two such chains interleaved in one loop (independent work the CPU
+could overlap if the step were latency-bound), and counts the instructions of the compiled loop.
+Also times a variant that keeps fewer stages live (the error estimate and the continuous
+extension's sum accumulated as the stages come), with the same arithmetic but for its order.
+
+    python benchmarks/step_throughput.py [--steps 200000] [--rounds 9]
+
+Thread time, medians of interleaved rounds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--steps", type=int, default=200_000)
+    parser.add_argument("--rounds", type=int, default=9)
+    args = parser.parse_args()
+
+    import numba
+    import numpy as np
+
+    import coincli
+    from coincli import jit, params
+    from coincli.integrators import batch
+
+    jit.compiled(batch.run_batch)  # every kernel name in the package is a dispatcher from here
+    from coincli.integrators import dopri
+    from coincli.model import rotate
+
+    combine, derivative, stage, step = dopri.combine, dopri.derivative, dopri.stage, dopri.step
+    A2, A3, A4, A5, A6, B, E, D = (dopri.A2, dopri.A3, dopri.A4, dopri.A5, dopri.A6, dopri.B,
+                                   dopri.E, dopri.D)
+
+    @numba.njit(fastmath={"contract"}, inline="always")
+    def axpy(acc, w, k):
+        return (acc[0] + w * k[0], acc[1] + w * k[1], acc[2] + w * k[2], acc[3] + w * k[3],
+                acc[4] + w * k[4], acc[5] + w * k[5])
+
+    @numba.njit(fastmath={"contract"}, inline="always")
+    def step_accumulating(p, mode, h, start, k1, c, s, scales, rtol):
+        k2 = stage(p, mode, start, h, A2, (k1,), c, s)
+        k3 = stage(p, mode, start, h, A3, (k1, k2), c, s)
+        k4 = stage(p, mode, start, h, A4, (k1, k2, k3), c, s)
+        k5 = stage(p, mode, start, h, A5, (k1, k2, k3, k4), c, s)
+        k6 = stage(p, mode, start, h, A6, (k1, k2, k3, k4, k5), c, s)
+        end = combine(start, h, B, (k1, k2, k3, k4, k5, k6))
+        e = axpy((0.0, 0.0, 0.0, 0.0, 0.0, 0.0), E[0], k1)
+        d = axpy((0.0, 0.0, 0.0, 0.0, 0.0, 0.0), D[0], k1)
+        for w_e, w_d, k in ((E[2], D[2], k3), (E[3], D[3], k4), (E[4], D[4], k5),
+                            (E[5], D[5], k6)):
+            e = axpy(e, w_e, k)
+            d = axpy(d, w_d, k)
+        c7, s7 = rotate(c, s, end[2] - start[2])
+        k7 = derivative(p, mode, end, c7, s7)
+        e = axpy(e, E[6], k7)
+        d = axpy(d, D[6], k7)
+        total = 0.0
+        for j in range(6):
+            tol = scales[j] + rtol * max(abs(start[j]), abs(end[j]))
+            total += (h * e[j] / tol) ** 2
+        return end, k7, c7, s7, math.sqrt(total / 6.0), (k1, k7, d)
+
+    def chain(stepper):
+        @numba.njit(fastmath={"contract"}, nogil=True)
+        def run(p, mode, h, st, n):
+            rtol = 1e-6
+            scales = dopri.error_scales(p, rtol)
+            c, s = math.cos(st[2]), math.sin(st[2])
+            k1 = derivative(p, mode, st, c, s)
+            total = 0.0
+            for _ in range(n):
+                end, k7, c7, s7, err, stages = stepper(p, mode, h, st, k1, c, s, scales, rtol)
+                if err > 1e9:  # the stages kept for a rare continuous extension, as the driver
+                    total += stages[0][0] + stages[-1][1]
+                st, k1, c, s = end, k7, c7, s7
+                total += err
+            return total + st[1]
+        return run
+
+    @numba.njit(fastmath={"contract"}, nogil=True)
+    def two_chains(p, mode, h, sa, sb, n):
+        rtol = 1e-6
+        scales = dopri.error_scales(p, rtol)
+        ca, sna, cb, snb = math.cos(sa[2]), math.sin(sa[2]), math.cos(sb[2]), math.sin(sb[2])
+        ka, kb = derivative(p, mode, sa, ca, sna), derivative(p, mode, sb, cb, snb)
+        total = 0.0
+        for _ in range(n):
+            ea, k7a, c7a, s7a, erra, _a = step(p, mode, h, sa, ka, ca, sna, scales, rtol)
+            eb, k7b, c7b, s7b, errb, _b = step(p, mode, h, sb, kb, cb, snb, scales, rtol)
+            sa, ka, ca, sna = ea, k7a, c7a, s7a
+            sb, kb, cb, snb = eb, k7b, c7b, s7b
+            total += erra + errb
+        return total + sa[1] + sb[1]
+
+    p = params.model_params(coincli.load_preset("paper"))
+    rest = p.r_t - 0.5 * p.mass * p.g / p.k  # resting on the two lower corners (mode 3)
+    a = (0.0, rest - 1e-5, 0.01, 0.1, 0.0, 1.0)
+    b = (0.0, rest - 2e-5, -0.01, -0.1, 0.01, -1.5)
+    h, n = 2e-5, args.steps
+    one, accumulating = chain(step), chain(step_accumulating)
+    runs = {"one chain": lambda: one(p, 3, h, a, n),
+            "two chains": lambda: two_chains(p, 3, h, a, b, n),
+            "accumulating": lambda: accumulating(p, 3, h, a, n)}
+    for run in runs.values():
+        run()
+    seconds = {name: [] for name in runs}
+    for _ in range(args.rounds):
+        for name, run in runs.items():
+            start = time.thread_time()
+            run()
+            seconds[name].append(time.thread_time() - start)
+    per_step = {name: np.array(values) / n * 1e9 for name, values in seconds.items()}
+    per_step["two chains"] /= 2
+    for name, dispatcher in (("one chain", one), ("accumulating", accumulating)):
+        body = dispatcher.inspect_asm(dispatcher.signatures[0]).split("_ZN7cpython")[0]
+        count = sum(1 for line in body.splitlines()
+                    if line.startswith("\t") and not line.startswith("\t."))
+        print(f"{name:13s} compiled function: {count} instructions, "
+              f"{body.count('(%rsp)')} of them on the stack")
+    base = per_step["one chain"]
+    for name, values in per_step.items():
+        print(f"{name:13s} {np.median(values):6.1f} ns a step, "
+              f"{np.median(values / base):.3f} x one chain (median of the rounds' ratios)")
+
+
+if __name__ == "__main__":
+    main()
