@@ -1,7 +1,8 @@
 """What bounds a Dormand-Prince 5(4) contact step, compiled: the latency of its chains of
 dependent operations, or the number of instructions? Times a chain of steps of one coin rocking
-on its two lower corners, and two such chains interleaved in one loop (independent work the CPU
-could overlap if the step were latency-bound), and counts the instructions of the compiled loop.
+on its two lower corners, and two such chains in one loop (independent work the CPU could
+overlap where the step waits on latency, if its branches let it), and counts the instructions
+of the compiled function.
 Also times a variant that keeps fewer stages live (the error estimate and the continuous
 extension's sum accumulated as the stages come), with the same arithmetic but for its order.
 
