@@ -1,10 +1,11 @@
 """What bounds a Dormand-Prince 5(4) contact step, compiled: the latency of its chains of
 dependent operations, or the number of instructions? Times a chain of steps of one coin rocking
 on its two lower corners, and two such chains in one loop (independent work the CPU could
-overlap where the step waits on latency, if its branches let it), and counts the instructions
-of the compiled function.
-Also times a variant that keeps fewer stages live (the error estimate and the continuous
-extension's sum accumulated as the stages come), with the same arithmetic but for its order.
+overlap where the step waits on latency), and counts the instructions of the compiled function.
+The same for a branch-free step written for that one contact mode (its corners fixed, the turn's
+cosine and sine from one short series), in case the general step's branches kept the two chains
+apart. Also times a variant that keeps fewer stages live (the error estimate and the continuous
+extension's sum accumulated as the stages come), the same arithmetic but for its order.
 
     python benchmarks/step_throughput.py [--steps 200000] [--rounds 9]
 
@@ -73,6 +74,52 @@ def main() -> None:
             total += (h * e[j] / tol) ** 2
         return end, k7, c7, s7, math.sqrt(total / 6.0), (k1, k7, d)
 
+    @numba.njit(fastmath={"contract"}, inline="always")
+    def turn(c, s, d):  # the series of coincli.model.rotate for small turns, without its branches
+        d2 = d * d
+        d4 = d2 * d2
+        cd = (1.0 - d2 * (1.0 / 2)) + d4 * (1.0 / 24 - d2 * (1.0 / 720))
+        sd = d * ((1.0 - d2 * (1.0 / 6)) + d4 * (1.0 / 120 - d2 * (1.0 / 5040)))
+        return c * cd - s * sd, s * cd + c * sd
+
+    @numba.njit(fastmath={"contract"}, inline="always")
+    def rocking(p, point, c, s):  # the derivative with corners 0 and 1 in contact, unrolled
+        y, vx, vy, vphi = point[1], point[3], point[4], point[5]
+        fx = fy = moment = 0.0
+        for side in (1.0, -1.0):
+            dx = side * p.r_d * c + p.r_t * s
+            dy = side * p.r_d * s - p.r_t * c
+            fxi = -p.c * (vx - vphi * dy)
+            fyi = -p.k * (y + dy) - p.c * (vy + vphi * dx)
+            fx += fxi
+            fy += fyi
+            moment += dx * fyi - dy * fxi
+        return (vx, vy, vphi, fx * p.inv_mass, fy * p.inv_mass - p.g, moment * p.inv_inertia)
+
+    @numba.njit(fastmath={"contract"}, inline="always")
+    def rocking_stage(p, start, h, weights, stages, c, s):
+        point = combine(start, h, weights, stages)
+        cp, sp = turn(c, s, point[2] - start[2])
+        return rocking(p, point, cp, sp)
+
+    @numba.njit(fastmath={"contract"}, inline="always")
+    def step_branch_free(p, mode, h, start, k1, c, s, scales, rtol):
+        k2 = rocking_stage(p, start, h, A2, (k1,), c, s)
+        k3 = rocking_stage(p, start, h, A3, (k1, k2), c, s)
+        k4 = rocking_stage(p, start, h, A4, (k1, k2, k3), c, s)
+        k5 = rocking_stage(p, start, h, A5, (k1, k2, k3, k4), c, s)
+        k6 = rocking_stage(p, start, h, A6, (k1, k2, k3, k4, k5), c, s)
+        end = combine(start, h, B, (k1, k2, k3, k4, k5, k6))
+        c7, s7 = turn(c, s, end[2] - start[2])
+        k7 = rocking(p, end, c7, s7)
+        stages = (k1, k2, k3, k4, k5, k6, k7)
+        error = combine((0.0, 0.0, 0.0, 0.0, 0.0, 0.0), h, E, stages)
+        total = 0.0
+        for j in range(6):
+            tol = scales[j] + rtol * max(abs(start[j]), abs(end[j]))
+            total += (error[j] / tol) ** 2
+        return end, k7, c7, s7, math.sqrt(total / 6.0), stages
+
     def chain(stepper):
         @numba.njit(fastmath={"contract"}, nogil=True)
         def run(p, mode, h, st, n):
@@ -90,30 +137,36 @@ def main() -> None:
             return total + st[1]
         return run
 
-    @numba.njit(fastmath={"contract"}, nogil=True)
-    def two_chains(p, mode, h, sa, sb, n):
-        rtol = 1e-6
-        scales = dopri.error_scales(p, rtol)
-        ca, sna, cb, snb = math.cos(sa[2]), math.sin(sa[2]), math.cos(sb[2]), math.sin(sb[2])
-        ka, kb = derivative(p, mode, sa, ca, sna), derivative(p, mode, sb, cb, snb)
-        total = 0.0
-        for _ in range(n):
-            ea, k7a, c7a, s7a, erra, _a = step(p, mode, h, sa, ka, ca, sna, scales, rtol)
-            eb, k7b, c7b, s7b, errb, _b = step(p, mode, h, sb, kb, cb, snb, scales, rtol)
-            sa, ka, ca, sna = ea, k7a, c7a, s7a
-            sb, kb, cb, snb = eb, k7b, c7b, s7b
-            total += erra + errb
-        return total + sa[1] + sb[1]
+    def two_chains(stepper):
+        @numba.njit(fastmath={"contract"}, nogil=True)
+        def run(p, mode, h, sa, sb, n):
+            rtol = 1e-6
+            scales = dopri.error_scales(p, rtol)
+            ca, sna = math.cos(sa[2]), math.sin(sa[2])
+            cb, snb = math.cos(sb[2]), math.sin(sb[2])
+            ka, kb = derivative(p, mode, sa, ca, sna), derivative(p, mode, sb, cb, snb)
+            total = 0.0
+            for _ in range(n):
+                ea, k7a, c7a, s7a, erra, _a = stepper(p, mode, h, sa, ka, ca, sna, scales, rtol)
+                eb, k7b, c7b, s7b, errb, _b = stepper(p, mode, h, sb, kb, cb, snb, scales, rtol)
+                sa, ka, ca, sna = ea, k7a, c7a, s7a
+                sb, kb, cb, snb = eb, k7b, c7b, s7b
+                total += erra + errb
+            return total + sa[1] + sb[1]
+        return run
 
     p = params.model_params(coincli.load_preset("paper"))
     rest = p.r_t - 0.5 * p.mass * p.g / p.k  # resting on the two lower corners (mode 3)
     a = (0.0, rest - 1e-5, 0.01, 0.1, 0.0, 1.0)
     b = (0.0, rest - 2e-5, -0.01, -0.1, 0.01, -1.5)
     h, n = 2e-5, args.steps
-    one, accumulating = chain(step), chain(step_accumulating)
+    one, accumulating, free = chain(step), chain(step_accumulating), chain(step_branch_free)
+    two, two_free = two_chains(step), two_chains(step_branch_free)
     runs = {"one chain": lambda: one(p, 3, h, a, n),
-            "two chains": lambda: two_chains(p, 3, h, a, b, n),
-            "accumulating": lambda: accumulating(p, 3, h, a, n)}
+            "two chains": lambda: two(p, 3, h, a, b, n),
+            "accumulating": lambda: accumulating(p, 3, h, a, n),
+            "branch-free": lambda: free(p, 3, h, a, n),
+            "bf two chains": lambda: two_free(p, 3, h, a, b, n)}
     for run in runs.values():
         run()
     seconds = {name: [] for name in runs}
@@ -124,7 +177,9 @@ def main() -> None:
             seconds[name].append(time.thread_time() - start)
     per_step = {name: np.array(values) / n * 1e9 for name, values in seconds.items()}
     per_step["two chains"] /= 2
-    for name, dispatcher in (("one chain", one), ("accumulating", accumulating)):
+    per_step["bf two chains"] /= 2
+    for name, dispatcher in (("one chain", one), ("accumulating", accumulating),
+                             ("branch-free", free)):
         body = dispatcher.inspect_asm(dispatcher.signatures[0]).split("_ZN7cpython")[0]
         count = sum(1 for line in body.splitlines()
                     if line.startswith("\t") and not line.startswith("\t."))
