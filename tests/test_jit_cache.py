@@ -52,11 +52,27 @@ def test_a_first_compilation_prunes_what_no_process_can_load(tmp_path):
         "compiled-new-aaaa", "compiled-old-bbbb"]
 
 
-def test_pruning_an_empty_or_missing_cache_does_nothing(tmp_path):
+def test_pruning_an_empty_cache_does_nothing(tmp_path):
     root = tmp_path / "numba-0.68.1"
     root.mkdir()
     jit._prune(root, {root / "coincli_0123": tmp_path}, "new", VERSION, root / "compiled-new-a")
     assert list(root.iterdir()) == []
+
+
+def test_only_the_first_marking_of_a_version_prunes(tmp_path, monkeypatch):
+    """mark_cached prunes when it writes this version's marker, not each time it is called
+    again; and a cache that cannot be written is not pruned."""
+    marker = tmp_path / "numba-0.68.1" / "compiled-new-aaaa"
+    pruned = []
+    monkeypatch.setattr(jit, "_marker", lambda: marker)
+    monkeypatch.setattr(jit, "prune_cache", lambda: pruned.append(marker.exists()))
+    jit.mark_cached()
+    jit.mark_cached()
+    assert marker.exists() and pruned == [True]
+    monkeypatch.setattr(jit, "_marker", lambda: tmp_path / "a-file" / "compiled-new-aaaa")
+    (tmp_path / "a-file").write_text("not a directory")
+    jit.mark_cached()
+    assert pruned == [True]
 
 
 def test_the_cache_directories_pruned_are_where_numba_keeps_this_packages_kernels():
