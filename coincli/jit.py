@@ -35,7 +35,6 @@ compilation of a version prunes there what no process can load any more (:func:`
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import hashlib
 import inspect
@@ -118,25 +117,18 @@ def lean_imports() -> None:
     _LEAN_IMPORTS = True
 
 
-@contextlib.contextmanager
-def _hidden(names):
+def _hidden(*names):
     """Within the block, importing any of ``names`` that is not loaded yet raises ImportError
-    (a None entry in sys.modules); afterwards it imports as usual."""
-    hidden = [name for name in names if name not in sys.modules]
-    for name in hidden:
-        sys.modules[name] = None
-    try:
-        yield
-    finally:
-        for name in hidden:
-            if sys.modules.get(name, 0) is None:
-                del sys.modules[name]
+    (a None stand-in, :func:`coincli.standins.standing_in`); afterwards it imports as usual."""
+    from .standins import standing_in
+
+    return standing_in(dict.fromkeys(names))
 
 
 def import_numba():
     """``import numba`` as the kernels' activation does it (see lean_imports); the module."""
     lean = _LEAN_IMPORTS and not os.path.isfile(".numba_config.yaml")
-    with _hidden(("yaml", "scipy") if lean else ()):
+    with _hidden(*(("yaml", "scipy") if lean else ())):
         import numba
     return numba
 
@@ -145,7 +137,7 @@ def _import_numba_lowering() -> None:
     """Import ``numba.np.arraymath`` now, without the BLAS probe if asked (lean_imports)."""
     if not _LEAN_IMPORTS or "scipy.linalg" in sys.modules:
         return  # numba imports it when it first compiles; with scipy.linalg loaded, cheaply
-    with _hidden(("scipy.linalg",)):  # `import scipy.linalg.cython_blas` raises ImportError
+    with _hidden("scipy.linalg"):  # `import scipy.linalg.cython_blas` raises ImportError
         import numba.np.arraymath  # noqa: F401
 
 

@@ -16,13 +16,17 @@ import types
 
 
 @contextlib.contextmanager
-def standing_in(stand_ins: dict[str, types.ModuleType]):
+def standing_in(stand_ins: dict[str, types.ModuleType | None]):
     """Within the block the modules of ``stand_ins`` are in ``sys.modules`` under their names
-    (those not loaded yet), and no other thread can import; afterwards they are gone."""
+    (those not loaded yet; a None stand-in makes importing its name raise ImportError), and no
+    other thread can import; afterwards they are gone."""
     import _imp  # CPython's import lock (numba runs on CPython only)
 
-    _imp.acquire_lock()
     placed = [name for name in stand_ins if name not in sys.modules]
+    if not placed:  # nothing to stand in: other threads may import as usual
+        yield
+        return
+    _imp.acquire_lock()
     try:
         for name in placed:
             sys.modules[name] = stand_ins[name]

@@ -24,6 +24,17 @@ def test_stand_ins_are_there_only_within_the_block_and_never_replace_a_loaded_mo
     assert fake.__name__ not in sys.modules
 
 
+def test_a_none_stand_in_hides_a_module_for_the_block_only(tmp_path, monkeypatch):
+    (tmp_path / "coincli_test_hidden.py").write_text("VALUE = 1\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with standing_in({"coincli_test_hidden": None}), pytest.raises(ImportError):
+        import coincli_test_hidden  # noqa: F401
+    import coincli_test_hidden
+
+    assert coincli_test_hidden.VALUE == 1
+    del sys.modules["coincli_test_hidden"]
+
+
 def test_deferred_classes_import_their_module_when_first_used():
     """Calling the stand-in or reading its attributes is the real class's; nothing before."""
     script = ("import sys\n"
