@@ -56,7 +56,10 @@ from .params import (
     RunSettings,
     Scene,
     model_params,
+    parse_number,
+    parse_whole,
     run_settings,
+    shown,
     state_array,
     step_budget,
 )
@@ -67,15 +70,21 @@ MIRROR_ODD = ("phi0", "vx", "vphi")  # the initial conditions the mirror negates
 
 # -- parsing ------------------------------------------------------------------------------------
 def _parse_float(name: str, text) -> float:
-    """A finite number from option text or a Python number."""
+    """A finite number from option text (:func:`coincli.params.parse_number`: ASCII only) or
+    a Python number."""
     if isinstance(text, bool) or not isinstance(text, str | int | float):
-        raise ParameterError(f"--{name}: {text!r} is not a number or a LO:HI range")
+        raise ParameterError(f"--{name}: {shown(text)} is not a number or a LO:HI range")
+    if isinstance(text, str):
+        try:
+            return parse_number(text)
+        except ParameterError as exc:
+            raise ParameterError(f"--{name}: {exc}") from None
     try:
         value = float(text)
-    except ValueError:
-        raise ParameterError(f"--{name}: '{text}' is not a number or a LO:HI range") from None
+    except OverflowError:  # an int past 1.8e308
+        value = math.inf
     if not math.isfinite(value):
-        raise ParameterError(f"--{name} must be finite, got '{text}'")
+        raise ParameterError(f"--{name} must be finite, got {shown(text)}")
     return value
 
 
@@ -88,7 +97,7 @@ def parse_range(name: str, value) -> float | tuple[float, float]:
     value."""
     if isinstance(value, tuple | list):
         if len(value) != 2:
-            raise ParameterError(f"--{name}: a range is (LO, HI), got {value!r}")
+            raise ParameterError(f"--{name}: a range is (LO, HI), got {shown(value)}")
         lo, hi = (_parse_float(name, v) for v in value)
         text = f"{lo!r}:{hi!r}"
     elif isinstance(value, str):
@@ -97,12 +106,15 @@ def parse_range(name: str, value) -> float | tuple[float, float]:
             return _parse_float(name, text)
         parts = text.split(":")
         if len(parts) != 2 or not parts[0].strip() or not parts[1].strip():
-            raise ParameterError(f"--{name}: '{text}' is not a LO:HI range")
+            raise ParameterError(f"--{name}: '{shown(text)}' is not a LO:HI range")
         lo, hi = (_parse_float(name, part) for part in parts)
     else:
         return _parse_float(name, value)
     if not lo < hi:
-        raise ParameterError(f"--{name} {text}: empty range (LO must be below HI)")
+        raise ParameterError(f"--{name} {shown(text)}: empty range (LO must be below HI)")
+    if not math.isfinite(hi - lo):  # its cell centres would be NaN
+        raise ParameterError(f"--{name} {shown(text)}: the range is too wide to divide into "
+                             "cells (HI - LO is past the largest float, 1.8e308); narrow it")
     return lo, hi
 
 
@@ -110,20 +122,23 @@ def parse_pair(option: str, text, minimum: int = 1) -> tuple[int, int]:
     """``'512'`` or ``512`` -> (512, 512), ``'512x256'`` or ``(512, 256)`` -> (512, 256)."""
     if isinstance(text, tuple | list):
         text = "x".join(map(str, text))
-    parts = str(text).lower().split("x")
+    text = str(text)
+    parts = text.lower().split("x")
     try:
-        values = [int(part) for part in parts]
-    except ValueError:
-        raise ParameterError(f"--{option}: '{text}' is not N or NxM (whole numbers)") from None
+        values = [parse_whole(part) for part in parts]
+    except ParameterError:
+        raise ParameterError(f"--{option}: '{shown(text)}' is not N or NxM (whole numbers in "
+                             "ASCII digits)") from None
     if len(values) == 1:
         values *= 2
     if len(values) != 2:
-        raise ParameterError(f"--{option}: '{text}' is not N or NxM")
+        raise ParameterError(f"--{option}: '{shown(text)}' is not N or NxM")
     for v in values:
         if v < minimum:
-            raise ParameterError(f"--{option} must be at least {minimum}, got '{text}'")
+            raise ParameterError(f"--{option} must be at least {minimum}, got '{shown(text)}'")
         if v > MAX_CELLS_PER_AXIS:
-            raise ParameterError(f"--{option} must be at most {MAX_CELLS_PER_AXIS}, got '{text}'")
+            raise ParameterError(f"--{option} must be at most {MAX_CELLS_PER_AXIS}, got "
+                                 f"'{shown(text)}'")
     return values[0], values[1]
 
 

@@ -49,9 +49,12 @@ def rotate(c, s, d):
               + d8 * ((_C8 - d2 * _C10) + d4 * _C12))
         sd = d * ((1.0 - d2 * _S3) + d4 * (_S5 - d2 * _S7)
                   + d8 * ((_S9 - d2 * _S11) + d4 * _S13))
-    else:
+    elif a < math.inf:
         cd = math.cos(d)
         sd = math.sin(d)
+    else:  # an infinite turn (or NaN): NaN, as compiled code gives, not Python's domain error
+        cd = math.nan
+        sd = math.nan
     return c * cd - s * sd, s * cd + c * sd
 
 

@@ -24,6 +24,50 @@ class ParameterError(ValueError):
     """A parameter value that makes no physical or numerical sense (reported in one line)."""
 
 
+SHOWN_CHARS = 40  # an error message quotes at most this much of a value
+ASCII_SPACE = " \t\n\r\f\v"  # what a number may have around it (not str.strip's Unicode)
+
+
+def shown(text) -> str:
+    """A value as an error message quotes it: whole if short, else its first SHOWN_CHARS
+    characters and '...' (a 100 kB value must not come back as 100 kB of error)."""
+    text = text if isinstance(text, str) else repr(text)
+    return text if len(text) <= SHOWN_CHARS + 3 else f"{text[:SHOWN_CHARS]}..."
+
+
+def parse_number(text: str) -> float:
+    """The finite number ``text`` writes, in ASCII: Python's float() also reads other scripts'
+    digits ('١.٥' is 1.5 to it), which no option or preset here means to accept; the one
+    parser of every number given as text. ParameterError (one line, the value cut short by
+    :func:`shown`) otherwise."""
+    stripped = text.strip(ASCII_SPACE)
+    if not stripped.isascii():
+        raise ParameterError(f"'{shown(stripped)}' is not a number: write numbers with the "
+                             "ASCII digits 0-9, a '.' and an optional exponent (1.5, 2e-3)")
+    try:
+        value = float(stripped)
+    except ValueError:
+        raise ParameterError(f"'{shown(stripped)}' is not a valid number (e.g. 1.5 or "
+                             "2e-3)") from None
+    if not math.isfinite(value):
+        raise ParameterError(f"'{shown(stripped)}' is not a finite number: give one between "
+                             "-1.7e308 and 1.7e308")
+    return value
+
+
+def parse_whole(text: str) -> int:
+    """The whole number ``text`` writes in ASCII digits (see :func:`parse_number`)."""
+    stripped = text.strip(ASCII_SPACE)
+    if not stripped.isascii():
+        raise ParameterError(f"'{shown(stripped)}' is not a whole number: write it with the "
+                             "ASCII digits 0-9")
+    try:
+        return int(stripped)
+    except ValueError:
+        raise ParameterError(f"'{shown(stripped)}' is not a valid whole number (e.g. "
+                             "1000)") from None
+
+
 @dataclass(frozen=True)
 class Coin:
     """A rigid rectangle: diameter d, thickness t (m), mass m (kg), moment of inertia I (kg m^2)."""

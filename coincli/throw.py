@@ -20,8 +20,14 @@ import numpy as np
 
 from .enums import Certainty, Engine, Status
 from .integrators import check_step, final_state, integrate, new_control, warm_up
-from .integrators.batch import NO_LABEL, interruptible, outcome_label, rungs_agree
-from .integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
+from .integrators.batch import (
+    NO_LABEL,
+    interruptible,
+    outcome_label,
+    rungs_agree,
+    stops_ladder,
+)
+from .integrators.common import EVENT_COLUMNS, FINITE_BOUND, SAMPLE_COLUMNS, is_finite_state
 from .integrators.ladder import ladder_of
 from .jit import compiled, is_active, python
 from .model import energies, rounded_quarter_turns
@@ -32,7 +38,6 @@ from .params import (
     model_params,
     run_settings,
     state_array,
-    step_budget,
     validate,
 )
 
@@ -194,7 +199,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     previous = None  # the last rung's RunResult and label
     for k in range(len(ladder)):
         settings = base._replace(method=int(ladder.methods[k]), rtol=ladder.rtols[k],
-                                 dt=ladder.dts[k])
+                                 dt=ladder.dts[k], max_steps=ladder.budget(k, base.max_steps))
         result, seconds, engine = _run(p, settings, state0, samples, events, final, control,
                                        engine)
         wall += seconds
@@ -202,8 +207,8 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
         rungs.append(Rung(ladder.rung_text(k), None if label == NO_LABEL else int(label),
                           Status(result.status), float(result.settle_time), int(result.steps),
                           float(result.last_change)))
-        if result.status in (Status.BUDGET, Status.INTERRUPTED):
-            break  # a tighter rung would need more steps still, or was told to stop
+        if stops_ladder(result):
+            break
         if previous is not None and rungs_agree(previous[1], previous[0], label, result,
                                                 ladder.change_tolerance,
                                                 ladder.settle_tolerance):
@@ -211,7 +216,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
             break
         previous = (result, label)
     return _trajectory(scene, p, state0, final, result, samples, events, sample_dt,
-                       record_events, wall, certainty, rungs)
+                       record_events, wall, certainty, rungs, settings.max_steps)
 
 
 def _check_sample_dt(sample_dt, t_end: float) -> None:
@@ -246,7 +251,7 @@ def _run(p, settings, state0, samples, events, final, control, engine: Engine):
 
 
 def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, record_events,
-                wall, certainty, rungs) -> Trajectory:
+                wall, certainty, rungs, budget) -> Trajectory:
     integ = scene.integration
     status = Status(result.status)
     t = result.t
@@ -262,19 +267,24 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
     if status == Status.UNSETTLED:
         notes.append(f"the energy is still above E_crit at t = {t:g} s: n = {rounded} is "
                      "round(2 phi / pi) at the end and may still change; raise --t-end")
-    if status == Status.NONFINITE:
+    if status == Status.NONFINITE and not is_finite_state(*state0):
+        notes.append(f"the initial state is beyond what can be integrated (a value of "
+                     f"{FINITE_BOUND:g} or more, far outside any throw): no outcome; give "
+                     "physical initial values")
+    elif status == Status.NONFINITE:
         notes.append(f"the run went non-finite near t = {t:.4g} s: no outcome (try a smaller "
                      "step or tolerance)")
     if status == Status.BUDGET:
         # The budget counts rejected steps and flight iterations too, so not result.steps.
-        notes.append(f"the run used up its budget of {step_budget(integ):,} steps at "
+        notes.append(f"the run used up its budget of {budget:,} steps at "
                      f"t = {t:.4g} s: "
                      "no outcome (raise --max-steps, or check the throw: a spin or a damping "
                      "this large needs steps too small to finish)")
     if certainty == Certainty.UNCERTAIN and status == Status.SETTLED:
         tried = "; ".join(f"{r.setting}: n = {r.quarter_turns} {r.status.label}" for r in rungs)
         notes.append(f"the label did not converge: no two successive rungs agreed ({tried})")
-    e0 = sum(energies(p, state0))
+    with np.errstate(over="ignore", invalid="ignore"):  # a state past FINITE_BOUND: inf
+        e0 = sum(energies(p, state0))
     e1 = sum(energies(p, final)) if status != Status.NONFINITE else math.nan
     return Trajectory(
         scene=scene, status=status, t_final=float(t), final_state=final.copy(),

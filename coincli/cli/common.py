@@ -2,6 +2,7 @@
 
 import contextlib
 import json
+import re
 import sys
 from typing import Annotated
 
@@ -9,9 +10,50 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from ..params import ParameterError, Scene, validate
+from ..params import ParameterError, Scene, parse_number, parse_whole, shown, validate
 from ..presets import load
 from .text import keep_whole
+
+
+def _click_types():
+    try:  # typer 0.28 carries its own click (see cli.run)
+        from typer._click import types
+    except ImportError:  # a typer that uses click itself
+        from click import types
+    return types
+
+
+_types = _click_types()
+
+
+class Number(_types.FloatParamType):
+    """A float option read by :func:`coincli.params.parse_number`: ASCII digits only, finite,
+    and a bad value quoted short, where click's float type takes any script's digits and
+    quotes a bad value whole."""
+
+    def convert(self, value, param, ctx):
+        if not isinstance(value, str):
+            return super().convert(value, param, ctx)
+        try:
+            return parse_number(value)
+        except ParameterError as exc:
+            self.fail(str(exc), param, ctx)
+
+
+class Whole(_types.IntParamType):
+    """An int option read by :func:`coincli.params.parse_whole` (ASCII digits, quoted short)."""
+
+    def convert(self, value, param, ctx):
+        if not isinstance(value, str):
+            return super().convert(value, param, ctx)
+        try:
+            return parse_whole(value)
+        except ParameterError as exc:
+            self.fail(str(exc), param, ctx)
+
+
+NUMBER = Number()
+WHOLE = Whole()
 
 console = Console()
 err_console = Console(stderr=True)
@@ -37,14 +79,16 @@ def _paper_defaults() -> dict:
 _PAPER = _paper_defaults()
 
 
-def _opt(flag: str, text: str, unit: str, panel: str, key: str | None = None):
+def _opt(flag: str, text: str, unit: str, panel: str, key: str | None = None,
+         number: bool = True):
     """An option overriding the preset: its unit as the metavar, the default preset's value in
-    the help."""
+    the help; a number unless ``number=False``."""
     key = key or flag.lstrip("-").replace("-", "_")
     if key in _PAPER:
         text += f" [dim]\\[paper: {_PAPER[key]:.6g}][/dim]" if isinstance(
             _PAPER[key], float) else f" [dim]\\[paper: {_PAPER[key]}][/dim]"
-    return typer.Option(flag, help=text, metavar=unit, rich_help_panel=panel, show_default=False)
+    return typer.Option(flag, help=text, metavar=unit, rich_help_panel=panel, show_default=False,
+                        click_type=NUMBER if number else None)
 
 
 def _flag(flags: str, text: str, panel: str | None = None):
@@ -77,7 +121,7 @@ VphiOpt = Annotated[float | None, _opt("--vphi", "Initial angular velocity [dim]
                                        "rad/s", INIT)]
 
 MethodOpt = Annotated[str | None, _opt("--method", "Integration method (see `coin methods`).",
-                                       "NAME", INTEG)]
+                                       "NAME", INTEG, number=False)]
 DtOpt = Annotated[float | None, _opt("--dt", "Step of a fixed-step method, first step of an "
                                      "adaptive one.", "s", INTEG)]
 RtolOpt = Annotated[float | None, _opt("--rtol", "Relative tolerance of an adaptive method "
@@ -97,14 +141,26 @@ MaxStepsOpt = Annotated[int | None, typer.Option("--max-steps", metavar="N", hel
                                                  "of one run; a run that needs more ends with "
                                                  "status budget [dim]\\[1,000,000 for an "
                                                  "adaptive method, t_end / dt for a fixed "
-                                                 "step][/dim]", rich_help_panel=INTEG)]
+                                                 "step; a finer fixed step of the ladder gets "
+                                                 "it in proportion][/dim]",
+                                                 rich_help_panel=INTEG, click_type=WHOLE)]
 JsonOpt = Annotated[bool, typer.Option("--json", metavar="", help="Print one JSON object on "
                                        "stdout instead of tables.")]
 
 
+LONG_TOKEN = 200  # characters without a space: no word or path, a value pasted by mistake
+
+
+def clip_values(message: str) -> str:
+    """``message`` with every run of LONG_TOKEN or more characters without a space cut short
+    (:func:`coincli.params.shown`): whatever quoted a bad value whole (click's own messages
+    do), the error stays one readable line."""
+    return re.sub(rf"\S{{{LONG_TOKEN},}}", lambda m: shown(m.group()), message)
+
+
 def fail(message: str) -> typer.Exit:
     """Print a one-line error and return the exit to raise (code 2, like a usage error)."""
-    text = f"[bold red]error:[/] {escape(message)}"
+    text = f"[bold red]error:[/] {escape(clip_values(message))}"
     if err_console.is_terminal:
         # A person reads it: break between phrases, not mid-word where the terminal would.
         # Piped or captured it stays one line, for grep and logs.

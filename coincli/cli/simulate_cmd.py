@@ -5,12 +5,14 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.markup import escape
 
 from ..defaults import DEFAULT_LOG_EVERY
 from ..enums import Certainty, Status
 from ..version import __version__
 from . import app
 from .common import (
+    NUMBER,
     COpt,
     DiameterOpt,
     DtOpt,
@@ -62,7 +64,7 @@ ConnectOpt = Annotated[str | None, typer.Option("--connect", metavar="URL", help
 LogEveryOpt = Annotated[float, typer.Option("--log-every", metavar="SECONDS", help="Simulated "
                                             "time between frames of the recording (contact "
                                             "onsets and lift-offs are added at their exact "
-                                            "times).", rich_help_panel=REC)]
+                                            "times).", rich_help_panel=REC, click_type=NUMBER)]
 
 
 @app.command("simulate")
@@ -89,6 +91,11 @@ def simulate_command(
     from ..throw import simulate  # coincli.simulate, without the rest of the API's imports
 
     rrd_path = None if no_rrd else rrd
+    no_viewer = spawn and not _display_available()
+    if no_viewer:  # said before the run; the outcome and any other output still follow
+        spawn = False
+        err_console.print(f"[yellow]warning[/]: --spawn: {escape(_no_display(rrd_path))}",
+                          highlight=False, soft_wrap=True)
     recording = rrd_path is not None or spawn or connect is not None
     with user_errors():
         scene = build_scene(preset, x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi,
@@ -106,15 +113,18 @@ def simulate_command(
             err_console.print("[yellow]interrupted[/]: no outcome, nothing written")
             raise typer.Exit(code=130) from None
     info = None
+    not_written = None  # why the recording asked for was not written
     if recording:
+        from ..io.paths import describe
         from ..io.rrd import write_recording
 
-        with user_errors():
-            try:
-                info = write_recording(trajectory, rrd=rrd_path, spawn=spawn, connect=connect,
-                                       log_every=log_every)
-            except (RuntimeError, ValueError, OSError) as exc:
-                raise fail(f"could not write the recording: {exc}") from None
+        try:
+            info = write_recording(trajectory, rrd=rrd_path, spawn=spawn, connect=connect,
+                                   log_every=log_every)
+        except OSError as exc:
+            not_written = describe(exc)
+        except (RuntimeError, ValueError) as exc:
+            not_written = str(exc)
     if json_out:
         print_json({**trajectory.summary(), "version": __version__,
                     "parameters": scene.to_dict(),
@@ -123,8 +133,28 @@ def simulate_command(
         print_summary(trajectory)
         if info is not None:
             print_recording(info)
-    if trajectory.status not in (Status.SETTLED, Status.UNSETTLED):
-        raise SystemExit(1)  # no outcome: non-finite, out of budget or interrupted
+    if not_written is not None:  # after the outcome, which is printed whatever else failed
+        raise fail(f"could not write the recording: {not_written}")
+    if trajectory.status not in (Status.SETTLED, Status.UNSETTLED) or no_viewer:
+        raise SystemExit(1)  # no outcome (non-finite, out of budget), or no viewer to open
+
+
+def _display_available() -> bool:
+    from ..io.rrd import display_available
+
+    return display_available()
+
+
+def _no_display(rrd_path) -> str:
+    """Why --spawn opens no viewer here, and the way out, in the words of the options."""
+    from ..io.rrd import NO_DISPLAY
+
+    if rrd_path is not None:
+        return (f"{NO_DISPLAY}; the outcome is printed and the recording written to {rrd_path} "
+                f"(open it with `rerun {rrd_path}` where there is a display), or stream it "
+                "with --connect URL")
+    return (f"{NO_DISPLAY}; the outcome is printed; record it with --rrd FILE (open it with "
+            "`rerun FILE` where there is a display), or stream it with --connect URL")
 
 
 SLOW_STEPS = 1e8  # fixed steps above which a run is announced (about 2 s of compiled work)
@@ -133,19 +163,22 @@ SLOW_STEPS = 1e8  # fixed steps above which a run is announced (about 2 s of com
 def _announce(scene) -> None:
     """Say before it starts how long a long fixed-step run will take at most."""
     from ..integrators import info
-    from ..params import step_budget
+    from ..integrators.ladder import ladder_of
 
     integ = scene.integration
     if not (info(integ.method).adaptive and integ.stop_on_settle):
         announce_compilation()  # not a short run: the compiled kernels do it
     if info(integ.method).adaptive:
         return
-    steps = step_budget(integ)
+    ladder = ladder_of(integ)
+    steps = sum(ladder.budgets)  # every rung's own budget: t_end / dt of its step
     if steps > SLOW_STEPS:
         from ..api import format_duration
 
         seconds = steps * 2e-8  # ~20 ns a step compiled, the paper's method
-        err_console.print(f"[yellow]note[/]: up to {steps:,} steps of {integ.dt:g} s "
+        rungs = (f"{ladder.dts[0]:g} s" if len(ladder) == 1 else
+                 f"{ladder.dts[0]:g} s down to {ladder.dts[-1]:g} s over {len(ladder)} rungs")
+        err_console.print(f"[yellow]note[/]: up to {steps:,} steps of {rungs} "
                           f"(about {format_duration(seconds)}); Ctrl-C stops it",
                           highlight=False)
 

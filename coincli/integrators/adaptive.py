@@ -50,7 +50,14 @@ from ..model import (
     rotate,
     well_index,
 )
-from .common import NO_WELL, RunResult, is_finite_state, record_events, record_sample
+from .common import (
+    NO_WELL,
+    RunResult,
+    is_finite_state,
+    record_events,
+    record_sample,
+    unstartable,
+)
 from .dopri import (
     ORDER,
     controller_memory,
@@ -262,6 +269,8 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
     """Dormand-Prince 5(4) (or, in the copy of :mod:`.pairs`, DOP853) with located contact
     events; for the event methods, closed-form flight between contacts. Same contract as
     :func:`coincli.integrators.fixed.integrate_fixed`."""
+    if not is_finite_state(state[0], state[1], state[2], state[3], state[4], state[5]):
+        return unstartable(state, final)
     rtol = settings.rtol
     t_end = settings.t_end
     stop_on_settle = settings.stop_on_settle
@@ -323,6 +332,12 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             if crossed == crossed:  # not NaN: exact, the flight turns uniformly
                 last_change = t + (crossed - st[2]) / st[5]
             st = flight_state(p, st, tau)
+            if not is_finite_state(st[0], st[1], st[2], st[3], st[4], st[5]):
+                # a flight that overflows (or a NaN tau) must not end at t_end as if it had
+                # landed well: no outcome, and no cosine of an infinite angle below
+                t = t + tau if tau < t_end - t else t_end
+                status = Status.NONFINITE
+                break
             if touching != 0:
                 c, s = c_tau, s_tau
             else:  # tau is t_max, short of the search's last angle

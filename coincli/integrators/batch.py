@@ -64,11 +64,11 @@ def run_batch(p, settings, states, no_samples, no_events, final, quarter_turns, 
 
 
 @kernel(inline=True)
-def rung_settings(settings, methods, rtols, dts, k):
-    """The settings of rung k of a ladder: the base settings with that rung's method, rtol and
-    dt."""
+def rung_settings(settings, methods, rtols, dts, budgets, k):
+    """The settings of rung k of a ladder: the base settings with that rung's method, rtol, dt
+    and step budget."""
     return RunSettings(methods[k], dts[k], rtols[k], settings.t_end,
-                       settings.stop_on_settle, settings.max_steps, settings.sample_dt)
+                       settings.stop_on_settle, budgets[k], settings.sample_dt)
 
 
 @kernel
@@ -96,27 +96,36 @@ def rungs_agree(label_a, run_a, label_b, run_b, change_tolerance, settle_toleran
 
 
 @kernel
-def run_ladder(p, settings, methods, rtols, dts, change_tolerance, settle_tolerance, states,
-               no_samples, no_events, final, quarter_turns, status, settle_time, steps,
+def stops_ladder(result):
+    """Whether a rung's run ends its ladder: it used up its budget (a tighter rung would run
+    out too), was told to stop, or could not start (non-finite at t = 0 without a step: an
+    initial state no setting can integrate)."""
+    return (result.status == Status.BUDGET or result.status == Status.INTERRUPTED
+            or (result.status == Status.NONFINITE and result.steps == 0 and result.t == 0.0))
+
+
+@kernel
+def run_ladder(p, settings, methods, rtols, dts, budgets, change_tolerance, settle_tolerance,
+               states, no_samples, no_events, final, quarter_turns, status, settle_time, steps,
                certainty, rung, control):
     """Verified labels: each row of ``states`` is run at rung 0, 1, ... of the ladder (methods,
-    rtols, dts: the rungs' settings, coarse to fine) until two successive rungs agree
+    rtols, dts, budgets: the rungs' settings, coarse to fine) until two successive rungs agree
     (:func:`rungs_agree`). Writes the finest run's outcome, the total steps, the certainty
     (CERTAIN, UNCERTAIN if no two rungs agreed, UNVERIFIED for a one-rung ladder) and the index
     of the last rung run. Releases the GIL; ``control[0]`` set stops it."""
     n_rungs = rtols.shape[0]
     for row in range(states.shape[0]):
-        result = integrate(p, rung_settings(settings, methods, rtols, dts, 0), states[row],
-                           no_samples, no_events, final, control)
+        result = integrate(p, rung_settings(settings, methods, rtols, dts, budgets, 0),
+                           states[row], no_samples, no_events, final, control)
         label = outcome_label(result.status, result.n_well, final[2])
         total = result.steps
         verdict = Certainty.UNVERIFIED if n_rungs == 1 else Certainty.UNCERTAIN
         last = 0
         for k in range(1, n_rungs):
-            if result.status == Status.BUDGET or result.status == Status.INTERRUPTED:
-                break  # a tighter rung would need more steps still, or was told to stop
-            finer = integrate(p, rung_settings(settings, methods, rtols, dts, k), states[row],
-                              no_samples, no_events, final, control)
+            if stops_ladder(result):
+                break
+            finer = integrate(p, rung_settings(settings, methods, rtols, dts, budgets, k),
+                              states[row], no_samples, no_events, final, control)
             finer_label = outcome_label(finer.status, finer.n_well, final[2])
             total += finer.steps
             last = k
@@ -163,6 +172,8 @@ def verified_labels(p, settings, ladder, states, control=None) -> VerifiedLabels
     compiled(run_ladder)(p, settings, np.asarray(ladder.methods, dtype=np.int64),
                          np.asarray(ladder.rtols, dtype=np.float64),
                          np.asarray(ladder.dts, dtype=np.float64),
+                         np.asarray([ladder.budget(k, settings.max_steps)
+                                     for k in range(len(ladder))], dtype=np.int64),
                          float(ladder.change_tolerance), float(ladder.settle_tolerance),
                          np.ascontiguousarray(states, dtype=np.float64), *unrecorded(), *out,
                          new_control() if control is None else control)
@@ -342,4 +353,4 @@ def warm_up(p, settings, state, runs=None) -> None:
 
 __all__ = ["Labels", "NO_LABEL", "VerifiedLabels", "final_state", "integrate", "interruptible",
            "label_states", "new_control", "outcome_label", "run_batch", "run_ladder", "rungs_agree",
-           "verified_labels", "warm_up"]
+           "stops_ladder", "verified_labels", "warm_up"]

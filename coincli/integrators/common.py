@@ -3,6 +3,7 @@ contact events and final state (kernels on plain floats and arrays)."""
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 from ..enums import Status
@@ -29,12 +30,26 @@ class RunResult(NamedTuple):
     last_change: float  # s, when the coin last passed from one well to another (NaN: never)
 
 
+FINITE_BOUND = 1e30  # a state value this large counts as non-finite (is_finite_state)
+
+
 @kernel
 def is_finite_state(x, y, phi, vx, vy, vphi):
-    # NaN fails every comparison; 1e30 catches a blow-up before it overflows to inf.
-    big = 1e30
+    # NaN fails every comparison; FINITE_BOUND catches a blow-up before it overflows to inf.
+    big = FINITE_BOUND
     return (abs(x) < big and abs(y) < big and abs(phi) < big and abs(vx) < big
             and abs(vy) < big and abs(vphi) < big)
+
+
+@kernel
+def unstartable(state, final):
+    """The result of a run whose initial state is already past :func:`is_finite_state`'s bound
+    (a speed of 1e308 m/s, which a sweep's range can hold): status NONFINITE at t = 0, not a
+    step taken. Run, it would overflow at once (to a NaN that ends a closed-form flight at
+    t_end as if it had gone well) and, as plain Python, stop on a math domain error."""
+    for j in range(6):
+        final[j] = state[j]
+    return RunResult(0.0, 0, Status.NONFINITE, math.nan, NO_WELL, 0, 0, math.nan)
 
 
 @kernel
@@ -84,5 +99,6 @@ def record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi):
     return n_samples
 
 
-__all__ = ["EVENT_COLUMNS", "LIFTOFF", "NO_WELL", "ONSET", "RunResult", "SAMPLE_COLUMNS",
-           "is_finite_state", "record_events", "record_sample", "store_state"]
+__all__ = ["EVENT_COLUMNS", "FINITE_BOUND", "LIFTOFF", "NO_WELL", "ONSET", "RunResult",
+           "SAMPLE_COLUMNS", "is_finite_state", "record_events", "record_sample", "store_state",
+           "unstartable"]

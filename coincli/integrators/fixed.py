@@ -29,6 +29,7 @@ from .common import (
     record_events,
     record_sample,
     store_state,
+    unstartable,
 )
 
 CONTROL_EVERY = 4096  # steps between looks at the control flag (a few microseconds apart)
@@ -158,6 +159,8 @@ def integrate_fixed(p, settings, state, samples, events, final, control):
     included) and ``events`` (contact onsets and lift-offs) while they have room. Stops with
     status BUDGET after ``settings.max_steps`` steps, INTERRUPTED when ``control[0]`` is set
     (looked at every CONTROL_EVERY steps)."""
+    if not is_finite_state(state[0], state[1], state[2], state[3], state[4], state[5]):
+        return unstartable(state, final)
     method = settings.method
     dt = settings.dt
     t_end = settings.t_end

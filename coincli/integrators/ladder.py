@@ -9,7 +9,9 @@ last rung is *uncertain*. Cells that agree at once cost two runs; only the disag
 climb.
 
 Adaptive methods climb in tolerance, rtol, rtol / 10, ... down to the floor; fixed-step methods
-in step, dt / 10^(1/p) (a tenfold smaller error for a method of order p) for FIXED_RUNGS rungs.
+in step, dt / 10^(1/p) (a tenfold smaller error for a method of order p) for FIXED_RUNGS rungs,
+each rung with the step budget of its own step (t_end / dt, or ``max_steps`` times the first
+rung's step over its own): a finer step needs more steps to reach the same time.
 The ``event`` method climbs on DOP853 (``event_dop853``, the same driver with an 8th-order pair)
 past its first rung, starting two decades below it (rtol 1e-6, then 1e-8, 1e-9, ...): DOP853 at
 rtol 1e-8 costs less than Dormand-Prince 5(4) at 1e-7 and is far more accurate, so the first
@@ -23,10 +25,11 @@ A single pass (``verify=False``) is a ladder of one rung: its labels are UNVERIF
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 
 from ..enums import Method
-from ..params import Integration
+from ..params import Integration, step_budget
 from .registry import info, setting_text
 
 RTOL_FLOOR = 1e-12  # the tightest tolerance a ladder climbs to (README: "Verified labels")
@@ -48,6 +51,11 @@ class Ladder:
     adaptive: bool
     change_tolerance: float = CHANGE_TOLERANCE
     settle_tolerance: float = SETTLE_TOLERANCE
+    budgets: tuple[int, ...] = ()  # each rung's step budget; () gives each the run's own
+
+    def budget(self, k: int, default: int) -> int:
+        """Rung k's step budget (``default``, the run's, if the ladder sets none)."""
+        return self.budgets[k] if self.budgets else default
 
     @property
     def verified(self) -> bool:
@@ -65,7 +73,8 @@ class Ladder:
     def to_dict(self) -> dict:
         knob = "rtol" if self.adaptive else "dt"
         return {"rungs": [{"method": self.methods[k].label,
-                           knob: (self.rtols if self.adaptive else self.dts)[k]}
+                           knob: (self.rtols if self.adaptive else self.dts)[k],
+                           **({"max_steps": self.budgets[k]} if self.budgets else {})}
                           for k in range(len(self))],
                 "change_tolerance": self.change_tolerance,
                 "settle_tolerance": self.settle_tolerance,
@@ -80,7 +89,8 @@ def ladder_of(integration: Integration) -> Ladder:
     method = info(integration.method)
     first = method.method
     if not integration.verify:
-        return Ladder((first,), (integration.rtol,), (integration.dt,), method.adaptive)
+        return Ladder((first,), (integration.rtol,), (integration.dt,), method.adaptive,
+                      budgets=(step_budget(integration),))
     if method.adaptive:
         rtol = integration.rtol
         upper, start = UPPER_RUNGS.get(first, (first, 10.0))
@@ -90,9 +100,20 @@ def ladder_of(integration: Integration) -> Ladder:
         while rtols[-1] / 10.0 >= RTOL_FLOOR * (1 - 1e-9):
             rtols.append(rtols[-1] / 10.0)
         return Ladder((first,) + (upper,) * (len(rtols) - 1), tuple(rtols),
-                      (integration.dt,) * len(rtols), True)
+                      (integration.dt,) * len(rtols), True,
+                      budgets=(step_budget(integration),) * len(rtols))
     dts = tuple(integration.dt / 10.0 ** (k / method.order) for k in range(FIXED_RUNGS))
-    return Ladder((first,) * FIXED_RUNGS, (integration.rtol,) * FIXED_RUNGS, dts, False)
+    return Ladder((first,) * FIXED_RUNGS, (integration.rtol,) * FIXED_RUNGS, dts, False,
+                  budgets=fixed_budgets(integration, dts))
+
+
+def fixed_budgets(integration: Integration, dts: tuple[float, ...]) -> tuple[int, ...]:
+    """The step budgets of fixed-step rungs: each the t_end / dt its own step takes (exactly
+    the steps its run makes), or, with ``max_steps`` given, that budget of the first rung
+    scaled by dt_0 / dt, so that every rung may reach the same time."""
+    if integration.max_steps is None:
+        return tuple(step_budget(replace(integration, dt=dt)) for dt in dts)
+    return tuple(math.ceil(integration.max_steps * dts[0] / dt - 1e-9) for dt in dts)
 
 
 def describe(integration: Integration) -> str:
@@ -106,4 +127,5 @@ def describe(integration: Integration) -> str:
     return f"{base}, verified up to {ladder.rung_text(len(ladder) - 1)}"
 
 
-__all__ = ["FIXED_RUNGS", "Ladder", "RTOL_FLOOR", "UPPER_RUNGS", "describe", "ladder_of"]
+__all__ = ["FIXED_RUNGS", "Ladder", "RTOL_FLOOR", "UPPER_RUNGS", "describe", "fixed_budgets",
+           "ladder_of"]

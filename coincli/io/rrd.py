@@ -170,6 +170,18 @@ def _visual_bounds(frames: Frames, scene):
     return rrb.VisualBounds2D(x_range=[x0, x1], y_range=[-y1, -y0])
 
 
+def display_available() -> bool:
+    """Whether a spawned viewer has a display to open its window on: on Linux and the other
+    Unixes an X11 or Wayland display named in the environment; macOS and Windows always have
+    one. Without it the viewer dies at once and the recording waits for it (20 s) in vain."""
+    if sys.platform == "darwin" or sys.platform.startswith("win"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+NO_DISPLAY = "no display to open a viewer on (DISPLAY and WAYLAND_DISPLAY are unset)"
+
+
 def _sinks(rr, rec, rrd: Path | None, spawn: bool, connect: str | None, port: int):
     sinks = []
     if rrd is not None:
@@ -206,6 +218,9 @@ def write_recording(trajectory, *, rrd: str | os.PathLike | None = None, spawn: 
         check_connect_url(connect)
     if rrd_path is None and not spawn and connect is None:
         raise ValueError("write_recording needs a destination: rrd, spawn or connect")
+    if spawn and not display_available():
+        raise RuntimeError(f"{NO_DISPLAY}: write the recording to a file (rrd=...) and open it "
+                           "where there is one, or stream it to a running viewer (connect=...)")
     if frames is None:
         frames = build_frames(trajectory)
     scene = trajectory.scene

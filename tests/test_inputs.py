@@ -1,0 +1,276 @@
+"""Extreme and malformed input (issue 28, items 7-9): a throw too large to integrate ends with
+status non-finite, never a math domain error nor a false ``unsettled``; numbers are ASCII and a
+bad value is quoted short; each rung of a fixed-step ladder has the budget of its own step;
+``--spawn`` without a display still prints the outcome and writes the file asked for."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from coincli import simulate
+from coincli.cli import app, run
+from coincli.enums import Engine, Method, Status
+from coincli.grid import compute_tile, make_grid, make_spec, parse_pair, parse_range
+from coincli.integrators import integrate, new_control
+from coincli.integrators.batch import verified_labels
+from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
+from coincli.integrators.ladder import ladder_of
+from coincli.jit import compiled, python
+from coincli.model import rotate
+from coincli.params import (
+    ADAPTIVE_MAX_STEPS,
+    Integration,
+    ParameterError,
+    model_params,
+    parse_number,
+    run_settings,
+    shown,
+)
+from coincli.presets import load
+
+REPO = Path(__file__).resolve().parent.parent
+runner = CliRunner()
+
+
+@pytest.fixture(autouse=True)
+def in_tmp(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # simulate writes coin.rrd by default
+    return tmp_path
+
+
+def coin(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def one_error_line(capsys, *args) -> str:
+    """The command line as `coin` runs it (click's usage errors made one line too): exit 2,
+    nothing on stdout, one `error:` line on stderr."""
+    code = run([str(a) for a in args])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "", (code, out, err)
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), err
+    return lines[0]
+
+
+# -- item 7: a state too large to integrate ---------------------------------------------------
+@pytest.mark.parametrize("option, value", [("--vphi", "1e308"), ("--vphi", "1e160"),
+                                           ("--vx", "1e308"), ("--vy", "-1e300")])
+def test_a_throw_too_large_to_integrate_is_non_finite_not_a_traceback(option, value):
+    """Was `ValueError: math domain error` in model.rotate (the plain-Python engine)."""
+    args = ["simulate", "--vy", "1", option, value, "--no-rrd"]
+    result = coin(*args)
+    assert result.exit_code == 1, (result.stdout, result.stderr, result.exception)
+    assert result.exception is None or isinstance(result.exception, SystemExit)
+    assert "none: the run went non-finite" in result.stdout
+    assert "initial state is beyond what can be integrated" in result.stdout
+    assert "Traceback" not in result.stdout + result.stderr
+    assert "Warning" not in result.stderr  # no numpy overflow warning either
+    data = json.loads(coin(*args, "--json").stdout)
+    assert data["status"] == "non-finite" and data["quarter_turns"] is None
+    assert len(data["rungs"]) == 1  # no finer setting can start it: the ladder stops
+
+
+def test_a_non_finite_throw_still_writes_its_recording(in_tmp):
+    result = coin("simulate", "--vy", "1", "--vphi", "1e308", "--rrd", "big.rrd")
+    assert result.exit_code == 1, (result.stdout, result.stderr, result.exception)
+    assert "non-finite" in result.stdout and (in_tmp / "big.rrd").stat().st_size > 0
+
+
+@pytest.mark.parametrize("method", ["event", "dopri5", "event_dop853", "symplectic_euler",
+                                    "rk4"])
+def test_both_engines_say_non_finite(method):
+    """Compiled and plain-Python kernels agree: status non-finite at t = 0, no step, the state
+    left as it was; no math domain error in Python."""
+    scene = load("paper").scene
+    p = model_params(scene)
+    settings = run_settings(scene.integration)._replace(method=int(Method.parse(method)))
+    for state in ([0.0, scene.y0, 0.0, 0.0, 1.0, 1e308], [0.0, scene.y0, 0.0, 1e308, 1.0, 0.0],
+                  [0.0, scene.y0, 1e300, 0.0, 1.0, 3.0], [0.0, scene.y0, 0.0, 0.0, 1.0, 1e160]):
+        state = np.array(state)
+        for engine in (compiled, python):
+            final = np.empty(6)
+            result = engine(integrate)(p, settings, state, np.empty((0, SAMPLE_COLUMNS)),
+                                       np.empty((0, EVENT_COLUMNS)), final, new_control())
+            assert result.status == Status.NONFINITE, (method, engine, state)
+            assert result.t == 0.0 and result.steps == 0
+            assert np.array_equal(final, state)
+    for engine in (Engine.PYTHON, Engine.NUMBA):
+        run = simulate(scene.with_overrides(vy=1.0, vphi=1e308), engine=engine)
+        assert run.status == Status.NONFINITE and run.quarter_turns is None
+
+
+def test_rotate_by_an_infinite_angle_is_nan_not_an_error():
+    assert all(math.isnan(v) for v in rotate(1.0, 0.0, math.inf))
+    assert all(math.isnan(v) for v in rotate(1.0, 0.0, math.nan))
+    assert rotate(1.0, 0.0, 2.0) == pytest.approx((math.cos(2.0), math.sin(2.0)), abs=1e-16)
+
+
+def test_a_basin_over_absurd_spins_labels_them_non_finite_not_unsettled():
+    """`coin basin --vphi -1e308:1e308` labelled every cell unsettled after a microsecond (a
+    closed-form flight with an infinite angle ended at t_end as if it had landed). That range
+    is now refused (its cells' centres would be NaN); one half as wide has finite cells."""
+    with pytest.raises(ParameterError, match="too wide"):
+        parse_range("vphi", "-1e308:1e308")
+    scene = load("paper").scene.with_overrides(vy=1.0)
+    ranges = {"vy": (0.5, 1.0), "vphi": parse_range("vphi", "-8e307:8e307")}
+    grid = make_grid(scene, ranges, (2, 3), (2, 3))
+    tile = compute_tile(make_spec(scene, grid), (0, 0))
+    status = tile.arrays["status"]
+    ends = status[:, [0, 2]]  # vphi = -1e308 and +1e308
+    assert (ends == Status.NONFINITE).all(), status
+    assert (status[:, 1] == Status.SETTLED).all(), status  # vphi = 0: an ordinary throw
+    assert (tile.arrays["rung"][:, [0, 2]] == 0).all()  # no finer rung tried
+
+
+def test_the_basin_command_on_absurd_spins(in_tmp, capsys):
+    line = one_error_line(capsys, "basin", "sweep", "big.zarr", "--vphi=-1e308:1e308",
+                          "--res", "2x3")
+    assert "too wide" in line and not (in_tmp / "big.zarr").exists()
+    result = coin("basin", "sweep", "big.zarr", "--vphi=-8e307:8e307", "--vy", "0.5:1",
+                  "--res", "2x3", "--chunk", "2x3")
+    assert result.exit_code == 0, (result.stdout, result.stderr, result.exception)
+    stats = coin("basin", "stats", "big.zarr", "--json")
+    assert stats.exit_code == 0, (stats.stdout, stats.stderr)
+    status = json.loads(stats.stdout)["status"]
+    assert status["non-finite"] == 4 and status["settled"] == 2 and status["unsettled"] == 0
+
+
+# -- item 7: parsing ---------------------------------------------------------------------------
+@pytest.mark.parametrize("args", [
+    ["simulate", "--vy", "١.٥", "--no-rrd"],
+    ["simulate", "--vy", "١٫٥", "--no-rrd"],
+    ["simulate", "--vphi", "٣", "--no-rrd"],
+    ["simulate", "--max-steps", "١٢", "--no-rrd"],
+    ["simulate", "--log-every", "٠.٠١", "--no-rrd"],
+    ["basin", "sweep", "s.zarr", "--vphi", "١:٢"],
+    ["basin", "sweep", "s.zarr", "--vy", "۱.۵"],  # Extended Arabic-Indic (Persian) digits
+    ["basin", "sweep", "s.zarr", "--res", "١٢"],
+])
+def test_numbers_in_other_scripts_are_refused(args, in_tmp, capsys):
+    line = one_error_line(capsys, *args)
+    assert "ASCII" in line, line
+    assert not (in_tmp / "s.zarr").exists()
+
+
+def test_parse_number_reads_ascii_only():
+    assert parse_number(" 1.5 ") == 1.5 and parse_number("-2e-3") == -2e-3
+    for text in ("١.٥", "１.５", "1.5\u00a0", "abc", "inf", "nan", "1e999", ""):
+        with pytest.raises(ParameterError):
+            parse_number(text)
+    assert parse_pair("res", "12x16") == (12, 16)
+    with pytest.raises(ParameterError, match="ASCII"):
+        parse_pair("res", "١٢")
+
+
+@pytest.mark.parametrize("args", [
+    ["simulate", "--vy", "x" * 100_000, "--no-rrd"],
+    ["simulate", "--vy", "7" * 100_000, "--no-rrd"],
+    ["simulate", "--max-steps", "x" * 100_000, "--no-rrd"],
+    ["basin", "sweep", "s.zarr", "--vphi", "x" * 100_000],
+    ["basin", "sweep", "s.zarr", "--vphi", "1:" + "x" * 100_000],
+    ["basin", "sweep", "s.zarr", "--res", "9" * 100_000],
+    ["basin", "sweep", "s.zarr", "--threads", "x" * 100_000],  # click's own message, clipped
+])
+def test_a_huge_bad_value_is_quoted_short(args, capsys):
+    line = one_error_line(capsys, *args)
+    assert len(line) < 400, len(line)
+    assert "..." in line
+
+
+def test_shown_cuts_long_values_only():
+    assert shown("abc") == "abc" and shown("x" * 43) == "x" * 43
+    assert shown("x" * 100) == "x" * 40 + "..."
+
+
+# -- item 8: each rung's budget follows its own step -------------------------------------------
+def test_fixed_step_rungs_get_the_budget_of_their_own_step():
+    ladder = ladder_of(Integration(method="symplectic_euler", dt=1e-4, t_end=2.0))
+    assert ladder.dts == pytest.approx((1e-4, 1e-5, 1e-6))
+    assert ladder.budgets == (20_000, 200_000, 2_000_000)
+    rk4 = ladder_of(Integration(method="rk4", dt=1e-4, t_end=2.0))
+    assert rk4.budgets == tuple(math.ceil(2.0 / dt - 1e-9) for dt in rk4.dts)
+    capped = ladder_of(Integration(method="verlet", dt=1e-4, t_end=2.0, max_steps=1000))
+    assert capped.budgets == (1000, math.ceil(1000 * 10 ** 0.5 - 1e-9), 10_000)
+    # adaptive ladders keep one budget for every rung, as before
+    event = ladder_of(Integration())
+    assert set(event.budgets) == {ADAPTIVE_MAX_STEPS} and len(event.budgets) == len(event)
+    assert set(ladder_of(Integration(max_steps=77)).budgets) == {77}
+    assert "max_steps" in ladder.to_dict()["rungs"][1]
+
+
+def test_the_papers_method_at_its_coarse_step_gets_an_outcome():
+    """`--method symplectic_euler --dt 1e-4` ran out of budget at t = 0.2 s on its second rung
+    (dt = 1e-5 with the 20,000 steps of dt = 1e-4). The fig. 2 throw settles: the model as
+    stated lies after six quarter turns (README, docs/model.md section 10)."""
+    result = coin("simulate", "--vy", "1.197", "--vphi", "3.508", "--method",
+                  "symplectic_euler", "--dt", "1e-4", "--no-rrd", "--json")
+    assert result.exit_code == 0, (result.stdout, result.stderr)
+    data = json.loads(result.stdout)
+    assert data["status"] == "settled" and data["quarter_turns"] is not None
+    assert all(r["status"] != "budget" for r in data["rungs"]), data["rungs"]
+    assert len(data["rungs"]) >= 2
+
+
+def test_the_sweep_ladder_gives_each_rung_its_budget():
+    """The compiled ladder (basin, fractions, accuracy) as simulate's."""
+    scene = load("paper").scene.with_overrides(method="symplectic_euler", dt=1e-4)
+    states = np.array([[0.0, scene.y0, 0.0, 0.0, 1.197, 3.508]])
+    out = verified_labels(model_params(scene), run_settings(scene.integration),
+                          ladder_of(scene.integration), states)
+    assert out.status[0] == Status.SETTLED and out.rung[0] >= 1
+    assert out.steps[0] > 20_000  # the second rung took more steps than the first's budget
+
+
+# -- item 9: --spawn without a display ---------------------------------------------------------
+def test_spawn_without_a_display_prints_the_outcome_and_writes_the_file(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    start = time.monotonic()
+    proc = subprocess.run([sys.executable, "-m", "coincli", "simulate", "--vy", "1.197",
+                           "--vphi", "3.508", "--spawn", "--rrd", "throw.rrd"],
+                          capture_output=True, text=True, cwd=tmp_path, env=env, timeout=60)
+    seconds = time.monotonic() - start
+    if sys.platform == "darwin" or sys.platform.startswith("win"):
+        pytest.skip("macOS and Windows always have a display")
+    assert seconds < 10, seconds
+    assert proc.returncode == 1, (proc.stdout, proc.stderr)
+    assert "outcome" in proc.stdout and "n = 6" in proc.stdout
+    assert "throw.rrd" in proc.stdout  # the recording line
+    assert (tmp_path / "throw.rrd").stat().st_size > 0
+    warning = [line for line in proc.stderr.splitlines() if "display" in line]
+    assert len(warning) == 1 and "--spawn" in warning[0] and "--connect" in warning[0]
+    assert "Traceback" not in proc.stderr and "could not write" not in proc.stderr
+
+
+def test_spawn_without_a_display_or_a_file_suggests_rrd(tmp_path, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr(sys, "platform", "linux")
+    result = coin("simulate", "--vy", "1.197", "--vphi", "3.508", "--spawn", "--no-rrd")
+    assert result.exit_code == 1, (result.stdout, result.stderr, result.exception)
+    assert "n = 6" in result.stdout
+    assert "--rrd FILE" in result.stderr and not list(tmp_path.iterdir())
+
+
+def test_write_recording_refuses_to_spawn_without_a_display(monkeypatch):
+    from coincli.io.rrd import write_recording
+
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr(sys, "platform", "linux")
+    run = simulate(load("paper").scene.with_overrides(vy=1.0, vphi=3.0), sample_dt=0.01,
+                   record_events=True)
+    start = time.monotonic()
+    with pytest.raises(RuntimeError, match="no display"):
+        write_recording(run, spawn=True)
+    assert time.monotonic() - start < 1
