@@ -35,11 +35,12 @@ def shown(text) -> str:
     return text if len(text) <= SHOWN_CHARS + 3 else f"{text[:SHOWN_CHARS]}..."
 
 
-def parse_number(text: str) -> float:
-    """The finite number ``text`` writes, in ASCII: Python's float() also reads other scripts'
-    digits ('١.٥' is 1.5 to it), which no option or preset here means to accept; the one
-    parser of every number given as text. ParameterError (one line, the value cut short by
-    :func:`shown`) otherwise."""
+def parse_number(text: str, finite: bool = True) -> float:
+    """The number ``text`` writes, in ASCII: Python's float() also reads other scripts' digits
+    ('١.٥' is 1.5 to it), which no option or preset here means to accept; the one parser of
+    every number given as text. ParameterError (one line, the value cut short by
+    :func:`shown`) otherwise, and for inf, nan or an overflow unless ``finite=False`` (a
+    scene's values are then refused by :func:`validate`, which names them)."""
     stripped = text.strip(ASCII_SPACE)
     if not stripped.isascii():
         raise ParameterError(f"'{shown(stripped)}' is not a number: write numbers with the "
@@ -49,7 +50,7 @@ def parse_number(text: str) -> float:
     except ValueError:
         raise ParameterError(f"'{shown(stripped)}' is not a valid number (e.g. 1.5 or "
                              "2e-3)") from None
-    if not math.isfinite(value):
+    if finite and not math.isfinite(value):
         raise ParameterError(f"'{shown(stripped)}' is not a finite number: give one between "
                              "-1.7e308 and 1.7e308")
     return value

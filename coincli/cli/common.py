@@ -27,15 +27,15 @@ _types = _click_types()
 
 
 class Number(_types.FloatParamType):
-    """A float option read by :func:`coincli.params.parse_number`: ASCII digits only, finite,
-    and a bad value quoted short, where click's float type takes any script's digits and
-    quotes a bad value whole."""
+    """A float option read by :func:`coincli.params.parse_number`: ASCII digits only, and a bad
+    value quoted short, where click's float type takes any script's digits and quotes a bad
+    value whole. Infinities pass, for the command to refuse naming the parameter."""
 
     def convert(self, value, param, ctx):
         if not isinstance(value, str):
             return super().convert(value, param, ctx)
         try:
-            return parse_number(value)
+            return parse_number(value, finite=False)
         except ParameterError as exc:
             self.fail(str(exc), param, ctx)
 
