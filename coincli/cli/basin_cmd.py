@@ -185,6 +185,8 @@ def sweep_command(
     from .. import api
     from ..io import store as store_io
     from ..io.paths import DISK_ERRORS, NotWritable, describe
+    from ..io.runner import SchedulerLost
+    from . import interruptions
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
@@ -250,6 +252,9 @@ def sweep_command(
         raise fail(_too_long(exc.estimate, plan, scheduler)) from None
     except ParameterError as exc:
         raise fail(str(exc)) from None
+    except SchedulerLost as exc:
+        fail(interruptions.lost_scheduler(exc, "every finished tile"))
+        raise typer.Exit(code=interruptions.SCHEDULER_LOST) from None
     except OSError as exc:  # a read-only or full disk; no scheduler at that address
         disk = exc.errno in DISK_ERRORS or isinstance(exc, NotWritable)
         raise fail(describe(exc, f"cannot write {path}" if disk else "cannot run the sweep")
@@ -278,8 +283,9 @@ def sweep_command(
                  f"{report.wall_seconds:.1f} s wall, {rate:,.0f} "
                  f"cells/s on {where}{others}.")
     if report.interrupted or not report.complete:
-        say(err_console, f"[yellow]stopped:[/] {counted(total - report.tiles_done, 'tile')} "
-                         "left; run the same command again to resume.")
+        say(err_console, f"[yellow]stopped:[/] {interruptions.stopped_by()}"
+                         f"{counted(total - report.tiles_done, 'tile')} left; run the same "
+                         "command again to resume.")
         raise typer.Exit(code=130)
     say(console, f"Next: {command('coin', 'basin', 'render', path, '-o', 'basin.png')}; "
                  f"{command('coin', 'basin', 'stats', path)}")
@@ -356,23 +362,28 @@ def verify_command(
                     - len(found.damaged),
                     "damaged": [{"tile": list(t), "reason": why}
                                 for t, why in sorted(found.damaged.items())],
-                    "metadata": unrepaired, "leftover_temporary_files": found.leftovers,
-                    "seconds": found.seconds})
+                    "metadata": unrepaired, "parameters": found.problems,
+                    "leftover_temporary_files": found.leftovers, "seconds": found.seconds})
     elif found.intact:
         missing = total - found.tiles_done
         say(console, f"{path}: intact: {found.tiles_done} of {total} tiles done and verified"
                      + (f", {missing} not computed yet" if missing else "")
                      + f" ({found.seconds:.2f} s)")
     else:
-        say(console, f"{path}: DAMAGED: {counted(len(found.damaged), 'tile')}"
-                     + (f" and {counted(len(unrepaired), 'metadata file')}" if unrepaired
-                        else "")
-                     + f"; {found.tiles_done} of {total} tiles intact ({found.seconds:.2f} s). "
-                     "Rerun the sweep command to recompute the damaged tiles.")
+        what = [counted(len(found.damaged), "tile")] if found.damaged else []
+        what += [counted(len(unrepaired), "metadata file")] if unrepaired else []
+        say(console, f"{path}: DAMAGED: {' and '.join(what)}; {found.tiles_done} of {total} "
+                     f"tiles intact ({found.seconds:.2f} s). Rerun the sweep command (with the "
+                     "store's parameters) to "
+                     + " and ".join((["recompute the damaged tiles"] if found.damaged else [])
+                                    + (["rewrite the metadata"] if unrepaired else [])) + ".")
+        for problem in found.problems:
+            say(console, f"  parameters changed in {problem}")
         for tile, why in sorted(found.damaged.items()):
             say(console, f"  tile {tile}: {why}")
         for key in unrepaired:
-            say(console, f"  metadata {key}: differs from what the store's parameters give")
+            say(console, f"  metadata {key}: differs from what the parameters of its tiles "
+                         "give")
     if found.leftovers and not json_out:
         say(err_console, f"note: {found.leftovers} temporary file(s) of interrupted writes "
                          "(*.partial); the next sweep removes them")
@@ -458,10 +469,11 @@ def stats_command(
     """  # noqa: E501 (typer keeps a docstring's line breaks)
     from .. import api
     from ..io.paths import check_writable, describe
-    from ..io.store import open_view
+    from ..io.store import damaged_metadata, open_view
 
     with user_errors():
         view = open_view(path)
+        metadata = damaged_metadata(view)
         if csv_out is not None:
             check_writable(csv_out, what="CSV file")  # before reading the whole store
         stats = api.basin_stats(path)
@@ -471,10 +483,12 @@ def stats_command(
             except OSError as exc:
                 raise fail(describe(exc, f"cannot write {csv_out}")) from None
     attrs = view.attrs
+    warnings = _stats_warnings(stats, view.problems, metadata)
     if json_out:
         print_json({"path": str(path), "version": __version__, "store_version": attrs["version"],
                     "sweep": attrs["sweep"], "method": attrs["method"],
-                    "tiles": stats["tiles_total"], **stats})
+                    "tiles": stats["tiles_total"], **stats, "metadata_damaged": metadata,
+                    "parameters_changed": view.problems, "warnings": warnings})
         return
     ax0, ax1 = attrs["sweep"]["axes"]
     console.print(f"[bold]coin basin stats[/] {path}", highlight=False)
@@ -512,6 +526,7 @@ def stats_command(
     counts = ", ".join(f"{count:,} {name}" for name, count in stats["status"].items()
                        if count and name != "not computed")
     summary.append(("status", counts or "-"))
+    summary += [("warning" if i == 0 else "", w) for i, w in enumerate(warnings)]
     if verified:
         u = stats["uncertain"]
         summary.append(("certain", share(stats["certain"])))
@@ -538,6 +553,24 @@ def stats_command(
                                 f"run{'s' if runs != 1 else ''}, "
                                 f"{_num(cost['trajectories_per_second'], ',.0f')} cells/s"))
     print_rows(console, summary)
+
+
+def _stats_warnings(stats: dict, problems: list[str], metadata: list[str]) -> list[str]:
+    """What the numbers of `coin basin stats` do not say: a partial store's fractions are of
+    the tiles computed so far, which are no random sample of the map (the sweep computes the
+    highest-energy tiles first); damaged metadata (what `coin basin verify` finds)."""
+    out = []
+    done, total = stats["tiles_done"], stats["tiles_total"]
+    if done < total:
+        out.append(f"partial store: {done} of {total} tiles computed ({percent(done / total)}); "
+                   "the fractions and intervals are over the computed cells only, which are no "
+                   "random sample of the map: they need not hold for the whole map")
+    out += [f"parameters changed in {problem}" for problem in problems]
+    if metadata:
+        out.append(f"{counted(len(metadata), 'metadata file')} damaged "
+                   f"({', '.join(metadata[:4])}{' ...' if len(metadata) > 4 else ''}): "
+                   "`coin basin verify` lists them, rerunning the sweep command rewrites them")
+    return out
 
 
 def _write_csv(stats: dict, target: Path) -> None:

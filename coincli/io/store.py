@@ -2,8 +2,9 @@
 
 Layout (dims named after the two swept initial conditions, e.g. ``vy`` and ``vphi``)::
 
-    out.zarr/                       group; attributes: coin_basin (format 3), version,
-                                    parameters, sweep, method (with its verification ladder)
+    out.zarr/                       group; attributes: coin_basin (format 4, the parameters
+                                    digest), version, parameters, sweep, method (with its
+                                    verification ladder)
       vy, vphi                      float64 cell centres, linspace(LO, HI, n)
       quarter_turns  (vy, vphi)     int16, fill -32768 = no label (not computed or non-finite)
       status         (vy, vphi)     uint8, 0 settled, 1 unsettled at t_end, 2 non-finite,
@@ -12,7 +13,8 @@ Layout (dims named after the two swept initial conditions, e.g. ``vy`` and ``vph
       steps          (vy, vphi)     int64 integrator steps (cost), fill -1
       certainty      (vy, vphi)     uint8, 0 uncertain, 1 certain, 2 unverified, 255 not computed
       rung           (vy, vphi)     int8, last rung of the ladder run, fill -1
-      done           (tile_vy, tile_vphi)  uint32 digest of the tile, 0 = not done; chunks (1, 1)
+      done           (tile_vy, tile_vphi)  uint32 digest of the tile, 0 = not done; chunks (1, 1);
+                                    attributes: a copy of the sweep's, with their digest
     out.zarr.cost/                  beside the store, so that the store itself is bit-identical
       tile_I_J.json                 however it was computed: each tile's CPU seconds and who
       runs.jsonl                    computed it, one line per invocation (wall time, tiles,
@@ -24,12 +26,13 @@ concurrent writers (threads, Dask workers, other processes) never touch the same
 chunk ends with a CRC-32C of its compressed bytes (Zarr v3's ``crc32c`` codec, after ``zstd``),
 so a chunk damaged on disk (random bytes, truncated, a bit flipped, emptied) fails to read
 instead of decoding to garbage. A tile's ``done`` entry, written after all its data, is
-:func:`tile_digest`: a 32-bit BLAKE2b of its data *and its tile index*, so that a chunk copied
-from another tile (a valid chunk, at the wrong place) or a missing chunk (read back as fill
-values) is caught too. A tile is done only if its ``done`` digest equals the digest of the data
-its chunks read back as (:func:`scan`); otherwise it is recomputed on resume (recomputing gives
-the same bytes), counted as not computed by ``stats`` and ``render``, and listed by
-``coin basin verify``.
+:func:`tile_digest`: a 32-bit BLAKE2b of its data, *its tile index and the digest of the
+parameters it was computed with*, so that a chunk copied from another tile (a valid chunk, at
+the wrong place) or a missing chunk (read back as fill values) is caught too, and so is a
+parameter changed in the metadata after the tile was computed. A tile is done only if its
+``done`` digest equals the digest of the data its chunks read back as (:func:`scan`); otherwise
+it is recomputed on resume (recomputing gives the same bytes), counted as not computed by
+``stats`` and ``render``, and listed by ``coin basin verify``.
 
 The store is Zarr v3, but this module writes and reads it without importing Zarr, whose import
 alone takes a quarter of a second of every `coin basin` (the layout is fixed: one chunk per tile,
@@ -44,9 +47,19 @@ which checks their CRC and length). The store is created from a template built i
 ``.NAME.creating-HOST-PID`` beside it, renamed into place under a lock (``.NAME.lock``,
 ``flock``), so that processes racing to create one store all end up in the winner's. Chunks,
 metadata and what is read back are the same, byte for byte and value for value, as Zarr's
-(tests/test_store.py). Metadata is consolidated once at creation and never changes afterwards, so
-``xarray.open_zarr(path)`` and ``zarr.open_group(path)`` open it directly; a metadata file or
-coordinate chunk that differs from the template is rewritten on resume. ``quarter_turns``
+(tests/test_store.py). Metadata is consolidated once at creation, so ``xarray.open_zarr(path)``
+and ``zarr.open_group(path)`` open it directly.
+
+The sweep's attributes (what determines the labels: :data:`coincli.io.schema.COMPARED_ATTRS`)
+are kept in three copies, each with its digest: the group's attributes, and the ``done`` array's
+attributes in the consolidated metadata and in done/zarr.json. On opening, copies that differ
+are judged by the tiles (:func:`open_view`): the parameters a computed tile verifies under are
+those it was computed with, and the copies that differ from them are damage, rebuilt on resume.
+Metadata files are compared parsed, on what the sweep wrote (shape, chunks, dtype, fill value,
+codecs, dimension names, its attributes): what a user adds (an attribute, an array listed in the
+consolidated metadata) is theirs, kept on resume and never called damage; a metadata file or
+coordinate chunk that differs is rewritten on resume from the proven parameters, with what the
+user added. ``quarter_turns``
 carries ``missing_value`` so xarray masks cells without a label to NaN (``mask_and_scale=False``
 keeps the int16 values).
 """
@@ -77,10 +90,16 @@ from .paths import atomic_output
 from .schema import (
     COMPARED_ATTRS,
     COORD_NOTE,
-    DONE_ATTRS,
+    COPY,
     DTYPES,
     FILLS,
+    FORMAT,
+    MARK,
     VARIABLES,
+    done_attrs,
+    owned,
+    parameters_digest,
+    root_attrs,
     tile_dims,
 )
 
@@ -101,33 +120,9 @@ class ChunkError(ValueError):
 
 @functools.cache
 def _zstd():
-    return _zstd_class()(level=ZSTD_LEVEL, checksum=False)
-
-
-def _zstd_class():
-    """numcodecs' Zstd codec. ``import numcodecs`` imports every codec it has and scans every
-    installed distribution for codec plugins (0.07 s, most of what a store costs a short
-    command); its zstd module needs none of that. So unless numcodecs is loaded already, the
-    module is imported under a stand-in for the package (:mod:`coincli.standins`): a later
-    ``import numcodecs`` runs the package as usual and finds the same module. On any failure,
-    the usual import."""
-    import sys
-
-    from ..standins import package_stand_in, standing_in
-
-    if "numcodecs" not in sys.modules:
-        stand_in = package_stand_in("numcodecs")
-        if stand_in is not None:
-            try:
-                with standing_in({"numcodecs": stand_in}):
-                    from numcodecs.zstd import Zstd
-
-                    return Zstd
-            except ImportError:
-                pass
     from numcodecs.zstd import Zstd
 
-    return Zstd
+    return Zstd(level=ZSTD_LEVEL, checksum=False)
 
 
 def _crc32c(data: bytes) -> bytes:
@@ -221,8 +216,10 @@ def show_value(value) -> str:
     return str(value)
 
 
-def differences(stored: dict, wanted: dict) -> list[str]:
-    """One phrase per differing parameter: 'k = 10000 in the store, 5000 here'."""
+def differences(stored: dict, wanted: dict,
+                where: tuple[str, str] = ("in the store", "here")) -> list[str]:
+    """One phrase per differing parameter: 'k = 10000 in the store, 5000 here' (``where``
+    names the two sides)."""
     a = flatten_attrs({k: stored.get(k) for k in COMPARED_ATTRS})
     b = flatten_attrs({k: wanted.get(k) for k in COMPARED_ATTRS})
     out = []
@@ -231,16 +228,19 @@ def differences(stored: dict, wanted: dict) -> list[str]:
         if key.startswith("sweep.axes.") and key.endswith((".units", ".long_name")):
             continue  # they follow from the axis's name, which differs too
         if a.get(key, "absent") != b.get(key, "absent"):
-            out.append(f"{_display_name(key)} = {show_value(a.get(key))} in the store, "
-                       f"{show_value(b.get(key))} here")
+            out.append(f"{_display_name(key)} = {show_value(a.get(key))} {where[0]}, "
+                       f"{show_value(b.get(key))} {where[1]}")
     return out
 
 
 # -- the digest of a tile ------------------------------------------------------------------------
-def tile_digest(tile: tuple[int, int], arrays: dict[str, np.ndarray]) -> int:
-    """32-bit BLAKE2b of a tile's index and data (every array of the schema, in a fixed order,
-    as little-endian bytes of its stored dtype): never 0, which means "not done"."""
+def tile_digest(tile: tuple[int, int], arrays: dict[str, np.ndarray], parameters: bytes) -> int:
+    """32-bit BLAKE2b of the parameters the tile was computed with (their digest,
+    :func:`coincli.io.schema.parameters_digest`), its index and its data (every array of the
+    schema, in a fixed order, as little-endian bytes of its stored dtype): never 0, which means
+    "not done"."""
     h = hashlib.blake2b(digest_size=4, person=b"coin-tile")
+    h.update(parameters)
     h.update(np.asarray(tile, dtype="<i8").tobytes())
     for name in ARRAY_NAMES:
         block = np.ascontiguousarray(arrays[name],
@@ -291,7 +291,9 @@ def template(attrs: dict, grid: Grid) -> dict[str, bytes]:
     """Every file of an empty store, by key ('zarr.json', 'vy/c/0', ...): the metadata of the
     group and its arrays (consolidated into the group's) and the coordinate chunks, byte for
     byte what Zarr writes for them (tests/test_store.py), without importing Zarr (a quarter of
-    a second). Creating a store is writing these files; checking one, comparing with them."""
+    a second). Creating a store is writing these files; checking one, comparing with them.
+    Only the attributes the sweep owns are taken from ``attrs`` (with their digest, in the
+    group's attributes and in a copy in the ``done`` array's)."""
     d0, d1 = grid.dims
     arrays = {}
     files = {}
@@ -306,8 +308,8 @@ def template(attrs: dict, grid: Grid) -> dict[str, bytes]:
         arrays[name] = _array_metadata(grid.shape, grid.chunk, dtype, fill, (d0, d1),
                                        array_attrs)
     arrays["done"] = _array_metadata(grid.tile_grid, (1, 1), DONE_DTYPE, 0, tile_dims(grid),
-                                     DONE_ATTRS)
-    group = {"attributes": attrs, "zarr_format": 3,
+                                     done_attrs(attrs))
+    group = {"attributes": root_attrs(attrs), "zarr_format": 3,
              "consolidated_metadata": {"kind": "inline", "must_understand": False,
                                        "metadata": {k: arrays[k] for k in sorted(arrays)}},
              "node_type": "group"}
@@ -415,7 +417,7 @@ def _create(path: Path, attrs: dict, spec: SweepSpec, overwrite: bool) -> None:
 
 # -- opening and checking ------------------------------------------------------------------------
 class StoreDamaged(ParameterError):
-    """A store whose metadata cannot be read, or that lacks an array."""
+    """A store whose metadata cannot be read, or whose parameters cannot be recovered."""
 
 
 class Tile(enum.Enum):
@@ -437,6 +439,7 @@ class StoreCheck:
     repaired: list[str] = field(default_factory=list)  # ... and were rewritten
     leftovers: int = 0  # temporary files (*.partial) of writers that died
     seconds: float = 0.0  # time the check took
+    problems: list[str] = field(default_factory=list)  # copies of the parameters found changed
 
     @property
     def intact(self) -> bool:
@@ -454,46 +457,211 @@ class StoreCheck:
 
 @dataclass
 class StoreView:
-    """An opened store: the metadata of its arrays (name -> zarr.json), attributes and grid."""
+    """An opened store: its attributes (those of the sweep its tiles were computed with, and
+    any a user added), its grid, and the parameters digest its tiles are checked against."""
 
     path: Path
-    arrays: dict[str, dict]
     attrs: dict
     grid: Grid
+    parameters: bytes = b""  # schema.parameters_digest of the sweep attributes
+    problems: list[str] = field(default_factory=list)  # copies of them that differ, and how
+    proof: str = "agree"  # how the sweep attributes are known: agree, tiles, digest
 
 
-def open_view(path: str | os.PathLike, grid: Grid | None = None) -> StoreView:
+@dataclass
+class _Copy:
+    """One copy of the sweep attributes in a store's metadata."""
+
+    where: str
+    value: dict | None  # None: unreadable
+    digest: str | None = None  # the parameters digest stored beside them
+
+    @property
+    def consistent(self) -> bool:
+        return self.value is not None and self.digest == parameters_digest(self.value).hex()
+
+
+_PROOF = {"tiles": "proven by its computed tiles", "digest": "confirmed by its digest",
+          "agree": "in the other copies"}
+
+
+def _load_json(file: Path):
+    """A metadata file parsed, or None if it cannot be read or parsed."""
+    try:
+        return json.loads(file.read_bytes())
+    except (OSError, ValueError):
+        return None
+
+
+def _dig(document, *keys):
+    for key in keys:
+        if not isinstance(document, dict):
+            return None
+        document = document.get(key)
+    return document
+
+
+def _copy_in(where: str, attributes) -> _Copy:
+    """The copy of the sweep attributes in the ``done`` array's attributes."""
+    value = _dig(attributes, COPY)
+    if not isinstance(value, dict):
+        return _Copy(where, None)
+    return _Copy(where, owned(value), _dig(attributes, "digest"))
+
+
+def _copies(path: Path) -> tuple[dict | None, list[_Copy]]:
+    """The group's attributes (None if unreadable) and the three copies of the sweep
+    attributes: the group's own, and the ``done`` array's in the consolidated metadata and in
+    its zarr.json."""
+    root = _load_json(path / "zarr.json")
+    attrs = _dig(root, "attributes")
+    if isinstance(attrs, dict):
+        group = _Copy("the group's attributes (zarr.json)", owned(attrs),
+                      _dig(attrs, MARK, "digest"))
+    else:
+        attrs, group = None, _Copy("zarr.json", None)
+    return attrs, [group,
+                   _copy_in("the consolidated metadata of done (zarr.json)",
+                            _dig(root, "consolidated_metadata", "metadata", "done",
+                                 "attributes")),
+                   _copy_in("done/zarr.json", _dig(_load_json(path / "done" / "zarr.json"),
+                                                   "attributes"))]
+
+
+def _digest_tiles(path: Path) -> list[tuple[int, int]]:
+    """The tiles with a ``done`` chunk file, from the folder (whatever the metadata say)."""
+    tiles = []
+    for row in (path / "done" / "c").glob("*"):
+        for cell in row.glob("*"):
+            if row.name.isdigit() and cell.name.isdigit():
+                tiles.append((int(row.name), int(cell.name)))
+    return sorted(tiles)
+
+
+def _tiles_verify(path: Path, value: dict, tiles: list, most: int = 16) -> bool:
+    """Whether a computed tile verifies under the sweep attributes ``value`` (one does only
+    under the parameters it was computed with). Up to ``most`` readable tiles are tried."""
+    try:
+        grid = grid_of(value)
+    except Exception:  # noqa: BLE001 - attributes that describe no grid prove nothing
+        return False
+    view = StoreView(path, value, grid, parameters_digest(value))
+    t0, t1 = grid.tile_grid
+    tried = 0
+    for tile in tiles:
+        if tile[0] >= t0 or tile[1] >= t1:
+            continue
+        try:
+            flag = int(_read_chunk(view, "done", tile)[0, 0])
+        except Exception:  # noqa: BLE001 - damage: no proof
+            continue
+        data, _ = _read_tile(view, tile)
+        if data is None:
+            continue
+        if tile_digest(tile, data, view.parameters) == flag:
+            return True
+        tried += 1
+        if tried >= most:
+            break
+    return False
+
+
+def _unique(values: Iterable[dict]) -> list[dict]:
+    out = []
+    for value in values:
+        if value not in out:
+            out.append(value)
+    return out
+
+
+def _prove(path: Path, copies: list[_Copy], wanted: dict | None) -> tuple[dict | None, str]:
+    """The sweep attributes the store's tiles were computed with, and how that is known:
+    'agree' (every copy whole and the same), 'tiles' (a computed tile verifies under them),
+    'digest' (the one copy that matches its own digest); (None, why) if nothing proves any."""
+    values = _unique(c.value for c in copies if c.value is not None)
+    if len(values) == 1 and all(c.consistent for c in copies):
+        return values[0], "agree"
+    tiles = _digest_tiles(path)
+    candidates = _unique([*values, *([owned(wanted)] if wanted is not None else [])])
+    for value in candidates:
+        if tiles and _tiles_verify(path, value, tiles):
+            return value, "tiles"
+    consistent = _unique(c.value for c in copies if c.consistent)
+    if len(consistent) == 1:
+        return consistent[0], "digest"
+    if len(values) == 1 and not tiles:  # nothing computed, and nothing says otherwise
+        return values[0], "agree"
+    if tiles:
+        n = len(tiles)
+        return None, (f"the parameters its {n} tile{'s' if n != 1 else ''} were computed with "
+                      "cannot be recovered: no tile verifies under "
+                      + ("its metadata's" if wanted is None else "its metadata's or these")
+                      + " (the metadata were changed after the tiles were computed"
+                      + (f": {_disagreement(copies)}" if len(values) > 1 else "") + "). "
+                      + "Run the sweep with the parameters of its tiles to resume it, or "
+                      "--overwrite to start again")
+    return None, (f"its parameters cannot be recovered: {_disagreement(copies)}, and no "
+                  "computed tile proves either; --overwrite starts the sweep again")
+
+
+def _disagreement(copies: list[_Copy]) -> str:
+    """'the group's attributes (zarr.json) and done/zarr.json disagree: c = 0.4 in the one,
+    0.5 in the other'."""
+    readable = [c for c in copies if c.value is not None]
+    for a in readable:
+        for b in readable:
+            if a.value != b.value:
+                diff = differences(a.value, b.value, ("in the one", "in the other"))
+                return f"{a.where} and {b.where} disagree ({'; '.join(diff[:2])})"
+    return "every copy of them fails its digest"
+
+
+def open_view(path: str | os.PathLike, grid: Grid | None = None,
+              wanted: dict | None = None) -> StoreView:
     """Open a basin store for reading; ParameterError (one line) if it is none, or if its
-    metadata cannot be read. ``grid``: the sweep's grid when known (else from the attributes).
-    Read from the group's consolidated metadata, as Zarr opens it."""
+    metadata cannot be read, StoreDamaged if the parameters its tiles were computed with
+    cannot be recovered. ``grid``: the sweep's grid when known (else from the attributes);
+    ``wanted``: the attributes of a sweep about to resume it (they are tried too).
+
+    The sweep attributes are in three copies (the group's attributes; the ``done`` array's, in
+    the consolidated metadata and in its zarr.json), each with its digest. When they differ
+    (one was damaged or edited), the one a computed tile verifies under is the one the tiles
+    were computed with; without any tile, the one that matches its digest. The copies that
+    differ from it are listed in ``problems`` (a resume rewrites them)."""
     p = Path(path)
     check_is_store(p)
-    try:
-        root = json.loads((p / "zarr.json").read_bytes())
-        attrs = dict(root["attributes"])
-        arrays = {name: meta for name, meta in root["consolidated_metadata"]["metadata"].items()
-                  if meta.get("node_type") == "array"}
-    except Exception as exc:  # noqa: BLE001 - any failure to parse is damage
-        raise StoreDamaged(f"{path}: its metadata cannot be read ({_short(exc)}): the store is "
-                           "damaged; --overwrite starts the sweep again") from None
-    if "coin_basin" not in attrs:
+    attrs, copies = _copies(p)
+    if attrs is not None and MARK not in attrs and copies[2].value is None:
         raise ParameterError(f"{path} is not a coin basin store")
-    fmt = attrs["coin_basin"].get("format") if isinstance(attrs["coin_basin"], dict) else None
-    from .schema import FORMAT
-
+    mark = attrs.get(MARK) if attrs is not None else None
+    fmt = mark.get("format") if isinstance(mark, dict) else None
     if fmt is not None and fmt != FORMAT:
         raise ParameterError(f"{path} is a coin basin store of format {fmt}, this version "
                              f"reads format {FORMAT}: recompute it (--overwrite)")
-    try:
-        grid = grid or grid_of(attrs)
-    except Exception as exc:  # noqa: BLE001
-        raise StoreDamaged(f"{path}: its metadata cannot be read ({_short(exc)}): the store is "
-                           "damaged; --overwrite starts the sweep again") from None
-    missing = [n for n in (*ARRAY_NAMES, "done") if n not in arrays]
-    if missing:
-        raise StoreDamaged(f"{path} is damaged: array '{missing[0]}' is missing; "
-                           "--overwrite starts it again")
-    return StoreView(p, arrays, attrs, grid)
+    if all(c.value is None for c in copies):
+        raise StoreDamaged(f"{path}: its metadata cannot be read: the store is damaged; "
+                           "--overwrite starts the sweep again")
+    proven, proof = _prove(p, copies, wanted)
+    if proven is None:
+        raise StoreDamaged(f"{path}: {proof}")
+    problems = []
+    for c in copies:
+        if c.value is None:
+            problems.append(f"{c.where} cannot be read")
+        elif c.value != proven:
+            problems.append(f"{c.where}: " + "; ".join(
+                differences(c.value, proven, ("there", _PROOF[proof]))))
+        elif not c.consistent:
+            problems.append(f"{c.where}: the digest stored with them is not theirs")
+    extra = {k: v for k, v in (attrs or {}).items() if k != MARK and k not in COMPARED_ATTRS}
+    full = {**root_attrs(proven), **extra}
+    if grid is None or (wanted is not None and owned(wanted) != proven):
+        try:
+            grid = grid_of(full)
+        except Exception as exc:  # noqa: BLE001
+            raise StoreDamaged(f"{path}: its metadata cannot be read ({_short(exc)}): the "
+                               "store is damaged; --overwrite starts the sweep again") from None
+    return StoreView(p, full, grid, parameters_digest(proven), problems, proof)
 
 
 def _short(exc: BaseException) -> str:
@@ -503,33 +671,68 @@ def _short(exc: BaseException) -> str:
     return text if len(text) <= 100 else text[:97] + "..."
 
 
-def _check_layout(view: StoreView) -> None:
-    grid = view.grid
-    expected = {**{name: (grid.shape, grid.chunk) for name in ARRAY_NAMES},
-                "done": (grid.tile_grid, (1, 1))}
-    for name, (shape, chunks) in expected.items():
-        meta = view.arrays[name]
-        try:
-            found = (tuple(meta["shape"]), tuple(meta["chunk_grid"]["configuration"]
-                                                 ["chunk_shape"]))
-        except (KeyError, TypeError):
-            found = None
-        if found != (tuple(shape), tuple(chunks)):
-            have = f"shape {found[0]} chunks {found[1]}" if found else "no readable shape"
-            raise ParameterError(f"{view.path} is damaged: array '{name}' has {have}, expected "
-                                 f"{shape} {chunks}; --overwrite starts it again")
+# -- comparing metadata --------------------------------------------------------------------------
+# Where a user may add entries to the metadata the sweep wrote (a group or array attribute, an
+# array in the consolidated listing): those are theirs, kept, and never damage.
+_OPEN_KEYS = ("attributes", "metadata")
 
 
-def _compare_metadata(path: Path, files: dict[str, bytes]) -> list[str]:
-    """Keys of the template whose file is missing or differs."""
-    bad = []
-    for key, data in files.items():
-        try:
-            if (path / key).read_bytes() != data:
-                bad.append(key)
-        except OSError:
-            bad.append(key)
-    return bad
+def _same(found, want) -> bool:
+    if isinstance(want, float) and isinstance(found, float) and math.isnan(want):
+        return math.isnan(found)
+    return type(found) is type(want) and found == want
+
+
+def _agrees(found, want, extensible: bool = False) -> bool:
+    """Whether parsed metadata ``found`` holds what the sweep wrote, ``want``: equal, except
+    for entries added where a user may add them."""
+    if isinstance(want, dict):
+        if not isinstance(found, dict) or not (extensible or set(found) == set(want)):
+            return False
+        return all(k in found and _agrees(found[k], v, k in _OPEN_KEYS)
+                   for k, v in want.items())
+    if isinstance(want, list):
+        return (isinstance(found, list) and len(found) == len(want)
+                and all(_agrees(f, w) for f, w in zip(found, want, strict=True)))
+    return _same(found, want)
+
+
+def _merged(found, want, extensible: bool = False):
+    """``want`` with the entries a user added to ``found`` (where they may add them)."""
+    if not (isinstance(want, dict) and isinstance(found, dict)):
+        return want
+    out = {k: _merged(found.get(k), v, k in _OPEN_KEYS) for k, v in want.items()}
+    if extensible:
+        out.update({k: v for k, v in found.items() if k not in want})
+    return out
+
+
+def _differs(file: Path, data: bytes) -> bool:
+    """Whether a file of the store does not hold what the template has for it: a metadata file
+    compared parsed, on what the sweep wrote; a coordinate chunk byte for byte."""
+    if file.name == "zarr.json":
+        found = _load_json(file)
+        return found is None or not _agrees(found, json.loads(data))
+    try:
+        return file.read_bytes() != data
+    except OSError:
+        return True
+
+
+def _repaired(file: Path, data: bytes) -> bytes:
+    """What a differing file is rewritten with: the template's, with what a user added."""
+    if file.name != "zarr.json":
+        return data
+    found = _load_json(file)
+    merged = _merged(found, json.loads(data))
+    return data if merged == json.loads(data) else _json_bytes(merged)
+
+
+def damaged_metadata(view: StoreView) -> list[str]:
+    """Keys of the metadata files and coordinate chunks that do not hold what the store's
+    (proven) parameters give."""
+    return [key for key, data in template(view.attrs, view.grid).items()
+            if _differs(view.path / key, data)]
 
 
 def _write_atomically(target: Path, data: bytes) -> None:
@@ -588,10 +791,10 @@ def _read_tile(view: StoreView, tile: tuple[int, int]) -> tuple[dict | None, str
     return out, None
 
 
-def _judge(tile, flag: int, data: dict | None, why: str | None):
+def _judge(view: StoreView, tile, flag: int, data: dict | None, why: str | None):
     if data is None:
         return Tile.DAMAGED, None, why
-    if tile_digest(tile, data) != flag:
+    if tile_digest(tile, data, view.parameters) != flag:
         return Tile.DAMAGED, None, ("its data do not match its digest (a chunk from another "
                                     "tile, or changed on disk)")
     return Tile.DONE, data, None
@@ -613,7 +816,7 @@ def scan(view: StoreView, *, with_data: bool = False,
             yield tile, Tile.MISSING, None, None
             continue
         data, why = _read_tile(view, tile)
-        state, data, why = _judge(tile, int(flags[tile]), data, why)
+        state, data, why = _judge(view, tile, int(flags[tile]), data, why)
         yield tile, state, (data if with_data else None), why
 
 
@@ -624,16 +827,19 @@ def _leftovers(path: Path) -> int:
 def check(path: str | os.PathLike, *, repair_with: dict | None = None,
           view: StoreView | None = None) -> StoreCheck:
     """Check every tile and every metadata file of a store (read only, unless
-    ``repair_with`` gives the attributes to rewrite differing metadata from)."""
+    ``repair_with`` gives the attributes to rewrite differing metadata from: what the sweep
+    wrote is rewritten, what a user added to it is kept)."""
     t0 = time.perf_counter()
     view = view or open_view(path)
     attrs = repair_with if repair_with is not None else view.attrs
     files = template(attrs, view.grid)
-    metadata = _compare_metadata(view.path, files)
+    metadata = [key for key, data in files.items() if _differs(view.path / key, data)]
     repaired = []
     if repair_with is not None:
         for key in metadata:
-            _write_atomically(view.path / key, files[key])
+            target = view.path / key
+            target.parent.mkdir(parents=True, exist_ok=True)
+            _write_atomically(target, _repaired(target, files[key]))
             repaired.append(key)
     done = np.zeros(view.grid.tile_grid, dtype=bool)
     damaged = {}
@@ -643,16 +849,17 @@ def check(path: str | os.PathLike, *, repair_with: dict | None = None,
         elif state is Tile.DAMAGED:
             damaged[tile] = why
     return StoreCheck(str(path), view.attrs, view.grid, done, damaged, metadata, repaired,
-                      _leftovers(view.path), time.perf_counter() - t0)
+                      _leftovers(view.path), time.perf_counter() - t0, list(view.problems))
 
 
 def prepare(path: str | os.PathLike, attrs: dict, spec: SweepSpec,
             overwrite: bool = False) -> StoreCheck:
     """Create the store, or open an existing one with the same parameters, and check it: which
-    tiles are done (verified), which damaged. A store with other parameters is refused with a
-    message naming them unless ``overwrite``. Metadata files that differ from those of the
-    parameters are rewritten. Several processes may call this at once on one path: one creates
-    the store, the others open it."""
+    tiles are done (verified), which damaged. A store with other parameters (those its tiles
+    were computed with, whatever its metadata say now) is refused with a message naming them
+    unless ``overwrite``. Metadata that differ from those of the parameters are rewritten
+    (keeping what a user added). Several processes may call this at once on one path: one
+    creates the store, the others open it."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise ParameterError(f"{path} exists and is not a directory")
@@ -663,14 +870,17 @@ def prepare(path: str | os.PathLike, attrs: dict, spec: SweepSpec,
         _create(path, attrs, spec, overwrite)
     else:
         tidy(path)
-    view = open_view(path, spec.grid)
+    view = open_view(path, spec.grid, wanted=attrs)
     diff = differences(view.attrs, attrs)
     if diff:
+        changed = ""
+        if view.problems:
+            when = "its tiles were computed" if view.proof == "tiles" else "it was created"
+            changed = f" (its metadata were changed after {when}: {view.problems[0]})"
         raise ParameterError(f"{path} holds a different sweep: {'; '.join(diff[:4])}"
-                             f"{' ...' if len(diff) > 4 else ''}. Run again with the "
+                             f"{' ...' if len(diff) > 4 else ''}{changed}. Run again with the "
                              "store's parameters to resume it, or --overwrite to "
                              "replace it")
-    _check_layout(view)
     cost_dir(path).mkdir(exist_ok=True)
     return check(path, repair_with=attrs, view=view)
 
@@ -703,9 +913,24 @@ def _remove_partials(path: Path, tile: tuple[int, int]) -> None:
                     leftover.unlink()
 
 
-def write_tile(path: str | os.PathLike, spec: SweepSpec, result: TileResult) -> None:
-    """Write one tile's arrays, its cost, and last its ``done`` digest."""
+def _store_parameters(path: Path) -> bytes:
+    """The parameters digest a tile written to the store now binds: the one in the ``done``
+    array's zarr.json (:func:`prepare` made it the sweep's before any tile was computed)."""
+    digest = _dig(_load_json(path / "done" / "zarr.json"), "attributes", "digest")
+    try:
+        return bytes.fromhex(digest)
+    except (TypeError, ValueError):
+        raise StoreDamaged(f"{path}: the parameters digest in done/zarr.json cannot be read: "
+                           "the store was damaged while the sweep ran; rerun it to repair "
+                           "the store") from None
+
+
+def write_tile(path: str | os.PathLike, spec: SweepSpec, result: TileResult,
+               parameters: bytes | None = None) -> None:
+    """Write one tile's arrays, its cost, and last its ``done`` digest, which binds the
+    parameters digest ``parameters`` (by default, the store's)."""
     path = Path(path)
+    parameters = _store_parameters(path) if parameters is None else parameters
     tile = result.tile
     i, j = tile
     _remove_partials(path, tile)
@@ -717,7 +942,7 @@ def write_tile(path: str | os.PathLike, spec: SweepSpec, result: TileResult) -> 
     if result.mirror_of is not None:
         cost["mirror_of"] = list(result.mirror_of)
     _write_atomically(cost_dir(path) / f"tile_{i}_{j}.json", json.dumps(cost).encode())
-    digest = np.array([[tile_digest(tile, result.arrays)]])
+    digest = np.array([[tile_digest(tile, result.arrays, parameters)]])
     _write_atomically(_chunk_file(path, "done", tile),
                       encode_chunk(digest, DONE_DTYPE, 0, (1, 1)))
 
@@ -813,17 +1038,31 @@ def check_store_writable(path: str | os.PathLike) -> None:
     """Raise NotWritable (one line) unless the store (or the folder it will be created in) and
     its side folder accept new files: a read-only mount or a full disk is found before any
     work."""
-    from .paths import check_writable
+    import errno
+
+    from .paths import REASONS, NotWritable, check_writable
 
     path = Path(path)
-    check_writable(path, what="store", directory=True, create_parents=True)
-    side = cost_dir(path)
-    if side.is_dir():
-        check_writable(side, what="store", directory=True)
+    existed = is_store(path)
+    try:
+        check_writable(path, what="store", directory=True, create_parents=True)
+        side = cost_dir(path)
+        if side.is_dir():
+            check_writable(side, what="store", directory=True)
+    except OSError as exc:
+        read_only = (errno.EROFS, errno.EACCES, errno.EPERM)
+        if not (isinstance(exc, PermissionError) or exc.errno in read_only):
+            raise  # a full disk, ...: said as it is
+        reason = REASONS.get(exc.errno, "permission denied")
+        raise NotWritable(exc.errno, f"the store {path} is read-only ({reason}): a sweep "
+                                     "cannot write to it here" if existed else
+                          f"cannot create the store {path}: its folder is read-only "
+                          f"({reason})") from None
 
 
 __all__ = ["ARRAY_NAMES", "StoreCheck", "StoreDamaged", "StoreView", "Tile", "check",
-           "check_is_store", "check_store_writable", "claims_dir", "cost_dir", "differences",
-           "flatten_attrs", "grid_of", "has_digest", "is_store", "open_view", "prepare",
-           "read_basin", "read_costs", "read_done", "read_runs", "record_run", "run_record",
-           "scan", "show_value", "template", "tidy", "tile_digest", "tile_done", "write_tile"]
+           "check_is_store", "check_store_writable", "claims_dir", "cost_dir", "damaged_metadata",
+           "differences", "flatten_attrs", "grid_of", "has_digest", "is_store", "open_view",
+           "prepare", "read_basin", "read_costs", "read_done", "read_runs", "record_run",
+           "run_record", "scan", "show_value", "template", "tidy", "tile_digest", "tile_done",
+           "write_tile"]
