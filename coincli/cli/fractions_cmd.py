@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.markup import escape
 from rich.table import Table
 
 from ..defaults import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION, PARAMETER_UNITS
@@ -132,6 +133,9 @@ def fractions_command(
                                                   rich_help_panel=RUN)] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress line.",
                                         rich_help_panel=RUN)] = False,
+    yes: Annotated[bool, typer.Option("--yes", "-y", help="Start a run estimated to take "
+                                      "more than 12 hours, or to spend its budget before "
+                                      "--precision, anyway.", rich_help_panel=RUN)] = False,
     json_out: JsonOpt = False,
     preset: PresetOpt = "paper",
     diameter: DiameterOpt = None, thickness: ThicknessOpt = None, mass: MassOpt = None,
@@ -142,7 +146,7 @@ def fractions_command(
 ) -> None:
     """Outcome probabilities of random throws: P(n), P(standing), P(lying) with 95 % intervals.
 
-    Each initial condition is a DIST: a value (0.01, 2pi), LO:HI (uniform), normal(MEAN,SD) or normal(MEAN,SD,LO,HI) (truncated); numbers may use pi (-pi:pi), and y0 multiples of the half diagonal r (r:5r). Samples are drawn until every 95 % interval is narrower than --precision (or --samples of them), counting only verified (certain) labels and reporting the uncertain fraction beside them. The same command gives the same samples and results; with --store it resumes where it stopped.
+    Each initial condition is a DIST: a value (0.01, 2pi), LO:HI (uniform), normal(MEAN,SD) or normal(MEAN,SD,LO,HI) (truncated); numbers may use pi (-pi:pi), and y0 multiples of the half diagonal r (r:5r). Samples are drawn until every 95 % interval is narrower than --precision (or --samples of them), counting only verified (certain) labels and reporting the uncertain fraction beside them. The same command gives the same samples and results; with --store it resumes where it stopped, and several processes may run it on one store at once. A pilot of a few hundred samples estimates the run first: one estimated at over 12 hours, or to need more samples than --max-samples, is refused without --yes. Exit 1 when the budget is spent before --precision, 130 when interrupted.
 
     Example:
 
@@ -202,13 +206,24 @@ def fractions_command(
                         estimate=estimate, width=width)
 
     announce_compilation()
+    with user_errors():
+        if store is not None:
+            from ..io.store import check_store_writable
+
+            check_store_writable(store)
+        est = api.estimate_fractions(plan, threads=threads, workers=workers,
+                                     scheduler=scheduler, store=store)
+    _check_estimate(est, plan, scheduler, yes, quiet)
+    from ..io.fractions_run import StoreIncomplete
+
     try:
         with user_errors(), _BatchStop() as stop, progress:
             result = api.run_fractions(plan, store=store, overwrite=overwrite, threads=threads,
                                        workers=workers, scheduler=scheduler, progress=show,
                                        stop=stop.event)
-    except OSError as exc:  # e.g. no scheduler at that address
-        raise fail(f"cannot run: {exc}") from None
+    except StoreIncomplete as exc:
+        say(err_console, f"[bold red]error:[/] {escape(str(exc))}")
+        raise typer.Exit(code=1) from None
     if plot is not None:
         with user_errors():
             api.render_fractions(result, plot)
@@ -225,6 +240,47 @@ def fractions_command(
                          "samples done" + (f"; rerun the same command to resume {store}"
                                            if store is not None else ""))
         raise typer.Exit(code=130)
+    runs = result.results if plan.parameter is not None else [result]
+    short = [r for r in runs if r.stopped is StopReason.BUDGET]
+    if short:
+        where = "" if plan.parameter is None else \
+            f" at {len(short)} of {len(runs)} values of {plan.parameter}"
+        say(err_console, f"[yellow]stopped short:[/] the budget of "
+                         f"{plan.goal.max_samples:,} samples was spent before the precision "
+                         f"asked for{where}; raise --max-samples (the same command with "
+                         "--store resumes from the samples done) or ask for less precision")
+        raise typer.Exit(code=1)
+
+
+MAX_SECONDS = 12 * 3600.0  # a run estimated longer is refused without --yes
+
+
+def _check_estimate(est, plan, scheduler, yes: bool, quiet: bool) -> None:
+    """Refuse (unless --yes) a run estimated at over 12 hours, or whose stop rule likely needs
+    more samples than its budget; otherwise say what a long run will cost."""
+    from ..api import format_duration
+
+    on = (f"on {counted(est.workers, 'core')}" if est.workers
+          else f"of CPU time over the cluster at {scheduler}")
+    cost = (f"about {format_duration(est.seconds)} {on} for {est.samples:,} samples "
+            f"({est.cpu_per_sample * 1e3:.3g} ms a sample, from a pilot of "
+            f"{est.pilot_samples:,})")
+    over = f" over {len(plan.scenes)} values" if plan.parameter is not None else ""
+    if not est.budget_suffices and not yes:
+        raise fail(f"--precision needs about {est.needed:,} samples{over} (from a pilot of "
+                   f"{est.pilot_samples:,}), more than the budget of {est.budget:,}: raise "
+                   "--max-samples, ask for less precision, or give --yes to run to the "
+                   "budget")
+    if est.seconds > MAX_SECONDS and not yes:
+        raise fail(f"this run would take {cost}. Give --yes to start it anyway, ask for less "
+                   "precision or fewer samples, or run it on more machines sharing a --store "
+                   "(each claims its own batches)")
+    if not est.budget_suffices:
+        say(err_console, f"[yellow]note:[/] --precision needs about {est.needed:,} samples, "
+                         f"more than the budget of {est.budget:,}: the run stops at the "
+                         "budget (exit 1)")
+    if est.seconds > 60 and not quiet:
+        say(err_console, f"estimate: {cost}")
 
 
 def _header(plan, samples: int) -> str:

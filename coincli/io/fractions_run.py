@@ -13,7 +13,6 @@ import numpy as np
 from ..enums import StopReason
 from ..integrators.batch import verified_labels, warm_up
 from ..montecarlo import (
-    BatchResult,
     BatchTask,
     Draws,
     FractionsOver,
@@ -31,14 +30,129 @@ from ..montecarlo.plan import FractionsPlan, FractionsProgress
 from ..params import ParameterError, state_array
 
 
+class BatchQueue:
+    """The batches of a run as one process sees them, with :class:`~coincli.io.claims.TileQueue`'s
+    interface (:func:`~coincli.io.runner.run_threads` takes from it): :meth:`take` hands out the
+    lowest batch (over every value) that the stop rules may still need and nobody else computes,
+    claimed first when the run has a store (``claims``); batches other processes hold are
+    watched (:data:`~coincli.io.claims.POLL`) until they appear in the store, whose labels are
+    then counted here (``found``), or until their claim is dropped or goes stale, when they are
+    claimed and computed here. So when the queue is :attr:`finished`, every value's goal is met,
+    whoever computed its batches."""
+
+    def __init__(self, progs, make_task: Callable, claims=None,
+                 written: Callable[[int, int], bool] | None = None,
+                 found: Callable[[int, int], None] | None = None, poll: float = 0.5):
+        self.progs = progs
+        self.make_task = make_task
+        self.claims = claims
+        self.written = written
+        self.found = found
+        self.poll = poll
+        self.watched: set[tuple[int, int]] = set()  # (value, batch) held by others
+        self.out: set[tuple[int, int]] = set()  # handed out here, not yet settled
+        self._last_look = 0.0
+
+    def _elsewhere(self, value: int, batch: int) -> bool:
+        """Whether another process wrote the batch; if so it is counted here."""
+        if self.written is None or not self.written(value, batch):
+            return False
+        self.found(value, batch)
+        return True
+
+    def _claim(self, value: int, batch: int) -> bool:
+        """True if this process is to compute the batch (claimed, and not written since)."""
+        if self.claims is None:
+            return True
+        if self._elsewhere(value, batch):
+            return False
+        if not self.claims.try_claim((value, batch)):
+            return False
+        if self._elsewhere(value, batch):  # written between our look and our claim
+            self.claims.release((value, batch))
+            return False
+        return True
+
+    def _hand_out(self, value: int, batch: int):
+        self.out.add((value, batch))
+        return self.make_task(value, batch)
+
+    def take(self):
+        """A batch to compute (a :class:`~coincli.montecarlo.BatchTask`), or None for now."""
+        while True:
+            best = None
+            for v, prog in enumerate(self.progs):
+                index = prog.peek()
+                if index is not None and (best is None or index < best[1]):
+                    best = (v, index)
+            if best is None:
+                break
+            v, index = best
+            self.progs[v].next_batch()  # handed out, or watched: either way not peeked again
+            if self._claim(v, index):
+                return self._hand_out(v, index)
+            if index not in self.progs[v].tallies:
+                self.watched.add((v, index))
+        self.watched = {(v, b) for v, b in self.watched if not self.progs[v].done}
+        if self.watched and time.monotonic() - self._last_look >= self.poll:
+            self._last_look = time.monotonic()
+            for v, index in sorted(self.watched, key=lambda item: item[1]):
+                if self.progs[v].done:
+                    self.watched.discard((v, index))
+                elif self._elsewhere(v, index):
+                    self.watched.discard((v, index))
+                elif self.claims.try_claim((v, index)):
+                    self.watched.discard((v, index))
+                    return self._hand_out(v, index)
+        return None
+
+    def settle(self, task) -> None:
+        """A handed-out batch's result is back (its claim is released once it is written)."""
+        self.out.discard((task.value, task.batch))
+
+    def drop(self, task) -> None:
+        """A handed-out batch that will not be written by this run (stopping, failed)."""
+        self.out.discard((task.value, task.batch))
+        self.progs[task.value].issued.discard(task.batch)
+        if self.claims is not None:
+            self.claims.release((task.value, task.batch))
+
+    @property
+    def finished(self) -> bool:
+        return not self.out and not self.watched and all(p.peek() is None for p in self.progs)
+
+    def pause(self) -> None:
+        """Sleep until the next look at the batches others hold (Ctrl-C interrupts it)."""
+        time.sleep(max(0.01, self.poll - (time.monotonic() - self._last_look)))
+
+    def items(self, stop=None):
+        """The batches as a lazy stream (for Dask): None while this process has batches in
+        flight and nothing else to hand out (the caller then waits for its results), a pause
+        while only other processes' batches are awaited; the stream ends when finished or
+        ``stop`` is set."""
+        while not (stop is not None and stop.is_set()):
+            task = self.take()
+            if task is not None:
+                yield task
+            elif self.finished:
+                return
+            elif self.out:
+                yield None
+            else:
+                self.pause()
+
+
 def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None,
                   overwrite: bool = False, threads: int | None = None,
                   workers: int | None = None, scheduler: str | None = None,
                   progress: Callable[[FractionsProgress], None] | None = None, stop=None):
     """Run a planned Monte Carlo run (see :func:`coincli.fractions`); a Fractions for a plain run, a
-    FractionsOver for a continuation."""
+    FractionsOver for a continuation. Several processes may run the same plan on one store at
+    once: they share the batches by claims, and each ends with the same results and store."""
     from . import fractions_store as fstore
-    from .runner import ItemQueue, check_where, run_threads, usable_cores
+    from .claims import Claims
+    from .runner import check_where, run_threads, usable_cores
+    from .store import check_store_writable
 
     check_where(threads, workers, scheduler)
     started = time.time()
@@ -51,97 +165,84 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     n_values = len(plan.scenes)
     layout = fstore.Layout(size, goal.batches(size),
                            None if plan.parameter is None else n_values, plan.parameter)
-    writer = None
+    writer = claims = None
     if store is not None:
+        check_store_writable(store)
         filled = fstore.prepare(store, plan.attrs, layout, None if plan.values is None
                                 else np.asarray(plan.values), overwrite=overwrite)
         _resume(plan, progs, draws, layout, store, filled)
         writer = fstore.Writer(store, layout)
-    from_store = sum(p.samples for p in progs)  # counted already, as the store holds them
+    # read from the store: every whole batch, also those past a gap
+    from_store = sum(t.samples for p in progs for t in p.tallies.values())
+    found_elsewhere = [0]
 
-    def tasks():
-        while True:
-            best = None
-            for v, prog in enumerate(progs):
-                index = prog.peek()
-                if index is not None and (best is None or index < best[1]):
-                    best = (v, index)
-            if best is None:
-                return
-            v, index = best
-            progs[v].next_batch()
-            count = goal.count(index, size)
-            states = initial_states(plan.scenes[v], sampling, draws.batch(index)[:count])
-            yield BatchTask(v, index, count, states)
+    def make_task(v: int, index: int) -> BatchTask:
+        count = goal.count(index, size)
+        states = initial_states(plan.scenes[v], sampling, draws.batch(index)[:count])
+        return BatchTask(v, index, count, states)
 
-    if scheduler is not None or workers is not None:
-        from .dask_tasks import run_dask_tasks
+    def found(v: int, index: int) -> None:  # a batch another process wrote
+        count = goal.count(index, size)
+        lab = fstore.read_batches(store, layout, v, [index], [count])[index]
+        progs[v].add(index, Tally.of(lab["quarter_turns"], lab["status"], lab["certainty"],
+                                     verified))
+        found_elsewhere[0] += count
 
-        mode, n_workers = "dask", workers or 0
-        runner = run_dask_tasks(compute_batch, ((specs[t.value], t) for t in tasks()),
-                                key=lambda item: f"coin-fractions-{item[1].value}-"
-                                                 f"{item[1].batch}",
-                                scheduler=scheduler, workers=workers)
+    if store is not None:
+        claims = Claims(fstore.claims_dir(store))
+        queue = BatchQueue(progs, make_task, claims,
+                           lambda v, index: fstore.batch_written(store, layout, v, index), found)
     else:
-        mode, n_workers = "threads", threads or usable_cores()
-        if any(p.peek() is not None for p in progs):
-            for spec, s in zip(specs, plan.scenes, strict=True):
-                warm_up(spec.params, spec.settings, np.asarray(state_array(s)),
-                        (verified_labels,))
-        runner = run_threads(lambda t, control: compute_batch(specs[t.value], t, control),
-                             ItemQueue(tasks()), n_workers)
-    pending: list[dict[int, BatchResult]] = [{} for _ in plan.scenes]
-    written = [p.prefix for p in progs]  # batches below are in the store (or need no store)
-    cpu = [0.0] * n_values
-    computed = 0
-    wall0 = time.perf_counter()
-    interrupted = False
-
-    def flush(v: int, upto: int) -> None:
-        while written[v] < upto:
-            result = pending[v].pop(written[v], None)
-            if result is None:
-                return
-            if writer is not None:
-                writer.write(v, result.batch, result.states, result.labels)
-            written[v] += 1
-
+        queue = BatchQueue(progs, make_task)
     try:
-        for result in runner:
-            v = result.value
-            computed += result.count
-            cpu[v] += result.cpu_seconds
-            lab = result.labels
-            progs[v].add(result.batch, Tally.of(lab["quarter_turns"], lab["status"],
-                                                lab["certainty"], verified))
-            pending[v][result.batch] = result
-            flush(v, progs[v].prefix)
-            if progs[v].done:
-                pending[v].clear()
-            if progress is not None:
-                t = progs[v].tally
-                lo, hi = wilson_arrays([t.standing], [t.n_counted])
-                p = t.standing / t.n_counted if t.n_counted else math.nan
-                expected = goal.samples or (
-                    progs[v].samples if progs[v].done else min(
-                        max(samples_needed(t, goal.precision, goal.of), progs[v].samples + size),
-                        goal.batches(size) * size))
-                progress(FractionsProgress(v, n_values, sum(p.done for p in progs), t.samples,
-                                           (p, float(lo[0]), float(hi[0])),
-                                           widest(t, goal.of), goal.precision, int(expected),
-                                           computed, time.perf_counter() - wall0))
-            if stop is not None and stop.is_set():
-                interrupted = True
-                break
-        runner.close()
-    except KeyboardInterrupt:
-        interrupted = True
-        runner.close()
-    if interrupted and goal.samples is not None:  # every batch is in the final prefix
-        for v in range(n_values):
-            for result in sorted(pending[v].values(), key=lambda r: r.batch):
-                if writer is not None:
+        if scheduler is not None or workers is not None:
+            from .dask_tasks import run_dask_tasks
+
+            mode, n_workers = "dask", workers or 0
+            runner = run_dask_tasks(compute_batch, ((specs[t.value], t) if t is not None
+                                                    else None for t in queue.items(stop)),
+                                    key=lambda item: f"coin-fractions-{item[1].value}-"
+                                                     f"{item[1].batch}",
+                                    scheduler=scheduler, workers=workers)
+        else:
+            mode, n_workers = "threads", threads or usable_cores()
+            if any(p.peek() is not None for p in progs):
+                for spec, s in zip(specs, plan.scenes, strict=True):
+                    warm_up(spec.params, spec.settings, np.asarray(state_array(s)),
+                            (verified_labels,))
+            runner = run_threads(lambda t, control: compute_batch(specs[t.value], t, control),
+                                 queue, n_workers, stop)
+        cpu = [0.0] * n_values
+        computed = 0
+        wall0 = time.perf_counter()
+        interrupted = False
+        try:
+            for result in runner:
+                v = result.value
+                computed += result.count
+                cpu[v] += result.cpu_seconds
+                if writer is not None:  # every batch at once: an interrupted run keeps it
                     writer.write(v, result.batch, result.states, result.labels)
+                    claims.release((v, result.batch))
+                queue.settle(result)
+                lab = result.labels
+                progs[v].add(result.batch, Tally.of(lab["quarter_turns"], lab["status"],
+                                                    lab["certainty"], verified))
+                if progress is not None:
+                    progress(_progress(progs, v, goal, size, computed, wall0))
+            # ``stop`` set: the runner hands out nothing more and ends with the batches in
+            # flight, which are written above
+            runner.close()
+        except KeyboardInterrupt:
+            interrupted = True
+            runner.close()
+        interrupted = interrupted or not all(p.done for p in progs)
+        if store is not None and not interrupted:
+            _seal(store, layout, progs, goal, size,
+                  lambda v, index: claims.path((v, index)).exists())
+    finally:
+        if claims is not None:
+            claims.close()
     wall = time.perf_counter() - wall0
     if store is not None and computed:
         fstore.record_run(store, fstore.run_record(started, wall, sum(cpu), computed, mode,
@@ -149,7 +250,8 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     total_cost = {"computed": computed, "cpu_seconds": sum(cpu), "wall_seconds": wall,
                   "trajectories_per_second": computed / wall if wall > 0 else math.nan,
                   "cpu_ms_per_trajectory": 1e3 * sum(cpu) / computed if computed else math.nan,
-                  "mode": mode, "workers": n_workers, "from_store": from_store}
+                  "mode": mode, "workers": n_workers, "from_store": from_store,
+                  "from_others": found_elsewhere[0]}
     path = None if store is None else str(store)
     results = []
     for v, (prog, s) in enumerate(zip(progs, plan.scenes, strict=True)):
@@ -161,6 +263,46 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
         return results[0]
     return FractionsOver(plan.parameter, list(plan.values), results, plan.note, total_cost,
                          path)
+
+
+def _progress(progs, v: int, goal, size: int, computed: int, wall0: float) -> FractionsProgress:
+    t = progs[v].tally
+    lo, hi = wilson_arrays([t.standing], [t.n_counted])
+    p = t.standing / t.n_counted if t.n_counted else math.nan
+    expected = goal.samples or (
+        progs[v].samples if progs[v].done else min(
+            max(samples_needed(t, goal.precision, goal.of), progs[v].samples + size),
+            goal.batches(size) * size))
+    return FractionsProgress(v, len(progs), sum(p.done for p in progs), t.samples,
+                             (p, float(lo[0]), float(hi[0])), widest(t, goal.of),
+                             goal.precision, int(expected), computed,
+                             time.perf_counter() - wall0)
+
+
+class StoreIncomplete(RuntimeError):
+    """A run that met its goal, but whose store does not hold every batch it counted."""
+
+
+def _seal(store, layout, progs, goal, size: int, held: Callable[[int, int], bool]) -> None:
+    """Once every value's goal is met: remove the batches beyond each value's stop (so the
+    store is the same whoever computed what; not those another process is computing, which it
+    removes itself once written: ``held``), then prove that the store holds every batch the
+    results counted, whole; StoreIncomplete names what is missing."""
+    from . import fractions_store as fstore
+
+    for v, prog in enumerate(progs):
+        fstore.trim(store, layout, v, prog.prefix, held)
+    filled = fstore.read_filled(store)
+    missing = []
+    for v, prog in enumerate(progs):
+        have = np.asarray(filled[v] if layout.values is not None else filled)
+        missing += [(v, b) for b in range(prog.prefix) if have[b] != goal.count(b, size)]
+    if missing:
+        v, b = missing[0]
+        where = f"batch {b}" + ("" if layout.values is None else f" of value {v}")
+        raise StoreIncomplete(f"{store}: {len(missing)} batch(es) counted in the results are "
+                              f"not in the store ({where} first); rerun the same command to "
+                              "compute them")
 
 
 def _resume(plan: FractionsPlan, progs, draws, layout, store, filled) -> None:

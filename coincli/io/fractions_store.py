@@ -18,36 +18,46 @@ Layout (a plain run; a continuation adds a leading axis named after the paramete
       certainty   ([value,] sample)  uint8 (coincli.enums.Certainty), 255 not computed
       rung        ([value,] sample)  int8, the last rung of the ladder run
       filled      ([value,] batch)   uint32 samples of the batch written; written last
-                                  (chunks of 1024 batches: only the coordinating process
-                                  writes it, each chunk by an atomic rename)
+                                  (one chunk a batch, so writers never share a file)
     out.zarr.cost/runs.jsonl      beside the store: one line per invocation (wall time, CPU
                                   time, samples computed, threads or Dask)
+    out.zarr.cost/claims/         the batches being computed (:mod:`coincli.io.claims`)
 
 Every per-sample array is chunked by batch (``sampling.batch`` samples; one value at a time),
-so one batch is one chunk of each array. A batch counts only once its ``filled`` entry, written
-after its data, says so; a batch cut off by ``kill -9`` is recomputed on resume, to the same
-bytes. The coordinating process writes the batches in order (batches beyond the point where a
-run stops are not kept), so the same command makes the same store, file for file, whether it
-ran once, was interrupted and resumed, or ran on more threads. The sample axis is as long as
-the largest budget asked for (whole batches); asking for more later lengthens it.
+so one batch is one chunk of each array, and ``filled`` has one chunk a batch too: writers of
+different batches (threads, Dask, other processes sharing the store through batch claims)
+never touch the same file, and Zarr writes each chunk by an atomic rename. A batch counts only
+once its ``filled`` entry, written after its data, says so; a batch cut off by ``kill -9`` is
+recomputed on resume, to the same bytes. Every batch computed is written at once, so an
+interrupted run keeps all its work; when a run's goal is met, the batches beyond the point where
+its stop rule stopped are removed (:func:`trim`), so the same command makes the same store,
+file for file, whether it ran once, was interrupted and resumed, or ran on more threads or
+processes. The sample axis is as long as the largest budget asked for (whole batches); asking
+for more later lengthens it. The store is created, checked and lengthened under the creation
+lock that basin stores use, so that processes started together all open one store.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import shutil
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..montecarlo.plan import STORE_FORMAT
 from ..params import ParameterError
 from .schema import VARIABLES
 from .store import (
+    _creation_lock,
     check_is_store,
+    claims_dir,
     cost_dir,
     flatten_attrs,
     is_store,
@@ -56,12 +66,11 @@ from .store import (
     show_value,
 )
 
-FORMAT = 1
+FORMAT = STORE_FORMAT  # 2: ``filled`` in one chunk a batch (1: 1024 batches a chunk)
 MARK = "coin_fractions"
 COMPARED = ("version", "parameters", "sampling", "method", "over")
 COLUMNS = ("y0", "phi0", "vx", "vy", "vphi")
 LABELS = ("quarter_turns", "status", "settle_time", "steps", "certainty", "rung")
-FILLED_CHUNK = 1024  # batches a chunk of ``filled`` (only the coordinating process writes it)
 FILLED_ATTRS = {"long_name": "samples of the batch written (written after them); the batch "
                              "counts only when this equals the samples it needs",
                 "units": "1"}
@@ -124,10 +133,12 @@ def _consolidate(path: Path) -> None:
 
 
 def _create(path: Path, attrs: dict, layout: Layout, values: np.ndarray | None) -> None:
+    """Create the store in a temporary directory beside it and rename it into place (call with
+    the creation lock held)."""
     zarr = _zarr()
+    for leftover in path.parent.glob(f".{path.name}.creating-*"):  # creations that died
+        shutil.rmtree(leftover, ignore_errors=True)
     tmp = path.with_name(f".{path.name}.creating-{os.getpid()}")
-    if tmp.exists():
-        shutil.rmtree(tmp)
     group = zarr.open_group(str(tmp), mode="w-", zarr_format=3, attributes=attrs)
     lead, dims, chunk = layout.lead(), layout.lead_dims(), layout.lead_chunk()
     if values is not None:
@@ -145,13 +156,13 @@ def _create(path: Path, attrs: dict, layout: Layout, values: np.ndarray | None) 
         group.create_array(name, shape=(*lead, layout.samples), chunks=(*chunk, layout.batch),
                            dtype=dtype, fill_value=fill, dimension_names=(*dims, "sample"),
                            attributes=array_attrs, config={"write_empty_chunks": True})
-    group.create_array("filled", shape=(*lead, layout.batches), chunks=(*chunk, FILLED_CHUNK),
+    group.create_array("filled", shape=(*lead, layout.batches), chunks=(*chunk, 1),
                        dtype="uint32", fill_value=0, dimension_names=(*dims, "batch"),
                        attributes=FILLED_ATTRS)
     _consolidate(tmp)
+    shutil.rmtree(cost_dir(path), ignore_errors=True)  # the records of an older store
     os.rename(tmp, path)
-    shutil.rmtree(cost_dir(path), ignore_errors=True)
-    cost_dir(path).mkdir()
+    cost_dir(path).mkdir(exist_ok=True)
 
 
 def _grow(path: Path, layout: Layout) -> None:
@@ -169,47 +180,105 @@ def prepare(path, attrs: dict, layout: Layout, values: np.ndarray | None = None,
             overwrite: bool = False) -> np.ndarray:
     """Create the store, or open one holding the same sampling and parameters (lengthening its
     sample axis if this run may need more), and return its ``filled`` counts
-    ([value,] batch). A store of anything else is refused in one line unless ``overwrite``."""
-    zarr = _zarr()
+    ([value,] batch). A store of anything else is refused in one line unless ``overwrite``.
+    Several processes may call this at once on one path: one creates the store (under the
+    creation lock), the others open it."""
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise ParameterError(f"{path} exists and is not a directory")
-    if path.is_dir() and not is_store(path):
-        if any(path.iterdir()):
-            raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
-        path.rmdir()
-    if is_store(path):
-        if overwrite:
+    if path.is_dir() and not is_store(path) and any(path.iterdir()):
+        raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with _creation_lock(path):
+        if is_store(path) and overwrite:
             shutil.rmtree(path)
             shutil.rmtree(cost_dir(path), ignore_errors=True)
-        else:
-            group = zarr.open_group(str(path), mode="r")
-            stored = dict(group.attrs)
-            if MARK not in stored:
-                raise ParameterError(f"{path} is a Zarr store but not of coin fractions; "
-                                     "--overwrite replaces it")
-            diff = differences(stored, attrs)
-            if diff:
-                raise ParameterError(f"{path} holds other samples: {'; '.join(diff[:4])}"
-                                     f"{' ...' if len(diff) > 4 else ''}. Run again with the "
-                                     "store's settings to resume it, or --overwrite to "
-                                     "replace it")
-            names = set(group.array_keys())
-            missing = [n for n in ("initial", "filled", *LABELS) if n not in names]
-            if missing:
-                raise ParameterError(f"{path} is damaged: array '{missing[0]}' is missing; "
-                                     "--overwrite starts it again")
-            have = int(group["filled"].shape[-1])
-            if tuple(group["filled"].shape[:-1]) != layout.lead() or \
-                    tuple(group["initial"].chunks[-2:]) != (layout.batch, len(COLUMNS)):
-                raise ParameterError(f"{path} is damaged: its arrays do not have the shape "
-                                     "of its attributes; --overwrite starts it again")
-            if layout.batches > have:
-                _grow(path, layout)
-            return np.asarray(zarr.open_group(str(path), mode="r")["filled"][:])
-    path.parent.mkdir(parents=True, exist_ok=True)
-    _create(path, attrs, layout, values)
-    return np.zeros((*layout.lead(), layout.batches), dtype=np.uint32)
+        if not is_store(path):
+            if path.is_dir():  # empty
+                path.rmdir()
+            _create(path, attrs, layout, values)
+            return np.zeros((*layout.lead(), layout.batches), dtype=np.uint32)
+        _check_stored(path, attrs, layout)
+        if layout.batches > int(_zarr().open_group(str(path), mode="r")["filled"].shape[-1]):
+            _grow(path, layout)
+    cost_dir(path).mkdir(exist_ok=True)
+    return read_filled(path)
+
+
+def _check_stored(path: Path, attrs: dict, layout: Layout) -> None:
+    """Refuse, in one line, a store of anything but these samples, or one whose arrays do not
+    have the layout its attributes describe."""
+    group = _zarr().open_group(str(path), mode="r")
+    stored = dict(group.attrs)
+    if MARK not in stored:
+        raise ParameterError(f"{path} is a Zarr store but not of coin fractions; "
+                             "--overwrite replaces it")
+    fmt = stored[MARK].get("format") if isinstance(stored[MARK], dict) else None
+    if fmt != FORMAT:
+        raise ParameterError(f"{path} is a coin fractions store of format {fmt}, this version "
+                             f"writes format {FORMAT}: --overwrite starts it again")
+    diff = differences(stored, attrs)
+    if diff:
+        raise ParameterError(f"{path} holds other samples: {'; '.join(diff[:4])}"
+                             f"{' ...' if len(diff) > 4 else ''}. Run again with the "
+                             "store's settings to resume it, or --overwrite to "
+                             "replace it")
+    names = set(group.array_keys())
+    missing = [n for n in ("initial", "filled", *LABELS) if n not in names]
+    if missing:
+        raise ParameterError(f"{path} is damaged: array '{missing[0]}' is missing; "
+                         "--overwrite starts it again")
+    filled = group["filled"]
+    if tuple(filled.shape[:-1]) != layout.lead() or filled.chunks[-1] != 1 or \
+            tuple(group["initial"].chunks[-2:]) != (layout.batch, len(COLUMNS)):
+        raise ParameterError(f"{path} is damaged: its arrays do not have the shape "
+                             "of its attributes; --overwrite starts it again")
+
+
+def open_attrs(path) -> dict:
+    """The store's attributes."""
+    return dict(_zarr().open_group(str(path), mode="r").attrs)
+
+
+def read_filled(path) -> np.ndarray:
+    """The ``filled`` counts of every batch ([value,] batch), read now."""
+    return np.asarray(_zarr().open_group(str(path), mode="r")["filled"][:])
+
+
+def _chunk_files(path: Path, layout: Layout, value: int, batch: int) -> list[Path]:
+    """The files of one batch, ``filled`` first (chunk keys as Zarr v3 names them by default:
+    ``NAME/c/I/J``)."""
+    at = [str(i) for i in layout.at(value)]
+    return [path.joinpath("filled", "c", *at, str(batch)),
+            path.joinpath("initial", "c", *at, str(batch), "0"),
+            *(path.joinpath(name, "c", *at, str(batch)) for name in LABELS)]
+
+
+def batch_written(path, layout: Layout, value: int, batch: int) -> bool:
+    """Whether a batch's ``filled`` chunk exists (one stat): written last, after all its data,
+    so one that appears while a run waits for it means another process finished the batch."""
+    return _chunk_files(Path(path), layout, value, batch)[0].is_file()
+
+
+def trim(path, layout: Layout, value: int, keep: int,
+         held: Callable[[int, int], bool] | None = None) -> int:
+    """Remove the batches from ``keep`` on of one value (its ``filled`` chunk first, so that a
+    batch cut off midway counts as not written): those a run computed beyond the point where
+    its stop rule stopped; not those ``held(value, batch)`` says another process is writing.
+    The number removed."""
+    path = Path(path)
+    removed = 0
+    for batch in range(keep, layout.batches):
+        if held is not None and held(value, batch):
+            continue
+        files = _chunk_files(path, layout, value, batch)
+        if not any(f.exists() for f in files):
+            continue
+        for f in files:
+            with contextlib.suppress(FileNotFoundError):
+                f.unlink()
+        removed += 1
+    return removed
 
 
 class Writer:
@@ -284,5 +353,6 @@ def open_fractions(path):
     return ds
 
 
-__all__ = ["COLUMNS", "LABELS", "Layout", "Writer", "cost_dir", "differences", "open_fractions",
-           "prepare", "read_batches", "read_initial", "read_runs", "record_run", "run_record"]
+__all__ = ["COLUMNS", "LABELS", "Layout", "Writer", "batch_written", "claims_dir", "cost_dir",
+           "differences", "open_attrs", "open_fractions", "prepare", "read_batches", "read_filled",
+           "read_initial", "read_runs", "record_run", "run_record", "trim"]

@@ -17,6 +17,9 @@ from .sampling import DEFAULT_BATCH, SOBOL_MAX, Sampling, check_box, make_sampli
 from .tally import DEFAULT_MAX_SAMPLES, Goal, make_goal
 
 
+STORE_FORMAT = 2  # of a fractions store (coincli.io.fractions_store): 2, a chunk a batch
+
+
 @dataclass(frozen=True)
 class FractionsPlan:
     """A validated Monte Carlo run: the scene of each value (one for a plain run), how samples
@@ -79,7 +82,7 @@ def plan_fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=N
         else:
             section = "foundation" if parameter in ("k", "c") else "coin"
             parameters[section][parameter] = None
-    attrs = {"coin_fractions": {"format": 1, "command": "coin fractions"},
+    attrs = {"coin_fractions": {"format": STORE_FORMAT, "command": "coin fractions"},
              "version": __version__, "parameters": parameters,
              "sampling": sampling.to_dict(), "method": method_attrs(scene, method),
              "over": None if parameter is None else {

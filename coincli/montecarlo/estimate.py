@@ -1,0 +1,97 @@
+"""How much a Monte Carlo run will cost before it starts: a pilot of a few hundred samples of
+the run's own first batch, at up to three of its values, timed and counted. From the pilot's
+labels, the normal approximation at its estimates gives the samples the stop rule will need
+(a precision goal), and whether the sample budget suffices; from its CPU time, how long the
+samples left take."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..integrators.batch import verified_labels, warm_up
+from ..params import state_array
+from .batch import BatchTask, compute_batch, make_fraction_spec
+from .plan import FractionsPlan
+from .sampling import Draws, initial_states
+from .tally import Tally
+
+PILOT_SAMPLES = 512  # samples a piloted value computes: the first of its first batch
+PILOT_VALUES = 3  # values piloted in a continuation: the first, the middle and the last
+Z95 = 1.959963984540054
+
+
+@dataclass(frozen=True)
+class FractionsEstimate:
+    """What a run will likely cost, from a pilot (``samples`` and ``seconds`` exclude what a
+    store holds already)."""
+
+    samples: int  # samples still to compute, over every value
+    needed: int | None  # the most samples any value's stop rule likely needs (precision goals)
+    budget: int  # the most samples a value may take (--samples, or --max-samples)
+    cpu_per_sample: float  # CPU s a sample, every rung of the ladder counted
+    seconds: float  # wall time on ``workers`` (CPU time if workers is None)
+    workers: int | None  # threads or Dask workers assumed; None: a cluster of unknown size
+    pilot_samples: int  # samples the pilot computed
+
+    @property
+    def budget_suffices(self) -> bool:
+        return self.needed is None or self.needed <= self.budget
+
+
+def needed_samples(tally: Tally, precision: float, of: str) -> int:
+    """The samples at which every interval the stop rule looks at (``of``) would be
+    ``precision`` wide (half-width), by the normal approximation at ``tally``'s estimates.
+    A proportion the pilot saw none (or all) of is taken as one half of a sample in ``n``, not
+    0: no count says it is exactly 0."""
+    n = max(tally.n_counted, 1)
+    floor = 0.5 / n
+
+    def var(count: int, total: int) -> float:
+        p = min(max(count / max(total, 1), floor), 1 - floor)
+        return p * (1 - p)
+
+    spread = [var(tally.standing, n)]
+    if of == "all":
+        spread += [var(c, n) for c in tally.counted.values()]
+        spread.append(var(tally.samples - tally.n_counted, tally.samples))
+    share = tally.n_counted / tally.samples if tally.samples else 1.0
+    return int(math.ceil(max(spread) * (Z95 / precision) ** 2 / max(share, 1e-9)))
+
+
+def estimate_fractions(plan: FractionsPlan, workers: int | None,
+                       held: list[int] | None = None) -> FractionsEstimate:
+    """Estimate a planned run: ``workers`` threads or Dask workers (None: CPU time, for a
+    cluster of unknown size); ``held``: the samples a store holds already, per value."""
+    goal, sampling = plan.goal, plan.sampling
+    budget = goal.samples or goal.batches(sampling.batch) * sampling.batch
+    n_values = len(plan.scenes)
+    piloted = sorted({0, n_values // 2, n_values - 1})[:PILOT_VALUES]
+    count = min(PILOT_SAMPLES, sampling.batch, budget)
+    points = Draws(sampling).batch(0)[:count]
+    cpu, needs = 0.0, []
+    for v in piloted:
+        spec = make_fraction_spec(plan.scenes[v])
+        warm_up(spec.params, spec.settings, np.asarray(state_array(plan.scenes[v])),
+                (verified_labels,))  # load (or compile) the kernels outside the clock
+        task = BatchTask(v, 0, count, initial_states(plan.scenes[v], sampling, points))
+        result = compute_batch(spec, task)
+        cpu += result.cpu_seconds
+        if goal.precision is not None:
+            lab = result.labels
+            tally = Tally.of(lab["quarter_turns"], lab["status"], lab["certainty"],
+                             spec.ladder.verified)
+            needs.append(needed_samples(tally, goal.precision, goal.of))
+    per_sample = cpu / (count * len(piloted))
+    needed = max(needs) if needs else None
+    per_value = min(budget, needed) if needed is not None else budget
+    held = held or [0] * n_values
+    samples = sum(max(0, per_value - h) for h in held)
+    seconds = per_sample * samples / (workers or 1)
+    return FractionsEstimate(samples, needed, budget, per_sample, seconds, workers,
+                             count * len(piloted))
+
+
+__all__ = ["FractionsEstimate", "PILOT_SAMPLES", "estimate_fractions", "needed_samples"]

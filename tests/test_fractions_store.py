@@ -1,0 +1,189 @@
+"""A `coin fractions` store loses nothing and is never reported complete when it is not:
+faults injected into its batches (a gap, batches beyond the stop), several writers started at
+once, and runs that cannot reach what was asked (a pilot's estimate first, exit 1 at the
+budget). Each ends bit-identical to an uninterrupted run, or in one line that says why."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import coincli
+from coincli.cli import app
+from coincli.io import fractions_store as fstore
+from coincli.montecarlo.estimate import needed_samples
+from coincli.montecarlo.tally import Tally
+
+PAPER = coincli.load_preset("paper")
+ROOT = Path(__file__).parent.parent
+RUN = dict(phi0="-pi:pi", batch=256)
+
+
+def _files(path: Path) -> dict[str, bytes]:
+    return {str(f.relative_to(path)): f.read_bytes() for f in sorted(path.rglob("*"))
+            if f.is_file()}
+
+
+def _layout(store: Path) -> fstore.Layout:
+    ds = coincli.open_fractions(store)
+    return fstore.Layout(ds.attrs["sampling"]["batch"], ds.sizes["batch"])
+
+
+def _remove_batch(store: Path, batch: int) -> None:
+    """A batch that never made it to disk (its files gone, ``filled`` first)."""
+    assert fstore.trim(store, _layout(store), 0, batch, lambda v, b: b != batch) == 1
+
+
+def _computed(store: Path) -> list[int]:
+    return [run["samples"] for run in fstore.read_runs(store)]
+
+
+@pytest.fixture(scope="module")
+def whole(tmp_path_factory):
+    """An uninterrupted run of 24 batches, and its store."""
+    store = tmp_path_factory.mktemp("whole") / "f.zarr"
+    result = coincli.fractions(PAPER, samples=6144, store=store, **RUN)
+    return result, store
+
+
+def test_a_gap_in_the_batches_is_filled_and_nothing_after_it_is_lost(tmp_path, whole):
+    """Batches 0-13 and 15-23 written, 14 not (an interrupted run on several threads): the
+    resume computes batch 14 alone and keeps every batch after it."""
+    reference, clean = whole
+    store = tmp_path / "gap.zarr"
+    coincli.fractions(PAPER, samples=6144, store=store, **RUN)
+    _remove_batch(store, 14)
+    assert int((fstore.read_filled(store) > 0).sum()) == 23
+    resumed = coincli.fractions(PAPER, samples=6144, store=store, **RUN)
+    assert resumed.cost["computed"] == 256 and resumed.cost["from_store"] == 23 * 256
+    assert resumed.outcomes == reference.outcomes and resumed.standing == reference.standing
+    assert _files(store) == _files(clean)
+    again = coincli.fractions(PAPER, samples=6144, store=store, **RUN)
+    assert again.cost["computed"] == 0  # the store is whole: nothing recomputed
+
+
+def test_batches_beyond_the_stop_are_kept_until_the_goal_is_met_then_removed(tmp_path):
+    """A precision run that finds more batches than its stop rule needs (an interrupted run's
+    batches in flight, another writer's) counts up to its stop and leaves the store as an
+    uninterrupted run does."""
+    kw = dict(precision=0.03, of="standing", max_samples=16384, **RUN)
+    clean = tmp_path / "clean.zarr"
+    reference = coincli.fractions(PAPER, store=clean, **kw)
+    assert reference.stopped == "precision"
+    used = reference.samples // 256
+    assert used < 64
+    store = tmp_path / "more.zarr"
+    coincli.fractions(PAPER, samples=256 * (used + 6), max_samples=16384, store=store,
+                      phi0="-pi:pi", batch=256)
+    assert int((fstore.read_filled(store) > 0).sum()) == used + 6
+    _remove_batch(store, used // 2)  # and a gap below the stop
+    resumed = coincli.fractions(PAPER, store=store, threads=1, **kw)
+    assert resumed.cost["computed"] == 256  # the gap; on one thread, nothing past the stop
+    assert resumed.standing == reference.standing and resumed.samples == reference.samples
+    assert _files(store) == _files(clean)
+
+
+def test_an_interrupted_precision_run_keeps_every_batch_it_computed(tmp_path):
+    import threading
+
+    stop = threading.Event()
+
+    def halt(update):
+        if update.computed >= 1024:
+            stop.set()
+
+    store = tmp_path / "f.zarr"
+    part = coincli.fractions(PAPER, precision=0.004, of="standing", store=store, threads=2,
+                             progress=halt, stop=stop, **RUN)
+    assert part.stopped == "interrupted"
+    written = int((fstore.read_filled(store) > 0).sum())
+    assert written * 256 == part.cost["computed"]  # the batches in flight were written too
+    resumed = coincli.fractions(PAPER, precision=0.004, of="standing", store=store, **RUN)
+    clean = coincli.fractions(PAPER, precision=0.004, of="standing",
+                              store=tmp_path / "clean.zarr", **RUN)
+    assert resumed.standing == clean.standing
+    assert _files(store) == _files(tmp_path / "clean.zarr")
+
+
+def test_several_writers_started_at_once_share_the_batches(tmp_path, whole):
+    """Three `coin fractions --store` started together: one creates the store, the batches are
+    shared by claims (no sample computed twice), every process reports the same numbers, and
+    the store is the one a single run makes."""
+    reference, clean = whole
+    store = tmp_path / "shared.zarr"
+    args = [sys.executable, "-m", "coincli", "fractions", "--samples", "6144", "--batch",
+            "256", "--phi0", "-pi:pi", "--threads", "1", "--store", str(store), "--json",
+            "-q"]
+    procs = [subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT)
+             for _ in range(3)]
+    outs = [p.communicate(timeout=240) for p in procs]
+    for proc, (out, err) in zip(procs, outs, strict=True):
+        assert proc.returncode == 0, err.decode()[-2000:]
+        data = json.loads(out)
+        assert data["standing"] == reference.standing
+        assert data["samples"] == 6144
+    assert sum(_computed(store)) == 6144  # each batch once
+    assert not list(store.parent.glob(f".{store.name}.creating-*"))
+    assert not (fstore.claims_dir(store)).exists()
+    assert _files(store) == _files(clean)
+
+
+def test_a_precision_the_budget_cannot_reach_is_refused_before_any_work(tmp_path):
+    store = tmp_path / "f.zarr"
+    result = CliRunner().invoke(app, ["fractions", "--precision", "0.001%", "--of", "standing",
+                                      "--store", str(store)])
+    assert result.exit_code == 2, result.output
+    err = " ".join(result.stderr.split())
+    assert err.startswith("error: --precision needs about") and "--max-samples" in err
+    assert "--yes" in err and not store.exists()
+
+
+def test_a_run_that_spends_its_budget_before_the_precision_exits_1(tmp_path):
+    result = CliRunner().invoke(app, ["fractions", "--precision", "0.002", "--of", "standing",
+                                      "--max-samples", "1024", "--batch", "256", "--yes",
+                                      "--store", str(tmp_path / "f.zarr")])
+    assert result.exit_code == 1, result.output
+    assert "stopped short:" in result.stderr and "budget" in result.stdout
+
+
+def test_the_estimate_of_a_run_counts_what_the_store_holds(tmp_path, whole):
+    _, clean = whole
+    plan = coincli.plan_fractions(PAPER, samples=6144, **RUN)
+    fresh = coincli.estimate_fractions(plan, threads=1)
+    assert fresh.samples == 6144 and fresh.budget_suffices and fresh.cpu_per_sample > 0
+    assert fresh.seconds == pytest.approx(6144 * fresh.cpu_per_sample)
+    held = coincli.estimate_fractions(plan, threads=1, store=clean)
+    assert held.samples == 0
+
+
+def test_samples_needed_does_not_take_an_unseen_outcome_as_impossible():
+    none_standing = Tally.of(np.zeros(1000, dtype=np.int16), np.zeros(1000, dtype=np.uint8),
+                             np.ones(1000, dtype=np.uint8))
+    assert none_standing.standing == 0
+    # an outcome never seen in 1,000 counts as 1 in 2,000: p(1 - p) about 5e-4, not 0
+    need = needed_samples(none_standing, 0.001, "standing")
+    assert 1500 < need < 2500
+
+
+def test_a_read_only_store_is_named_in_one_line(tmp_path, monkeypatch):
+    import errno
+
+    from test_store import Disk
+
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    args = ["fractions", "--samples", "512", "--batch", "256"]
+    assert CliRunner().invoke(app, [*args, "--store", str(folder / "f.zarr")]).exit_code == 0
+    Disk(monkeypatch, folder, errno.EROFS)
+    for store in (folder / "f.zarr", folder / "new.zarr"):
+        result = CliRunner().invoke(app, [*args, "--samples", "1024", "--store", str(store)])
+        assert result.exit_code == 2, result.output
+        err = result.stderr.strip()
+        assert err.startswith("error:") and len(err.splitlines()) == 1, err
+        assert str(store) in err and "read-only" in err and "creating" not in err, err
