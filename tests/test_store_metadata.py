@@ -110,8 +110,11 @@ def test_changed_metadata_is_found_and_rebuilt_from_what_the_tiles_prove(tmp_pat
     result = coin("verify", path)
     assert result.exit_code == 1 and "DAMAGED" in result.output, result.output
     assert what in said(result) and "0 tiles" not in said(result)
+    assert "vy/c/0" not in said(result)  # the coordinates are what the tiles prove
     report = json.loads(coin("verify", path, "--json").stdout)
     assert report["intact"] is False and report["damaged"] == [] and report["metadata"]
+    assert bool(report["parameters_changed"]) == (key != "status/zarr.json" and "shape" not in
+                                                  kind)
     # stats: the numbers of the tiles, and a warning naming the damage
     stats = json.loads(coin_ok("stats", path, "--json").stdout)
     assert stats["tiles_done"] == 4 and stats["metadata_damaged"] == report["metadata"]

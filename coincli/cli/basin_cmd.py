@@ -362,7 +362,7 @@ def verify_command(
                     - len(found.damaged),
                     "damaged": [{"tile": list(t), "reason": why}
                                 for t, why in sorted(found.damaged.items())],
-                    "metadata": unrepaired, "parameters": found.problems,
+                    "metadata": unrepaired, "parameters_changed": found.problems,
                     "leftover_temporary_files": found.leftovers, "seconds": found.seconds})
     elif found.intact:
         missing = total - found.tiles_done
