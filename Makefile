@@ -1,13 +1,15 @@
 # coin: two commands set everything up on a fresh machine:
 #   make demo   installs into .venv, runs a small basin sweep and one simulation, writes out/
 #   make test   installs into .venv and runs the test suite
+#   make test-oldest   installs the oldest versions pyproject.toml allows (constraints/oldest.txt)
+#               into .venv-oldest and runs the tests of kernels, stores, the CLI and the API there
 PYTHON ?= python3
 VENV   ?= .venv
 BIN    := $(VENV)/bin
 COIN   := $(BIN)/coin
 OUT    ?= out
 
-.PHONY: install demo test bench lint docs clean
+.PHONY: install install-oldest demo test test-oldest bench lint docs clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +36,24 @@ demo: install
 
 test: install
 	$(BIN)/python -m pytest -n 2 -q
+
+# The oldest environment: each lower bound of pyproject.toml is a version these tests pass on.
+OLDEST      ?= .venv-oldest
+OLDEST_TESTS = tests/test_api.py tests/test_store.py tests/test_basin.py tests/test_cli.py \
+               tests/test_engines.py tests/test_jit_cache.py tests/test_threads.py \
+               tests/test_fractions.py
+
+$(OLDEST)/.installed: pyproject.toml constraints/oldest.txt
+	$(PYTHON) -m venv $(OLDEST)
+	$(OLDEST)/bin/pip install --quiet --upgrade pip
+	$(OLDEST)/bin/pip install --quiet -c constraints/oldest.txt -e ".[test]"
+	$(OLDEST)/bin/python -m compileall -q coincli
+	touch $@
+
+install-oldest: $(OLDEST)/.installed
+
+test-oldest: install-oldest
+	$(OLDEST)/bin/python -m pytest -n 2 -q $(OLDEST_TESTS)
 
 bench: install
 	$(COIN) bench

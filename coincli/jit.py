@@ -56,7 +56,6 @@ _INLINE: set = set()  # kernels numba inlines into their callers (small helpers 
 _NAMESPACES: list = []  # the globals of derived kernels (see derive), rebound like modules'
 _DISPATCHERS: dict = {}  # Python function -> numba dispatcher (after activation)
 _LOCK = threading.Lock()
-_LEAN_IMPORTS = False  # see lean_imports
 
 
 def kernel(fn=None, *, inline: bool = False):
@@ -102,43 +101,6 @@ def derive(module, suffix: str, **substitutions) -> types.SimpleNamespace:
         namespace[name] = kernel(copy, inline=fn in _INLINE)
     _NAMESPACES.append(namespace)
     return types.SimpleNamespace(**{name: namespace[name] for name, _ in originals})
-
-
-def lean_imports() -> None:
-    """Have this process import numba without what only other processes may need. (1) When numba
-    first compiles (loading cached code does not, see _refresh_on_miss) it imports
-    ``numba.np.arraymath``, which imports scipy.linalg (0.2 s) to learn whether ``np.convolve``
-    and ``np.correlate`` may call BLAS. No kernel of ours uses them: they would fall back to plain
-    loops. (2) ``import numba`` imports pyyaml (0.02 s), to read a ``.numba_config.yaml`` in the
-    working directory, and scipy (0.01 s), to check its version. Both are hidden during that
-    import unless such a file is there. The ``coin`` command (a process that runs only our
-    kernels) calls this; a library user's process keeps numba's behaviour."""
-    global _LEAN_IMPORTS
-    _LEAN_IMPORTS = True
-
-
-def _hidden(*names):
-    """Within the block, importing any of ``names`` that is not loaded yet raises ImportError
-    (a None stand-in, :func:`coincli.standins.standing_in`); afterwards it imports as usual."""
-    from .standins import standing_in
-
-    return standing_in(dict.fromkeys(names))
-
-
-def import_numba():
-    """``import numba`` as the kernels' activation does it (see lean_imports); the module."""
-    lean = _LEAN_IMPORTS and not os.path.isfile(".numba_config.yaml")
-    with _hidden(*(("yaml", "scipy") if lean else ())):
-        import numba
-    return numba
-
-
-def _import_numba_lowering() -> None:
-    """Import ``numba.np.arraymath`` now, without the BLAS probe if asked (lean_imports)."""
-    if not _LEAN_IMPORTS or "scipy.linalg" in sys.modules:
-        return  # numba imports it when it first compiles; with scipy.linalg loaded, cheaply
-    with _hidden("scipy.linalg"):  # `import scipy.linalg.cython_blas` raises ImportError
-        import numba.np.arraymath  # noqa: F401
 
 
 def is_active() -> bool:
@@ -215,16 +177,21 @@ def prune_cache() -> None:
     root = cache_dir() / f"numba-{numba.__version__}"
     try:
         _prune(root, _cache_dirs(root), sources_digest(), numba.__version__, _marker())
-    except OSError:
+    except (OSError, ImportError, AttributeError):
         pass
 
 
-def _cache_dirs(root: Path) -> dict:
-    """This installation's cache directories under ``root`` (numba's locators name them after
-    the source directory), each with its source directory."""
-    from numba.core.caching import _CacheLocator
+def _cache_subdir(py_file: str) -> str:
+    """The name of the cache directory of the kernels of ``py_file``: the name of its directory
+    and a hash of that directory's path, as numba names its own (the caches of earlier versions
+    are where they were)."""
+    source_dir = os.path.dirname(os.path.abspath(py_file))
+    return f"{os.path.basename(source_dir)}_{hashlib.sha1(source_dir.encode()).hexdigest()}"
 
-    return {root / _CacheLocator.get_suitable_cache_subpath(name): Path(name).parent
+
+def _cache_dirs(root: Path) -> dict:
+    """This installation's cache directories under ``root``, each with its source directory."""
+    return {root / _cache_subdir(name): Path(name).parent
             for name in {inspect.getfile(fn) for fn in _KERNELS}}
 
 
@@ -296,10 +263,9 @@ def _activate() -> None:
     with _LOCK:
         if _DISPATCHERS:
             return
-        numba = import_numba()
+        import numba
+
         fast_load = loads_without_refresh()
-        if not fast_load:
-            _import_numba_lowering()  # numba's own loading refreshes, and imports it, at once
         _import_kernel_modules()
 
         _install_locator(numba)
@@ -352,7 +318,6 @@ def _refresh_on_miss(dispatcher) -> None:
             result = cache._load_overload(sig, target_context)
             if result is not None:
                 return result
-        _import_numba_lowering()
         target_context.refresh()
         return None
 
@@ -360,10 +325,12 @@ def _refresh_on_miss(dispatcher) -> None:
 
 
 def _install_locator(numba) -> None:
-    """Put a cache locator for this package's files in front of numba's own ones."""
+    """Put a cache locator for this package's files in front of numba's own ones (numba has no
+    public way to say where a function's cache goes: its locator classes are its own)."""
     try:
         from numba.core.caching import CacheImpl, _CacheLocator, _SourceFileBackedLocatorMixin
-    except ImportError:  # another numba layout: fall back to numba's default caching
+        locators = CacheImpl._locator_classes
+    except (ImportError, AttributeError):  # another numba layout: numba's default caching
         return
     stamp = sources_digest()
     root = cache_dir() / f"numba-{numba.__version__}"
@@ -372,7 +339,7 @@ def _install_locator(numba) -> None:
         def __init__(self, py_func, py_file):
             self._py_file = py_file
             self._lineno = py_func.__code__.co_firstlineno
-            self._cache_path = str(root / self.get_suitable_cache_subpath(py_file))
+            self._cache_path = str(root / _cache_subdir(py_file))
 
         def get_cache_path(self):
             return self._cache_path
@@ -386,9 +353,9 @@ def _install_locator(numba) -> None:
                 return None  # not ours: numba's own locators decide
             return super().from_function(py_func, py_file)
 
-    CacheImpl._locator_classes.insert(0, CoincliCacheLocator)
+    locators.insert(0, CoincliCacheLocator)
 
 
 __all__ = ["FIRST_COMPILE_SECONDS", "LOADS_WITHOUT_REFRESH", "cache_dir", "compiled", "derive",
-           "import_numba", "is_active", "kernel", "kernels_cached", "lean_imports",
-           "loads_without_refresh", "mark_cached", "prune_cache", "python", "sources_digest"]
+           "is_active", "kernel", "kernels_cached", "loads_without_refresh", "mark_cached",
+           "prune_cache", "python", "sources_digest"]

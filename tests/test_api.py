@@ -152,15 +152,12 @@ def test_import_is_light_and_leaves_numba_alone():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
-def test_the_command_loads_kernels_without_numbas_compiler_or_blas_probe(tmp_path):
-    """`coin basin` (through the CLI's main, as the console script runs it) loads and runs its
-    kernels without importing scipy.linalg (numba imports it only to probe for BLAS), and, once
-    they are compiled, without scipy at all (numba imports it to check its version) or pyyaml
-    (for a .numba_config.yaml, and there is none), numba's compiler registries
-    (numba.np.arraymath among them, 0.2-0.3 s: jit._refresh_on_miss, on the numba versions it
-    was tried on), its array module (no kernel allocates) or its runtime (they are compiled
-    without it); a library user's process keeps the BLAS probe (numba's np.convolve may use BLAS
-    there)."""
+def test_the_command_loads_cached_kernels_as_this_numba_allows(tmp_path):
+    """`coin basin` (through the CLI's main, as the console script runs it) compiles or loads its
+    kernels and runs them, cold and then warm (loading from the cache). On the numba versions of
+    LOADS_WITHOUT_REFRESH a warm run loads them without numba's compiler (numba.np.arraymath and
+    numba.np.arrayobj, 0.2-0.3 s of imports: jit._refresh_on_miss); on every other version numba
+    loads them its own way, which this test then exercises."""
     def cli(store, warm: bool) -> str:
         # main() ends the process at once (cli.exit_now): the checks run in its place
         return ("import sys, coincli.cli\n"
@@ -168,10 +165,7 @@ def test_the_command_loads_kernels_without_numbas_compiler_or_blas_probe(tmp_pat
                 "def checks(code):\n"
                 "    assert code == 0, code\n"
                 "    assert 'coincli.integrators.batch' in sys.modules and 'numba' in sys.modules\n"
-                "    assert 'scipy.linalg' not in sys.modules\n"
-                + ("    from numba.core.runtime import rtsys\n"
-                   "    assert not rtsys._init, 'runtime started'\n"
-                   "    for name in ('scipy', 'yaml', 'numba.np.arraymath', 'numba.np.arrayobj'):\n"
+                + ("    for name in ('numba.np.arraymath', 'numba.np.arrayobj'):\n"
                    "        assert name not in sys.modules, name\n" if warm else "")
                 + "    print('checked')\n"
                 "coincli.cli.exit_now = checks\n"
@@ -186,10 +180,6 @@ def test_the_command_loads_kernels_without_numbas_compiler_or_blas_probe(tmp_pat
         assert done.returncode == 0, done.stderr[-2000:]
         assert done.stdout.splitlines()[-1] == "checked"
         assert coincli.open_basin(store).quarter_turns.shape == (4, 4)
-    library = ("import coincli\n"
-               "coincli.classify(coincli.load_preset('paper').with_overrides(vy=0.5))\n"
-               "import numba.np.arraymath as m; assert m._HAVE_BLAS is True")
-    subprocess.run([sys.executable, "-c", library], check=True)
 
 
 def test_the_command_line_declares_its_options_without_numpy():

@@ -75,15 +75,48 @@ def test_only_the_first_marking_of_a_version_prunes(tmp_path, monkeypatch):
     assert pruned == [True]
 
 
-def test_the_cache_directories_pruned_are_where_numba_keeps_this_packages_kernels():
-    """prune_cache looks where the compiled kernels are: every kernel's cache directory is one
-    of _cache_dirs, with the directory of its source."""
+def test_the_cache_directories_pruned_are_where_numba_keeps_this_packages_kernels(paper):
+    """prune_cache looks where the compiled kernels are: a kernel run compiled (or loaded) leaves
+    its index in the cache directory that _cache_dirs gives for its source directory. numba
+    finds that directory through our cache locator (jit._install_locator)."""
     import numba
+    import numpy as np
 
     from coincli import model
+    from coincli.params import model_params
 
-    dispatcher = jit.compiled(model.total_energy)
-    root = jit.cache_dir() / f"numba-{numba.__version__}"
-    ours = jit._cache_dirs(root)
-    assert Path(dispatcher._cache._cache_path) in ours
-    assert ours[Path(dispatcher._cache._cache_path)] == Path(model.__file__).parent
+    state = np.array([0.0, 0.01, 0.0, 0.0, 1.0, 3.0])
+    assert jit.compiled(model.total_energy)(model_params(paper), state) > 0
+    ours = jit._cache_dirs(jit.cache_dir() / f"numba-{numba.__version__}")
+    (directory,) = [d for d, source in ours.items() if source == Path(model.__file__).parent]
+    assert list(directory.glob("model.total_energy-*.nbi")), sorted(directory.iterdir())
+
+
+def test_pruning_never_raises_on_a_numba_it_does_not_know(monkeypatch):
+    """A numba whose internals differ (here: the cache directories cannot be found) leaves its
+    cache unpruned; the compilation that asked for the pruning goes on."""
+    def unknown_layout(root):
+        raise ImportError("cannot import name '_CacheLocator' from 'numba.core.caching'")
+
+    monkeypatch.setattr(jit, "_cache_dirs", unknown_layout)
+    jit.prune_cache()
+
+
+def test_a_numba_without_our_hooks_keeps_its_own_caching_and_loading(monkeypatch):
+    """Where numba's cache locators or its dispatcher's cache are not as we expect, the kernels
+    are cached and loaded as numba does it by itself; and only the numba versions the suite
+    has run on load cached code without numba's refresh."""
+    import types
+
+    import numba
+    import numba.core.caching as caching
+
+    before = list(caching.CacheImpl._locator_classes)
+    monkeypatch.delattr(caching, "_CacheLocator")
+    jit._install_locator(numba)
+    assert caching.CacheImpl._locator_classes == before
+    other = types.SimpleNamespace(_cache=types.SimpleNamespace(load_overload=len))
+    jit._refresh_on_miss(other)
+    assert other._cache.load_overload is len
+    monkeypatch.setattr(numba, "__version__", "0.99.0")
+    assert not jit.loads_without_refresh()

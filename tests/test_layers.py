@@ -10,8 +10,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "coincli"
 
 # parameters and presets -> model -> integrators -> simulate / sweep / analysis -> io -> api -> cli
 LAYERS = [
-    ("parameters", {"version", "enums", "defaults", "params", "presets", "jsonable",
-                    "standins"}),
+    ("parameters", {"version", "enums", "defaults", "params", "presets", "jsonable"}),
     ("model", {"jit", "model", "statics"}),
     ("integrators", {"integrators"}),
     ("analysis", {"throw", "grid", "stats", "accuracy", "bench", "boundary", "montecarlo",

@@ -1,9 +1,7 @@
 """The `coin` command line: typer app assembled from one module per command.
 
 The command modules do without ``from __future__ import annotations``: with it, typer has to
-evaluate every option's annotation string, twice, on each start. typer is held below 0.29
-(pyproject.toml), which coerces every option's value through a pydantic adapter: importing
-pydantic and building the adapters adds 0.15-0.2 s to every command that takes an option."""
+evaluate every option's annotation string, twice, on each start."""
 
 import sys
 from typing import Annotated
@@ -56,7 +54,7 @@ _register()
 
 
 def _click_exceptions():
-    try:  # typer 0.28 carries its own click (pyproject.toml holds typer below 0.29)
+    try:  # typer 0.28 on carries its own click, and exports only BadParameter of its errors
         from typer._click import exceptions
     except ImportError:  # a typer that uses click itself
         from click import exceptions
@@ -88,25 +86,7 @@ def run(args: list[str] | None = None) -> int:
 
 
 def main() -> None:
-    from ..jit import lean_imports
-
-    lean_imports()
-    lean_help()
     exit_now(run())
-
-
-def lean_help() -> None:
-    """Have typer render help without importing rich's Markdown and Traceback. typer's
-    ``rich_utils``, which it imports to render a help screen, imports both at its top: the
-    markdown-it parser and rich.pretty, 0.08 s of a ``coin --help`` of 0.35 s, for markup this
-    app does not use (its markup mode is rich's) and tracebacks it does not pretty-print
-    (``pretty_exceptions_enable=False``). They stand in until used (:mod:`coincli.standins`).
-    The ``coin`` command calls this; a process that imports the app keeps typer's imports."""
-    from ..standins import deferred_classes, import_with_stand_ins
-
-    import_with_stand_ins("typer.rich_utils", lambda: {
-        "rich.markdown": deferred_classes("rich.markdown", "Markdown"),
-        "rich.traceback": deferred_classes("rich.traceback", "Traceback")})
 
 
 def exit_now(code: int) -> None:
@@ -120,10 +100,12 @@ def exit_now(code: int) -> None:
     import os
     import threading
 
-    if any(thread.is_alive() and not thread.daemon and thread is not threading.main_thread()
-           for thread in threading.enumerate()):
+    run_handlers = getattr(atexit, "_run_exitfuncs", None)  # CPython's; elsewhere, exit
+    if run_handlers is None or any(
+            thread.is_alive() and not thread.daemon and thread is not threading.main_thread()
+            for thread in threading.enumerate()):
         sys.exit(code)
-    atexit._run_exitfuncs()  # runs each handler once and clears them: none runs twice below
+    run_handlers()  # runs each handler once and clears them: none runs twice below
     try:
         sys.stdout.flush()
         sys.stderr.flush()

@@ -130,13 +130,9 @@ STARTUP_RUNS = 5
 
 
 # What every command that runs kernels imports before it can do anything (Python, numpy, typer
-# and rich, numba as the command imports it), then an exit without the interpreter's teardown as
-# the command's (cli.exit_now): the part of its start-up no work of ours can remove.
-IMPORT_FLOOR = ("import os, numpy, typer, rich.console, rich.progress\n"
-                "from coincli import jit\n"
-                "jit.lean_imports()\n"
-                "jit.import_numba()\n"
-                "os._exit(0)")
+# and rich, numba), then an exit without the interpreter's teardown as the command's
+# (cli.exit_now): the part of its start-up no work of ours can remove.
+IMPORT_FLOOR = "import os, numpy, typer, rich.console, rich.progress, numba\nos._exit(0)"
 
 
 def _run(args: list[str], cwd: str, *, code: str | None = None) -> tuple[float, float]:
