@@ -296,7 +296,14 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
     output that cannot be written is found before any work."""
     from .io import store as store_io
     from .io.claims import Claims, TileQueue
-    from .io.runner import hard_stop, run_dask, run_threads, run_tile_task, usable_cores
+    from .io.runner import (
+        SchedulerLost,
+        hard_stop,
+        run_dask,
+        run_threads,
+        run_tile_task,
+        usable_cores,
+    )
 
     check_where(threads, workers, scheduler)
     _check_progress(progress)
@@ -342,15 +349,17 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
 
     claims = Claims(store_io.claims_dir(path))
     queue = TileQueue(todo, claims, is_done=is_done)
+    cluster_workers: list[int] = []  # the Dask cluster's workers, each time it was looked at
     if dask:
         # workers open the store by this path: make it absolute (same path on every machine)
         runner = run_dask(str(path.resolve()), spec, queue, scheduler=scheduler,
-                          workers=workers, stop=stop)
+                          workers=workers, stop=stop, on_workers=cluster_workers.append)
     else:
         _load_kernels(spec)
         runner = run_threads(partial(run_tile_task, str(path), spec), queue, n_workers, stop)
     wall0 = time.perf_counter()
     interrupted = False
+    lost = None
     computed = cells = mirrored = 0
     kernel_seconds = store_seconds = 0.0
     try:
@@ -367,8 +376,11 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
     except KeyboardInterrupt:
         interrupted = True
         hard_stop(runner)  # the tiles in flight stop now, unwritten
+    except SchedulerLost as exc:  # raised once the run is recorded: the store keeps its tiles
+        lost = exc
     finally:
         claims.close()
+    n_workers = max(cluster_workers, default=n_workers)
     interrupted = interrupted or not queue.finished or (stop is not None and stop.is_set())
     wall = time.perf_counter() - wall0
     elsewhere = tiles_elsewhere()
@@ -378,6 +390,8 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
         store_io.record_run(path, store_io.run_record(
             started, wall, computed, cells, mode, n_workers, interrupted,
             kernel_seconds=kernel_seconds, store_seconds=store_seconds))
+    if lost is not None:
+        raise lost
     return SweepReport(str(path), total, n_done, before, cells, wall, mode, n_workers,
                        interrupted, computed, elsewhere, damaged, estimate, kernel_seconds,
                        store_seconds, mirrored)

@@ -86,7 +86,10 @@ def run(args: list[str] | None = None) -> int:
 
 
 def main() -> None:
-    exit_now(run())
+    from .interruptions import ended_by_signal, stop_on_termination
+
+    stop_on_termination()  # SIGTERM and SIGHUP as Ctrl-C, exit 143 and 129
+    exit_now(ended_by_signal(run))
 
 
 def exit_now(code: int) -> None:

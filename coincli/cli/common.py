@@ -12,7 +12,7 @@ from rich.markup import escape
 
 from ..params import ParameterError, Scene, parse_number, parse_whole, shown, validate
 from ..presets import load
-from .text import keep_whole
+from .text import NBSP, keep_whole
 
 
 def _click_types():
@@ -165,6 +165,8 @@ def fail(message: str) -> typer.Exit:
         # A person reads it: break between phrases, not mid-word where the terminal would.
         # Piped or captured it stays one line, for grep and logs.
         text = keep_whole(text, err_console.width, indent=len("error: "))
+    else:  # a command in it (text.command) copies as one, with plain spaces
+        text = text.replace(NBSP, " ")
     err_console.print(text, highlight=False, soft_wrap=True)
     return typer.Exit(code=2)
 

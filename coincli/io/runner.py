@@ -16,6 +16,7 @@ new_control`), and an interrupted tile is never written.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import time
@@ -33,6 +34,18 @@ from ..params import ParameterError
 from .claims import TileQueue
 
 POLL = 0.2  # s between looks at the stop flag while tiles run
+
+
+class SchedulerLost(RuntimeError):
+    """The Dask scheduler, or this process's connection to it, went away mid-run: the tasks it
+    held are gone. What the workers finished is in the store (each tile, or each batch the
+    client had received, is written whole or not at all), so the same run resumes."""
+
+    def __init__(self, address: str | None, reason: str):
+        self.address = address
+        self.reason = reason
+        where = f"at {address}" if address else "of the local cluster"
+        super().__init__(f"lost the Dask scheduler {where}: {reason}")
 
 
 class TileDone(NamedTuple):
@@ -174,7 +187,8 @@ def hard_stop(runner: Iterator) -> None:
 
 
 def run_dask(path: str, spec: SweepSpec, queue: TileQueue, scheduler: str | None = None,
-             workers: int | None = None, stop=None) -> Iterator[TileDone]:
+             workers: int | None = None, stop=None,
+             on_workers: Callable[[int], None] | None = None) -> Iterator[TileDone]:
     """Yield each tile's :class:`TileDone` as its Dask task finishes: on the cluster at
     ``scheduler`` (tcp://host:port), or on a LocalCluster of ``workers`` processes with one
     thread each. This process (the client) claims each tile before submitting it.
@@ -182,17 +196,19 @@ def run_dask(path: str, spec: SweepSpec, queue: TileQueue, scheduler: str | None
     Tasks are submitted in a window of twice the cluster's threads (re-read as workers come and
     go), so that stopping is clean: ``stop`` set cancels the tasks no worker has taken and waits
     for those being computed, which write their tiles completely. (A tile cut off anyway, say
-    by a worker dying or a second Ctrl-C, has no ``done`` digest and is recomputed on resume.)"""
+    by a worker dying or a second Ctrl-C, has no ``done`` digest and is recomputed on resume.)
+    ``on_workers`` is told the cluster's number of workers each time it is read. A lost
+    scheduler raises :class:`SchedulerLost` within a second (:func:`losing_scheduler`)."""
     from distributed import wait as dask_wait
 
     client, cluster = open_dask(scheduler, workers)
     run_id = uuid.uuid4().hex[:12]
     running: dict = {}  # future -> tile
-    hard = False
+    hard = lost = False
     cancelled_queued = False
 
     def window() -> int:
-        return max(2, 2 * sum(client.nthreads().values()))
+        return cluster_window(client, on_workers)
 
     def processing() -> set:
         try:
@@ -209,50 +225,117 @@ def run_dask(path: str, spec: SweepSpec, queue: TileQueue, scheduler: str | None
 
     try:
         while True:
-            stopping = stop is not None and stop.is_set()
-            if stopping and not cancelled_queued:
-                cancel_queued()
-                cancelled_queued = True
-            if not stopping:
-                limit = window()
-                while len(running) < limit:
-                    tile = queue.take()
-                    if tile is None:
-                        break
-                    future = client.submit(run_tile_task, path, spec, tuple(tile), pure=False,
-                                           key=f"coin-basin-tile-{tile[0]}-{tile[1]}-{run_id}")
-                    running[future] = tuple(tile)
-            if not running:
-                if stopping or queue.finished:
-                    return
-                queue.pause()
-                continue
-            try:
-                dask_wait(list(running), timeout=POLL, return_when="FIRST_COMPLETED")
-            except TimeoutError:
-                continue
-            for future in [f for f in running if f.done()]:
-                tile = running.pop(future)
+            with losing_scheduler(client, scheduler):
+                stopping = stop is not None and stop.is_set()
+                if stopping and not cancelled_queued:
+                    cancel_queued()
+                    cancelled_queued = True
+                if not stopping:
+                    limit = window()
+                    while len(running) < limit:
+                        tile = queue.take()
+                        if tile is None:
+                            break
+                        future = client.submit(
+                            run_tile_task, path, spec, tuple(tile), pure=False,
+                            key=f"coin-basin-tile-{tile[0]}-{tile[1]}-{run_id}")
+                        running[future] = tuple(tile)
+                if not running:
+                    if stopping or queue.finished:
+                        return
+                    queue.pause()
+                    continue
                 try:
-                    result = future.result()
-                finally:
-                    queue.settle(tile)
+                    dask_wait(list(running), timeout=POLL, return_when="FIRST_COMPLETED")
+                except TimeoutError:
+                    continue
+                finished = [(f, f.result()) for f in running if f.done()]
+            for future, result in finished:
+                queue.settle(running.pop(future))
                 yield result
     except BaseException as exc:
         hard = not isinstance(exc, GeneratorExit)
+        lost = isinstance(exc, SchedulerLost) or scheduler_gone(client)
         raise
     finally:
         try:
-            if running:
+            if running and not lost:  # lost: nothing to cancel or wait for
                 cancel_queued()
                 if running and not hard:
                     dask_wait(list(running), timeout=600)
         finally:
             for tile in running.values():
                 queue.drop(tile)
+            close_dask(client, cluster, lost)
+
+
+def cluster_window(client, on_workers: Callable[[int], None] | None = None) -> int:
+    """How many tasks to keep submitted: twice the cluster's threads (at least 2). Tells
+    ``on_workers`` how many workers the scheduler has now."""
+    nthreads = client.nthreads()
+    if on_workers is not None:
+        on_workers(len(nthreads))
+    return max(2, 2 * sum(nthreads.values()))
+
+
+def scheduler_gone(client) -> bool:
+    """The client has lost its scheduler: distributed then cancels every future at once and
+    tries to reconnect for the client's whole timeout (a new scheduler would not know the
+    tasks anyway), so waiting for it only delays the news."""
+    return client.status != "running"
+
+
+@contextlib.contextmanager
+def losing_scheduler(client, scheduler: str | None):
+    """Turn the ways distributed reports a lost scheduler (futures cancelled with reason
+    scheduler-connection-lost, CommClosedError, an OSError or timeout on the connection) into
+    :class:`SchedulerLost`, raised at once; other errors (a task's own) go on as they are."""
+    from distributed.comm.core import CommClosedError
+
+    if scheduler_gone(client):
+        raise SchedulerLost(scheduler, "the connection to it closed")
+    try:
+        yield
+    except Exception as exc:
+        # CommClosedError: a call to the scheduler (not a task: a task's OSError, say a full
+        # disk, is its own) that met the loss before the client's stream did
+        if (scheduler_gone(client) or isinstance(exc, CommClosedError)
+                or "scheduler-connection-lost" in str(exc)):
+            raise SchedulerLost(scheduler, f"the connection to it closed "
+                                f"({type(exc).__name__})") from exc
+        raise
+
+
+def close_dask(client, cluster, lost: bool = False) -> None:
+    """Close the client and the local cluster, if any; after a lost scheduler at once, without
+    the goodbyes to it (they would wait for the connection's timeout)."""
+    try:
+        if lost:
+            # distributed logs its reconnection, cut short here, as an error with tracebacks
+            with _muted("distributed.client", "distributed.batched", "distributed.core"):
+                client.close(timeout=2)
+        else:
             client.close()
-            if cluster is not None:
-                cluster.close()
+    except Exception:  # noqa: BLE001 - a lost scheduler: nothing left to close cleanly
+        if not lost:
+            raise
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
+@contextlib.contextmanager
+def _muted(*loggers: str):
+    import logging
+
+    levels = {name: logging.getLogger(name).level for name in loggers}
+    for name in loggers:
+        logging.getLogger(name).setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        for name, level in levels.items():
+            logging.getLogger(name).setLevel(level)
 
 
 def open_dask(scheduler: str | None, workers: int | None):
@@ -304,5 +387,6 @@ def check_where(threads, workers, scheduler) -> None:
                              "tcp://HOST:PORT")
 
 
-__all__ = ["ItemQueue", "TileDone", "check_where", "hard_stop", "open_dask", "run_dask",
-           "run_threads", "run_tile_task", "usable_cores"]
+__all__ = ["ItemQueue", "SchedulerLost", "TileDone", "check_where", "close_dask",
+           "cluster_window", "hard_stop", "losing_scheduler", "open_dask", "run_dask",
+           "run_threads", "run_tile_task", "scheduler_gone", "usable_cores"]

@@ -1,0 +1,166 @@
+"""Ending a run early by fault injection: SIGTERM and SIGHUP mid-sweep (taken as Ctrl-C: claims
+released, run recorded, exit 143 and 129), and a Dask scheduler killed mid-run (one line, exit
+3, within a second); each resumed to a store bit-identical to an uninterrupted one."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from test_basin import KILL_ARGS, assert_same_store, coin_ok, start_sweep, wait_for_tiles
+
+from coincli.cli import interruptions
+from coincli.io import store
+from coincli.io.runner import SchedulerLost
+
+
+@pytest.fixture(scope="module")
+def clean(tmp_path_factory) -> Path:
+    """The sweep of KILL_ARGS, uninterrupted."""
+    path = tmp_path_factory.mktemp("clean") / "clean.zarr"
+    coin_ok(str(path), *KILL_ARGS)
+    return path
+
+
+def runs(path: Path) -> list[dict]:
+    return [json.loads(line) for line in (Path(f"{path}.cost") / "runs.jsonl").read_text()
+            .splitlines()]
+
+
+def claims_left(path: Path) -> list[str]:
+    folder = store.claims_dir(path)
+    return sorted(p.name for p in Path(folder).iterdir()) if Path(folder).exists() else []
+
+
+# -- SIGTERM and SIGHUP --------------------------------------------------------------------------
+@pytest.mark.parametrize("signum, code", [(signal.SIGTERM, 143), (signal.SIGHUP, 129)])
+def test_termination_signal_stops_like_ctrl_c(tmp_path, clean, signum, code):
+    path = tmp_path / "s.zarr"
+    proc = start_sweep(str(path), *KILL_ARGS)
+    wait_for_tiles(proc, path, 3)
+    proc.send_signal(signum)
+    out, err = proc.communicate(timeout=30)
+    err = err.decode()
+    assert proc.returncode == code, err
+    assert "Traceback" not in err
+    assert f"stopped: {signum.name}: " in err and "resume" in err
+    assert 3 <= store.read_basin(path).done.sum() < store.read_basin(path).done.size
+    assert runs(path)[-1]["interrupted"] is True
+    assert claims_left(path) == []  # another host need not wait for them to go stale
+    coin_ok(str(path), *KILL_ARGS)  # resume
+    assert_same_store(path, clean)
+
+
+def test_a_second_signal_during_the_first_ones_clean_up_still_ends_it():
+    """KeyboardInterrupt out of the command (the second signal) ends quietly with the code."""
+    interruptions._received[:] = [signal.SIGTERM]
+    try:
+        def interrupted_twice() -> int:
+            raise KeyboardInterrupt
+
+        def terminal_gone() -> int:
+            raise OSError(5, "Input/output error")
+
+        assert interruptions.ended_by_signal(interrupted_twice) == 143
+        assert interruptions.ended_by_signal(terminal_gone) == 143
+        assert interruptions.ended_by_signal(lambda: 130) == 143
+        assert interruptions.ended_by_signal(lambda: 0) == 143
+        assert interruptions.ended_by_signal(lambda: 2) == 2  # an error of its own stays
+    finally:
+        interruptions._received.clear()
+    assert interruptions.ended_by_signal(lambda: 130) == 130  # Ctrl-C as before
+    with pytest.raises(KeyboardInterrupt):
+        interruptions.ended_by_signal(interrupted_twice)
+
+
+def test_handlers_are_the_commands_only_and_nohup_is_kept():
+    """Importing coincli (a notebook, a program) leaves Python's handlers; the command keeps
+    an ignored SIGHUP ignored."""
+    code = ("import signal, coincli.api, coincli.cli\n"
+            "assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL\n"
+            "assert signal.getsignal(signal.SIGHUP) is signal.SIG_DFL\n"
+            "signal.signal(signal.SIGHUP, signal.SIG_IGN)\n"
+            "from coincli.cli.interruptions import stop_on_termination\n"
+            "stop_on_termination()\n"
+            "assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN\n"
+            "assert signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL\n")
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=60)
+
+
+# -- a Dask scheduler lost -----------------------------------------------------------------------
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@contextlib.contextmanager
+def dask_cluster(workers: int = 1):
+    """A scheduler and ``workers`` one-thread workers as processes of their own (so that the
+    scheduler can be killed): (address, scheduler process)."""
+    from distributed import Client
+
+    address = f"tcp://127.0.0.1:{free_port()}"
+    quiet = dict(stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler",
+                               "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
+                               "--no-dashboard"], **quiet)]
+    try:
+        procs += [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker",
+                                    address, "--nthreads", "1", "--no-dashboard"], **quiet)
+                  for _ in range(workers)]
+        with Client(address, timeout="30s") as client:
+            client.wait_for_workers(workers, timeout=30)
+        yield address, procs[0]
+    finally:
+        for proc in procs:
+            proc.kill()
+            proc.wait()
+
+
+def test_scheduler_killed_mid_sweep_is_one_line_and_resumes(tmp_path, clean):
+    path = tmp_path / "s.zarr"
+    with dask_cluster() as (address, scheduler):
+        proc = start_sweep(str(path), *KILL_ARGS[:-3], "-q", "--scheduler", address)
+        wait_for_tiles(proc, path, 3)
+        scheduler.kill()
+        killed = time.monotonic()
+        out, err = proc.communicate(timeout=30)
+        took = time.monotonic() - killed
+    err = err.decode().strip()
+    assert proc.returncode == interruptions.SCHEDULER_LOST, err
+    assert err.startswith(f"error: lost the Dask scheduler at {address}: "), err
+    assert len(err.splitlines()) == 1, err
+    assert "the store keeps every finished tile: resume with coin basin" in err
+    assert took < 5, f"{took:.1f} s from the scheduler's end to the command's"
+    record = runs(path)[-1]
+    assert record["interrupted"] is True and record["mode"] == "dask"
+    assert record["workers"] == 1  # the cluster's, not 0
+    assert claims_left(path) == []
+    assert 3 <= store.read_basin(path).done.sum() < store.read_basin(path).done.size
+    coin_ok(str(path), *KILL_ARGS)  # resumed on threads: the same store wherever it runs
+    assert_same_store(path, clean)
+
+
+def test_run_dask_tasks_reports_a_lost_scheduler_and_the_workers():
+    from coincli.io.dask_tasks import run_dask_tasks
+
+    seen: list[int] = []
+    with dask_cluster() as (address, scheduler):
+        tasks = run_dask_tasks(time.sleep, ((0.05,) for _ in range(400)),
+                               key=lambda item: "coin-test-sleep", scheduler=address,
+                               on_workers=seen.append)
+        with pytest.raises(SchedulerLost, match=f"lost the Dask scheduler at {address}"):
+            for done, _ in enumerate(tasks):
+                if done == 3:
+                    scheduler.kill()
+                    killed = time.monotonic()
+        assert time.monotonic() - killed < 5
+    assert seen and set(seen) == {1}
