@@ -27,7 +27,13 @@ from .integrators.batch import (
     rungs_agree,
     stops_ladder,
 )
-from .integrators.common import EVENT_COLUMNS, FINITE_BOUND, SAMPLE_COLUMNS, is_finite_state
+from .integrators.common import (
+    ANGLE_BOUND,
+    EVENT_COLUMNS,
+    FINITE_BOUND,
+    SAMPLE_COLUMNS,
+    is_finite_state,
+)
 from .integrators.ladder import ladder_of
 from .jit import compiled, is_active, python
 from .model import energies, rounded_quarter_turns
@@ -269,8 +275,8 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
                      "round(2 phi / pi) at the end and may still change; raise --t-end")
     if status == Status.NONFINITE and not is_finite_state(*state0):
         notes.append(f"the initial state is beyond what can be integrated (a value of "
-                     f"{FINITE_BOUND:g} or more, far outside any throw): no outcome; give "
-                     "physical initial values")
+                     f"{FINITE_BOUND:g} or more, or an angle of {ANGLE_BOUND:g} rad or more, "
+                     "far outside any throw): no outcome; give physical initial values")
     elif status == Status.NONFINITE:
         notes.append(f"the run went non-finite near t = {t:.4g} s: no outcome (try a smaller "
                      "step or tolerance)")

@@ -65,7 +65,8 @@ def one_error_line(capsys, *args) -> str:
 
 # -- item 7: a state too large to integrate ---------------------------------------------------
 @pytest.mark.parametrize("option, value", [("--vphi", "1e308"), ("--vphi", "1e160"),
-                                           ("--vx", "1e308"), ("--vy", "-1e300")])
+                                           ("--vx", "1e308"), ("--vy", "-1e300"),
+                                           ("--phi0", "1e20")])
 def test_a_throw_too_large_to_integrate_is_non_finite_not_a_traceback(option, value):
     """Was `ValueError: math domain error` in model.rotate (the plain-Python engine)."""
     args = ["simulate", "--vy", "1", option, value, "--no-rrd"]
@@ -96,7 +97,8 @@ def test_both_engines_say_non_finite(method):
     p = model_params(scene)
     settings = run_settings(scene.integration)._replace(method=int(Method.parse(method)))
     for state in ([0.0, scene.y0, 0.0, 0.0, 1.0, 1e308], [0.0, scene.y0, 0.0, 1e308, 1.0, 0.0],
-                  [0.0, scene.y0, 1e300, 0.0, 1.0, 3.0], [0.0, scene.y0, 0.0, 0.0, 1.0, 1e160]):
+                  [0.0, scene.y0, 1e300, 0.0, 1.0, 3.0], [0.0, scene.y0, 0.0, 0.0, 1.0, 1e160],
+                  [0.0, scene.y0, 1e16, 0.0, 1.0, 3.0]):  # past ANGLE_BOUND: no count
         state = np.array(state)
         for engine in (compiled, python):
             final = np.empty(6)
@@ -274,3 +276,21 @@ def test_write_recording_refuses_to_spawn_without_a_display(monkeypatch):
     with pytest.raises(RuntimeError, match="no display"):
         write_recording(run, spawn=True)
     assert time.monotonic() - start < 1
+
+
+def test_a_recording_that_fails_after_the_run_comes_after_the_outcome(monkeypatch, capsys):
+    """A disk that fills while the recording is written: the outcome is printed all the same,
+    then one error line, exit 2."""
+    import errno
+
+    import coincli.io.rrd
+
+    def full_disk(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device", "coin.rrd")
+
+    monkeypatch.setattr(coincli.io.rrd, "write_recording", full_disk)
+    code = run(["simulate", "--vy", "1.197", "--vphi", "3.508"])
+    out, err = capsys.readouterr()
+    assert code == 2 and "n = 6" in out, (code, out, err)
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: could not write the recording")

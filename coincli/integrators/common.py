@@ -31,13 +31,16 @@ class RunResult(NamedTuple):
 
 
 FINITE_BOUND = 1e30  # a state value this large counts as non-finite (is_finite_state)
+ANGLE_BOUND = 1e15  # rad: past it a quarter turn is below the angle's rounding (ulp 0.125)
 
 
 @kernel
 def is_finite_state(x, y, phi, vx, vy, vphi):
     # NaN fails every comparison; FINITE_BOUND catches a blow-up before it overflows to inf.
+    # An angle past ANGLE_BOUND has no count of quarter turns (round(2 phi / pi) would be
+    # rounding noise, and past 1.4e19 rad overflow the count's integer).
     big = FINITE_BOUND
-    return (abs(x) < big and abs(y) < big and abs(phi) < big and abs(vx) < big
+    return (abs(x) < big and abs(y) < big and abs(phi) < ANGLE_BOUND and abs(vx) < big
             and abs(vy) < big and abs(vphi) < big)
 
 
@@ -99,6 +102,6 @@ def record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi):
     return n_samples
 
 
-__all__ = ["EVENT_COLUMNS", "FINITE_BOUND", "LIFTOFF", "NO_WELL", "ONSET", "RunResult",
-           "SAMPLE_COLUMNS", "is_finite_state", "record_events", "record_sample", "store_state",
-           "unstartable"]
+__all__ = ["ANGLE_BOUND", "EVENT_COLUMNS", "FINITE_BOUND", "LIFTOFF", "NO_WELL", "ONSET",
+           "RunResult", "SAMPLE_COLUMNS", "is_finite_state", "record_events", "record_sample",
+           "store_state", "unstartable"]
