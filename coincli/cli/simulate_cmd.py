@@ -56,7 +56,9 @@ NoRrdOpt = Annotated[bool, typer.Option("--no-rrd", help="Write no .rrd file (wi
                                         "--spawn nor --connect: print the numbers only).",
                                         rich_help_panel=REC)]
 SpawnOpt = Annotated[bool, typer.Option("--spawn", help="Open a Rerun viewer and stream the "
-                                        "recording to it.", rich_help_panel=REC)]
+                                        "recording to it (without a display: says so, prints "
+                                        "the outcome, writes any --rrd file, exit 1).",
+                                        rich_help_panel=REC)]
 ConnectOpt = Annotated[str | None, typer.Option("--connect", metavar="URL", help="Stream the "
                                                 "recording to a running viewer, e.g. "
                                                 "rerun+http://127.0.0.1:9876/proxy.",
