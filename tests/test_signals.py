@@ -58,6 +58,52 @@ def test_termination_signal_stops_like_ctrl_c(tmp_path, clean, signum, code):
     assert_same_store(path, clean)
 
 
+FRACTIONS = ["fractions", "--samples", "60000", "--yes", "-q", "--json"]
+
+
+def test_sigterm_mid_fractions_records_and_resumes(tmp_path):
+    """`coin fractions --store` as `coin basin`: exit 143, the batches done kept and recorded,
+    no claim left; the resumed store holds what an uninterrupted run's does."""
+    import numpy as np
+
+    from coincli import api
+    from coincli.io import fractions_store
+
+    def coin(path: Path) -> subprocess.Popen:
+        return subprocess.Popen([sys.executable, "-m", "coincli", *FRACTIONS, "--store",
+                                 str(path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                cwd=Path(__file__).parent.parent)
+
+    path = tmp_path / "f.zarr"
+    proc = coin(path)
+    end = time.monotonic() + 60
+    while not batches_written(path):
+        assert proc.poll() is None and time.monotonic() < end, proc.communicate()[1].decode()
+        time.sleep(0.005)
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 143, err.decode()
+    assert b"Traceback" not in err
+    assert runs(path)[-1]["interrupted"] is True
+    assert 0 < runs(path)[-1]["samples"] < 60000
+    assert not fractions_store.claims_dir(path).exists()
+    for target in (path, tmp_path / "clean.zarr"):  # resume; an uninterrupted run
+        proc = coin(target)
+        assert proc.wait(timeout=60) == 0, proc.communicate()[1].decode()
+    resumed, clean = (api.open_fractions(p) for p in (path, tmp_path / "clean.zarr"))
+    for name in clean.data_vars:
+        np.testing.assert_array_equal(resumed[name].values, clean[name].values, name)
+
+
+def batches_written(path: Path) -> bool:
+    from coincli.io import fractions_store
+
+    try:
+        return bool(fractions_store.read_filled(path).any())
+    except Exception:  # noqa: BLE001 - not created yet, or being created
+        return False
+
+
 def test_a_second_signal_during_the_first_ones_clean_up_still_ends_it():
     """KeyboardInterrupt out of the command (the second signal) ends quietly with the code."""
     interruptions._received[:] = [signal.SIGTERM]

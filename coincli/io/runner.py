@@ -287,9 +287,10 @@ def scheduler_gone(client) -> bool:
 
 @contextlib.contextmanager
 def losing_scheduler(client, scheduler: str | None):
-    """Turn the ways distributed reports a lost scheduler (futures cancelled with reason
-    scheduler-connection-lost, CommClosedError, an OSError or timeout on the connection) into
-    :class:`SchedulerLost`, raised at once; other errors (a task's own) go on as they are."""
+    """Turn the ways distributed reports a lost scheduler (the client no longer running,
+    futures cancelled with reason scheduler-connection-lost, a CommClosedError from a call to
+    the scheduler) into :class:`SchedulerLost`, raised at once; other errors (a task's own)
+    go on as they are."""
     from distributed.comm.core import CommClosedError
 
     if scheduler_gone(client):
