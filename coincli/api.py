@@ -706,6 +706,42 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                scheduler=scheduler, progress=progress, stop=stop)
 
 
+def estimate_fractions(plan: FractionsPlan, *, threads: int | None = None,
+                       workers: int | None = None, scheduler: str | None = None,
+                       store: str | os.PathLike | None = None):
+    """How long a planned run should take and how many samples its stop rule likely needs,
+    from a pilot of a few hundred samples (timed on this machine): a
+    :class:`coincli.montecarlo.estimate.FractionsEstimate` (``budget_suffices`` says whether
+    the sample budget covers a precision goal). On ``threads`` threads (default one per core),
+    ``workers`` Dask workers, or a cluster (``scheduler``: the estimate is then CPU time);
+    samples that ``store`` holds already are not counted."""
+    from .io.runner import usable_cores
+    from .montecarlo.estimate import estimate_fractions as estimate
+
+    check_where(threads, workers, scheduler)
+    n = None if scheduler is not None else workers or min(threads or usable_cores(),
+                                                          usable_cores())
+    held = None
+    if store is not None and Path(store).is_dir():
+        held = _held_samples(plan, store)
+    return estimate(plan, n, held)
+
+
+def _held_samples(plan: FractionsPlan, store) -> list[int] | None:
+    """The samples a fractions store holds, per value (None if it holds another run)."""
+    from .io import fractions_store as fstore
+
+    try:
+        filled = fstore.read_filled(store)
+        stored = dict(fstore.open_attrs(store))
+    except Exception:  # noqa: BLE001 - an unreadable store is the run's to report
+        return None
+    if fstore.differences(stored, plan.attrs):
+        return None
+    rows = filled.reshape(len(plan.scenes), -1) if plan.parameter is not None else filled[None]
+    return [int(row.sum()) for row in rows]
+
+
 def open_fractions(store: str | os.PathLike):
     """A `coin fractions` store as an xarray Dataset: ``initial`` ([value,] sample, ic) and the
     labels ([value,] sample); batches not written hold the fill values (``filled`` says which
@@ -731,7 +767,7 @@ __all__ = ["Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
            "FractionsProgress", "Method", "Outcome", "ParameterError", "Scene", "Status",
            "StopReason", "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport",
            "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin", "basin_stats",
-           "classify", "estimate_sweep", "fractions", "fractions_over", "load_preset",
-           "open_basin", "open_fractions", "plan_fractions", "plan_sweep", "render_analysis",
-           "render_basin", "render_fractions", "run_fractions", "simulate", "stability", "sweep",
-           "verify_basin"]
+           "classify", "estimate_fractions", "estimate_sweep", "fractions", "fractions_over",
+           "load_preset", "open_basin", "open_fractions", "plan_fractions", "plan_sweep",
+           "render_analysis", "render_basin", "render_fractions", "run_fractions", "simulate",
+           "stability", "sweep", "verify_basin"]

@@ -187,3 +187,17 @@ def test_a_read_only_store_is_named_in_one_line(tmp_path, monkeypatch):
         err = result.stderr.strip()
         assert err.startswith("error:") and len(err.splitlines()) == 1, err
         assert str(store) in err and "read-only" in err and "creating" not in err, err
+
+
+def test_a_precision_run_on_dask_makes_the_store_threads_make(tmp_path):
+    from distributed import LocalCluster
+
+    kw = dict(precision=0.004, of="standing", **RUN)
+    local = coincli.fractions(PAPER, store=tmp_path / "threads.zarr", **kw)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                      dashboard_address=None) as cluster:
+        remote = coincli.fractions(PAPER, store=tmp_path / "dask.zarr",
+                                   scheduler=cluster.scheduler_address, **kw)
+    assert remote.standing == local.standing and remote.samples == local.samples
+    assert remote.cost["mode"] == "dask"
+    assert _files(tmp_path / "dask.zarr") == _files(tmp_path / "threads.zarr")

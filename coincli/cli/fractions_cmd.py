@@ -215,6 +215,8 @@ def fractions_command(
                                      scheduler=scheduler, store=store)
     _check_estimate(est, plan, scheduler, yes, quiet)
     from ..io.fractions_run import StoreIncomplete
+    from ..io.runner import SchedulerLost
+    from . import interruptions
 
     try:
         with user_errors(), _BatchStop() as stop, progress:
@@ -224,6 +226,9 @@ def fractions_command(
     except StoreIncomplete as exc:
         say(err_console, f"[bold red]error:[/] {escape(str(exc))}")
         raise typer.Exit(code=1) from None
+    except SchedulerLost as exc:
+        fail(interruptions.lost_scheduler(exc, "every batch received"))
+        raise typer.Exit(code=interruptions.SCHEDULER_LOST) from None
     if plot is not None:
         with user_errors():
             api.render_fractions(result, plot)
@@ -236,7 +241,8 @@ def fractions_command(
     if plot is not None and not json_out:
         say(console, f"wrote {plot}")
     if result.interrupted:
-        say(err_console, "[yellow]stopped:[/] interrupted; the estimates above are from the "
+        say(err_console, f"[yellow]stopped:[/] {interruptions.stopped_by()}interrupted; the "
+                         "estimates above are from the "
                          "samples done" + (f"; rerun the same command to resume {store}"
                                            if store is not None else ""))
         raise typer.Exit(code=130)

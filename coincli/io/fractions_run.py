@@ -151,7 +151,7 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     once: they share the batches by claims, and each ends with the same results and store."""
     from . import fractions_store as fstore
     from .claims import Claims
-    from .runner import check_where, run_threads, usable_cores
+    from .runner import SchedulerLost, check_where, run_threads, usable_cores
     from .store import check_store_writable
 
     check_where(threads, workers, scheduler)
@@ -194,6 +194,8 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                            lambda v, index: fstore.batch_written(store, layout, v, index), found)
     else:
         queue = BatchQueue(progs, make_task)
+    cluster_workers: list[int] = []  # the Dask cluster's workers, each time it was looked at
+    lost = None
     try:
         if scheduler is not None or workers is not None:
             from .dask_tasks import run_dask_tasks
@@ -203,7 +205,8 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                                                     else None for t in queue.items(stop)),
                                     key=lambda item: f"coin-fractions-{item[1].value}-"
                                                      f"{item[1].batch}",
-                                    scheduler=scheduler, workers=workers)
+                                    scheduler=scheduler, workers=workers,
+                                    on_workers=cluster_workers.append)
         else:
             mode, n_workers = "threads", threads or usable_cores()
             if any(p.peek() is not None for p in progs):
@@ -236,6 +239,8 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
         except KeyboardInterrupt:
             interrupted = True
             runner.close()
+        except SchedulerLost as exc:  # the batches received are written already
+            interrupted, lost = True, exc
         interrupted = interrupted or not all(p.done for p in progs)
         if store is not None and not interrupted:
             _seal(store, layout, progs, goal, size,
@@ -244,9 +249,12 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
         if claims is not None:
             claims.close()
     wall = time.perf_counter() - wall0
+    n_workers = max(cluster_workers, default=n_workers)
     if store is not None and computed:
         fstore.record_run(store, fstore.run_record(started, wall, sum(cpu), computed, mode,
                                                    n_workers, interrupted))
+    if lost is not None:
+        raise lost
     total_cost = {"computed": computed, "cpu_seconds": sum(cpu), "wall_seconds": wall,
                   "trajectories_per_second": computed / wall if wall > 0 else math.nan,
                   "cpu_ms_per_trajectory": 1e3 * sum(cpu) / computed if computed else math.nan,
