@@ -201,3 +201,13 @@ def test_a_precision_run_on_dask_makes_the_store_threads_make(tmp_path):
     assert remote.standing == local.standing and remote.samples == local.samples
     assert remote.cost["mode"] == "dask"
     assert _files(tmp_path / "dask.zarr") == _files(tmp_path / "threads.zarr")
+
+
+@pytest.mark.parametrize("args", [["fractions", "--seed", "١"], ["fractions", "--batch", "٨"],
+                                  ["fractions", "--threads", "٢"], ["basin", "x.zarr",
+                                                                     "--threads", "٢"],
+                                  ["basin", "analyze", "x.zarr", "--seed", "١"]])
+def test_whole_number_options_take_ascii_digits_only(args):
+    result = CliRunner().invoke(app, args)  # click's usage box here; `coin` makes it one line
+    assert result.exit_code == 2, result.output
+    assert "ASCII digits" in " ".join(result.stderr.replace("│", " ").split()), result.stderr

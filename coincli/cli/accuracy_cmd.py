@@ -11,6 +11,7 @@ from ..enums import Method
 from ..params import ParameterError
 from . import app
 from .common import (
+    WHOLE,
     COpt,
     DiameterOpt,
     GOpt,
@@ -73,7 +74,7 @@ def accuracy_command(
     quick: Annotated[bool, typer.Option("--quick", help="Two settings per method (a smoke "
                                         "test, not a chart to trust).")] = False,
     threads: Annotated[int | None, typer.Option("--threads", help="Threads (default: one per "
-                                                "core).")] = None,
+                                                "core).", click_type=WHOLE)] = None,
     stability: Annotated[bool, typer.Option("--stability", help="Only find where each "
                                             "fixed-step method fails (bisection).")] = False,
     preset: PresetOpt = "paper", diameter: DiameterOpt = None, thickness: ThicknessOpt = None,

@@ -21,6 +21,7 @@ from ..version import __version__
 from . import app
 from .common import (
     INIT,
+    WHOLE,
     COpt,
     DiameterOpt,
     DtOpt,
@@ -152,10 +153,11 @@ def sweep_command(
                                             rich_help_panel=SWEEP)] = False,
     threads: Annotated[int | None, typer.Option("--threads", help="Threads computing tiles "
                                                 "on this machine (default: one per core).",
-                                                rich_help_panel=RUN)] = None,
+                                                rich_help_panel=RUN, click_type=WHOLE)] = None,
     workers: Annotated[int | None, typer.Option("--workers", help="Start a local Dask "
                                                 "cluster of N worker processes and run the "
-                                                "tiles on it.", rich_help_panel=RUN)] = None,
+                                                "tiles on it.", rich_help_panel=RUN,
+                                                click_type=WHOLE)] = None,
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Run the tiles as Dask "
                                                   "tasks on the cluster at this address "
                                                   "(tcp://HOST:PORT); every worker writes its "
@@ -399,10 +401,11 @@ def render_command(
                                              "PDF to write (default: the store's name with "
                                              ".png).")] = None,
     title: Annotated[str | None, typer.Option("--title", help="Title of the picture.")] = None,
-    dpi: Annotated[int, typer.Option("--dpi", help="Resolution of the PNG.")] = 150,
+    dpi: Annotated[int, typer.Option("--dpi", help="Resolution of the PNG.",
+                                     click_type=WHOLE)] = 150,
     n_max: Annotated[int | None, typer.Option("--n-max", metavar="N", help="Colour scale up "
                                               "to |n| = N (larger |n| take its ends) "
-                                              "[dim]\\[24][/dim]")] = None,
+                                              "[dim]\\[24][/dim]", click_type=WHOLE)] = None,
     field: Annotated[str, typer.Option("--field", metavar="NAME", help="What to draw: n (the "
                                        "outcome) or settle_time (when it was decided).")]
     = "n",
@@ -622,29 +625,31 @@ def analyze_command(
     path: Annotated[Path, typer.Argument(help="A basin store (complete or partial).",
                                          metavar="STORE")],
     box: Annotated[int, typer.Option("--box", metavar="CELLS", help="Box size of the basin "
-                                     "entropy, in cells.")] = 5,
+                                     "entropy, in cells.", click_type=WHOLE)] = 5,
     bands: Annotated[int, typer.Option("--bands", metavar="N", help="Bands of the first swept "
-                                       "axis (vy0 by default) measured one by one.")] = 4,
+                                       "axis (vy0 by default) measured one by one.",
+                                       click_type=WHOLE)] = 4,
     points: Annotated[int | None, typer.Option("--points", metavar="N", help="Random initial "
                                                "conditions of the perturbation method; 0 "
                                                "skips it. [dim]\\[150,000: about a minute on "
-                                               "2 cores][/dim]")] = None,
+                                               "2 cores][/dim]", click_type=WHOLE)] = None,
     eps: Annotated[str, typer.Option("--eps", metavar="LO:HI", help="Perturbation sizes, "
                                      "relative to each swept axis's range (log-spaced).")]
     = "1e-9:1e-4",
     eps_values: Annotated[int, typer.Option("--eps-values", metavar="N", help="How many "
-                                            "perturbation sizes in --eps.")] = 6,
+                                            "perturbation sizes in --eps.", click_type=WHOLE)] = 6,
     radius: Annotated[float, typer.Option("--radius", metavar="CELLS", help="Ball radius of "
                                           "the fractal test.")] = 5.0,
     balls: Annotated[int, typer.Option("--balls", metavar="N", help="Boundary balls of the "
-                                       "fractal test.")] = 1000,
+                                       "fractal test.", click_type=WHOLE)] = 1000,
     max_dilation: Annotated[int, typer.Option("--max-dilation", metavar="CELLS", help="Largest "
-                                              "dilation of the Wada merging test.")] = 6,
+                                              "dilation of the Wada merging test.",
+                                              click_type=WHOLE)] = 6,
     seed: Annotated[int, typer.Option("--seed", metavar="N", help="Seed of the random points, "
-                                      "perturbations and balls.")] = 0,
+                                      "perturbations and balls.", click_type=WHOLE)] = 0,
     threads: Annotated[int | None, typer.Option("--threads", metavar="N", help="Threads "
                                                 "running the simulator (default: one per "
-                                                "core).")] = None,
+                                                "core).", click_type=WHOLE)] = None,
     figure: Annotated[Path | None, typer.Option("--figure", "-o", metavar="FILE", help="Also "
                                                 "draw f(eps) and the measures by band to this "
                                                 ".png or .svg.")] = None,
