@@ -55,10 +55,10 @@ from ..montecarlo.plan import STORE_FORMAT
 from ..params import ParameterError
 from .schema import VARIABLES
 from .store import (
-    _creation_lock,
     check_is_store,
     claims_dir,
     cost_dir,
+    creation_lock,
     flatten_attrs,
     is_store,
     read_runs,
@@ -189,7 +189,7 @@ def prepare(path, attrs: dict, layout: Layout, values: np.ndarray | None = None,
     if path.is_dir() and not is_store(path) and any(path.iterdir()):
         raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
     path.parent.mkdir(parents=True, exist_ok=True)
-    with _creation_lock(path):
+    with creation_lock(path):
         if is_store(path) and overwrite:
             shutil.rmtree(path)
             shutil.rmtree(cost_dir(path), ignore_errors=True)

@@ -327,7 +327,7 @@ def _write_files(root: Path, files: dict[str, bytes]) -> None:
 
 
 @contextlib.contextmanager
-def _creation_lock(path: Path, blocking: bool = True):
+def creation_lock(path: Path, blocking: bool = True):
     """Hold ``.NAME.lock`` beside the store (flock; the kernel drops it when its holder dies).
     Yields False if not ``blocking`` and someone else holds it."""
     try:
@@ -389,14 +389,14 @@ def tidy(path: str | os.PathLike) -> None:
     if not any(path.parent.glob(f".{path.name}.creating-*")) and \
             not path.with_name(f".{path.name}.lock").exists():
         return
-    with contextlib.suppress(OSError), _creation_lock(path, blocking=False) as held:
+    with contextlib.suppress(OSError), creation_lock(path, blocking=False) as held:
         if held:
             _remove_orphans(path)
 
 
 def _create(path: Path, attrs: dict, spec: SweepSpec, overwrite: bool) -> None:
     """Create the store (under the creation lock), unless another process did meanwhile."""
-    with _creation_lock(path):
+    with creation_lock(path):
         if is_store(path) and not overwrite:
             return  # another process won the race: open its store
         _remove_orphans(path)
@@ -1061,8 +1061,8 @@ def check_store_writable(path: str | os.PathLike) -> None:
 
 
 __all__ = ["ARRAY_NAMES", "StoreCheck", "StoreDamaged", "StoreView", "Tile", "check",
-           "check_is_store", "check_store_writable", "claims_dir", "cost_dir", "damaged_metadata",
-           "differences", "flatten_attrs", "grid_of", "has_digest", "is_store", "open_view",
-           "prepare", "read_basin", "read_costs", "read_done", "read_runs", "record_run",
-           "run_record", "scan", "show_value", "template", "tidy", "tile_digest", "tile_done",
-           "write_tile"]
+           "check_is_store", "check_store_writable", "claims_dir", "cost_dir", "creation_lock",
+           "damaged_metadata", "differences", "flatten_attrs", "grid_of", "has_digest",
+           "is_store", "open_view", "prepare", "read_basin", "read_costs", "read_done",
+           "read_runs", "record_run", "run_record", "scan", "show_value", "template", "tidy",
+           "tile_digest", "tile_done", "write_tile"]
