@@ -11,7 +11,6 @@ from ..enums import Method
 from ..params import ParameterError
 from . import app
 from .common import (
-    WHOLE,
     COpt,
     DiameterOpt,
     GOpt,
@@ -28,6 +27,7 @@ from .common import (
     fail,
     print_json,
     user_errors,
+    whole_option,
 )
 from .text import percent, say
 
@@ -74,7 +74,7 @@ def accuracy_command(
     quick: Annotated[bool, typer.Option("--quick", help="Two settings per method (a smoke "
                                         "test, not a chart to trust).")] = False,
     threads: Annotated[int | None, typer.Option("--threads", help="Threads (default: one per "
-                                                "core).", click_type=WHOLE)] = None,
+                                                "core).", parser=whole_option, metavar="N")] = None,
     stability: Annotated[bool, typer.Option("--stability", help="Only find where each "
                                             "fixed-step method fails (bisection).")] = False,
     preset: PresetOpt = "paper", diameter: DiameterOpt = None, thickness: ThicknessOpt = None,

@@ -21,7 +21,6 @@ from ..version import __version__
 from . import app
 from .common import (
     INIT,
-    WHOLE,
     COpt,
     DiameterOpt,
     DtOpt,
@@ -46,6 +45,7 @@ from .common import (
     fail,
     print_json,
     user_errors,
+    whole_option,
 )
 from .text import TURN, command, counted, percent, print_rows, say, share
 
@@ -153,11 +153,12 @@ def sweep_command(
                                             rich_help_panel=SWEEP)] = False,
     threads: Annotated[int | None, typer.Option("--threads", help="Threads computing tiles "
                                                 "on this machine (default: one per core).",
-                                                rich_help_panel=RUN, click_type=WHOLE)] = None,
+                                                rich_help_panel=RUN, parser=whole_option,
+                                                metavar="N")] = None,
     workers: Annotated[int | None, typer.Option("--workers", help="Start a local Dask "
                                                 "cluster of N worker processes and run the "
                                                 "tiles on it.", rich_help_panel=RUN,
-                                                click_type=WHOLE)] = None,
+                                                parser=whole_option, metavar="N")] = None,
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Run the tiles as Dask "
                                                   "tasks on the cluster at this address "
                                                   "(tcp://HOST:PORT); every worker writes its "
@@ -402,10 +403,10 @@ def render_command(
                                              ".png).")] = None,
     title: Annotated[str | None, typer.Option("--title", help="Title of the picture.")] = None,
     dpi: Annotated[int, typer.Option("--dpi", help="Resolution of the PNG.",
-                                     click_type=WHOLE)] = 150,
+                                     parser=whole_option, metavar="N")] = 150,
     n_max: Annotated[int | None, typer.Option("--n-max", metavar="N", help="Colour scale up "
                                               "to |n| = N (larger |n| take its ends) "
-                                              "[dim]\\[24][/dim]", click_type=WHOLE)] = None,
+                                              "[dim]\\[24][/dim]", parser=whole_option)] = None,
     field: Annotated[str, typer.Option("--field", metavar="NAME", help="What to draw: n (the "
                                        "outcome) or settle_time (when it was decided).")]
     = "n",
@@ -625,31 +626,32 @@ def analyze_command(
     path: Annotated[Path, typer.Argument(help="A basin store (complete or partial).",
                                          metavar="STORE")],
     box: Annotated[int, typer.Option("--box", metavar="CELLS", help="Box size of the basin "
-                                     "entropy, in cells.", click_type=WHOLE)] = 5,
+                                     "entropy, in cells.", parser=whole_option)] = 5,
     bands: Annotated[int, typer.Option("--bands", metavar="N", help="Bands of the first swept "
                                        "axis (vy0 by default) measured one by one.",
-                                       click_type=WHOLE)] = 4,
+                                       parser=whole_option)] = 4,
     points: Annotated[int | None, typer.Option("--points", metavar="N", help="Random initial "
                                                "conditions of the perturbation method; 0 "
                                                "skips it. [dim]\\[150,000: about a minute on "
-                                               "2 cores][/dim]", click_type=WHOLE)] = None,
+                                               "2 cores][/dim]", parser=whole_option)] = None,
     eps: Annotated[str, typer.Option("--eps", metavar="LO:HI", help="Perturbation sizes, "
                                      "relative to each swept axis's range (log-spaced).")]
     = "1e-9:1e-4",
     eps_values: Annotated[int, typer.Option("--eps-values", metavar="N", help="How many "
-                                            "perturbation sizes in --eps.", click_type=WHOLE)] = 6,
+                                            "perturbation sizes in --eps.",
+                                            parser=whole_option)] = 6,
     radius: Annotated[float, typer.Option("--radius", metavar="CELLS", help="Ball radius of "
                                           "the fractal test.")] = 5.0,
     balls: Annotated[int, typer.Option("--balls", metavar="N", help="Boundary balls of the "
-                                       "fractal test.", click_type=WHOLE)] = 1000,
+                                       "fractal test.", parser=whole_option)] = 1000,
     max_dilation: Annotated[int, typer.Option("--max-dilation", metavar="CELLS", help="Largest "
                                               "dilation of the Wada merging test.",
-                                              click_type=WHOLE)] = 6,
+                                              parser=whole_option)] = 6,
     seed: Annotated[int, typer.Option("--seed", metavar="N", help="Seed of the random points, "
-                                      "perturbations and balls.", click_type=WHOLE)] = 0,
+                                      "perturbations and balls.", parser=whole_option)] = 0,
     threads: Annotated[int | None, typer.Option("--threads", metavar="N", help="Threads "
                                                 "running the simulator (default: one per "
-                                                "core).", click_type=WHOLE)] = None,
+                                                "core).", parser=whole_option)] = None,
     figure: Annotated[Path | None, typer.Option("--figure", "-o", metavar="FILE", help="Also "
                                                 "draw f(eps) and the measures by band to this "
                                                 ".png or .svg.")] = None,

@@ -18,7 +18,6 @@ from ..params import ParameterError
 from . import app
 from .accuracy_cmd import parse_range, parse_res
 from .common import (
-    WHOLE,
     JsonOpt,
     PresetOpt,
     announce_compilation,
@@ -26,6 +25,7 @@ from .common import (
     console,
     print_json,
     user_errors,
+    whole_option,
 )
 from .text import say
 
@@ -38,17 +38,18 @@ def bench_command(
     label_res: Annotated[str, typer.Option("--label-res", metavar="N|NxM",
                                            help="Grid for label agreement.")] = "24",
     repeats: Annotated[int, typer.Option("--repeats", help="Rounds of the side-by-side "
-                                         "timing (median reported).", click_type=WHOLE)] = 3,
+                                         "timing (median reported).", parser=whole_option,
+                                         metavar="N")] = 3,
     basin_res: Annotated[int, typer.Option("--basin-res", help="Resolution of the full basin "
                                            "sweep timed at the end (0 to skip).",
-                                           click_type=WHOLE)] = 512,
+                                           parser=whole_option, metavar="N")] = 512,
     vy_range: Annotated[str, typer.Option("--vy", "--vy-range", metavar="LO:HI",
                                           help="vy0 range, m/s.")] = "0.05:2",
     vphi_range: Annotated[str, typer.Option("--vphi", "--vphi-range", metavar="LO:HI",
                                             help="vphi0 range, rad/s.")] = "-20:20",
     threads: Annotated[int | None, typer.Option("--threads", help="Threads for the label "
                                                 "grids (default: one per core).",
-                                                click_type=WHOLE)] = None,
+                                                parser=whole_option, metavar="N")] = None,
     preset: PresetOpt = "paper", json_out: JsonOpt = False,
 ) -> None:
     """Benchmark: cost per trajectory of each method and of the paper's setting side by side, their label accuracy, and the full default basin on all cores."""  # noqa: E501

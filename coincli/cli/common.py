@@ -15,45 +15,28 @@ from ..presets import load
 from .text import NBSP, keep_whole
 
 
-def _click_types():
-    try:  # typer 0.28 carries its own click (see cli.run)
-        from typer._click import types
-    except ImportError:  # a typer that uses click itself
-        from click import types
-    return types
+def number_option(value) -> float:
+    """Read a float option with :func:`coincli.params.parse_number` (typer's ``parser=``): ASCII
+    digits only, and a bad value quoted short, where click's float type takes any script's digits
+    and quotes a bad value whole. Infinities pass, for the command to refuse naming the
+    parameter."""
+    if not isinstance(value, str):  # a default
+        return value
+    try:
+        return parse_number(value, finite=False)
+    except ParameterError as exc:
+        raise typer.BadParameter(str(exc)) from None
 
 
-_types = _click_types()
+def whole_option(value) -> int:
+    """Read an int option with :func:`coincli.params.parse_whole` (ASCII digits, quoted short)."""
+    if not isinstance(value, str):  # a default
+        return value
+    try:
+        return parse_whole(value)
+    except ParameterError as exc:
+        raise typer.BadParameter(str(exc)) from None
 
-
-class Number(_types.FloatParamType):
-    """A float option read by :func:`coincli.params.parse_number`: ASCII digits only, and a bad
-    value quoted short, where click's float type takes any script's digits and quotes a bad
-    value whole. Infinities pass, for the command to refuse naming the parameter."""
-
-    def convert(self, value, param, ctx):
-        if not isinstance(value, str):
-            return super().convert(value, param, ctx)
-        try:
-            return parse_number(value, finite=False)
-        except ParameterError as exc:
-            self.fail(str(exc), param, ctx)
-
-
-class Whole(_types.IntParamType):
-    """An int option read by :func:`coincli.params.parse_whole` (ASCII digits, quoted short)."""
-
-    def convert(self, value, param, ctx):
-        if not isinstance(value, str):
-            return super().convert(value, param, ctx)
-        try:
-            return parse_whole(value)
-        except ParameterError as exc:
-            self.fail(str(exc), param, ctx)
-
-
-NUMBER = Number()
-WHOLE = Whole()
 
 console = Console()
 err_console = Console(stderr=True)
@@ -88,7 +71,7 @@ def _opt(flag: str, text: str, unit: str, panel: str, key: str | None = None,
         text += f" [dim]\\[paper: {_PAPER[key]:.6g}][/dim]" if isinstance(
             _PAPER[key], float) else f" [dim]\\[paper: {_PAPER[key]}][/dim]"
     return typer.Option(flag, help=text, metavar=unit, rich_help_panel=panel, show_default=False,
-                        click_type=NUMBER if number else None)
+                        parser=number_option if number else None)
 
 
 def _flag(flags: str, text: str, panel: str | None = None):
@@ -143,7 +126,7 @@ MaxStepsOpt = Annotated[int | None, typer.Option("--max-steps", metavar="N", hel
                                                  "adaptive method, t_end / dt for a fixed "
                                                  "step; a finer fixed step of the ladder gets "
                                                  "it in proportion][/dim]",
-                                                 rich_help_panel=INTEG, click_type=WHOLE)]
+                                                 rich_help_panel=INTEG, parser=whole_option)]
 JsonOpt = Annotated[bool, typer.Option("--json", metavar="", help="Print one JSON object on "
                                        "stdout instead of tables.")]
 

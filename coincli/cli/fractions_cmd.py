@@ -18,7 +18,6 @@ from . import app
 from .basin_cmd import _Stop
 from .common import (
     INIT,
-    WHOLE,
     COpt,
     DiameterOpt,
     DtOpt,
@@ -43,6 +42,7 @@ from .common import (
     fail,
     print_json,
     user_errors,
+    whole_option,
 )
 from .text import TURN, counted, interval, percent, print_rows, resolving, say, share
 
@@ -101,14 +101,15 @@ def fractions_command(
         "batches).", rich_help_panel=SAMPLING)] = str(DEFAULT_MAX_SAMPLES),
     seed: Annotated[int, typer.Option("--seed", metavar="S", help="Seed of the scrambling or "
                                       "of the generator: the same seed, the same samples.",
-                                      rich_help_panel=SAMPLING, click_type=WHOLE)] = 0,
+                                      rich_help_panel=SAMPLING, parser=whole_option)] = 0,
     sampler: Annotated[str, typer.Option(
         "--sampler", metavar="sobol|random", help="Scrambled Sobol points (scipy.stats.qmc) or "
         "independent draws (numpy's default_rng(\\[seed, batch])).",
         rich_help_panel=SAMPLING)] = "sobol",
     batch: Annotated[int, typer.Option("--batch", metavar="N", help="Samples a batch: the "
                                        "unit of work, of storing and of the stop test.",
-                                       rich_help_panel=SAMPLING, click_type=WHOLE)] = DEFAULT_BATCH,
+                                       rich_help_panel=SAMPLING,
+                                       parser=whole_option)] = DEFAULT_BATCH,
     over: Annotated[str | None, typer.Option(
         "--over", metavar="NAME=LO:HI:STEPS", help="Repeat at STEPS values of a physical "
         "parameter (thickness, diameter, k, c, mass, inertia, g), the same samples at every "
@@ -124,10 +125,12 @@ def fractions_command(
                                             "samples.", rich_help_panel=RUN)] = False,
     threads: Annotated[int | None, typer.Option("--threads", help="Threads on this machine "
                                                 "(default: one per core).",
-                                                rich_help_panel=RUN, click_type=WHOLE)] = None,
+                                                rich_help_panel=RUN, parser=whole_option,
+                                                metavar="N")] = None,
     workers: Annotated[int | None, typer.Option("--workers", help="Run the batches on a "
                                                 "local Dask cluster of N processes.",
-                                                rich_help_panel=RUN, click_type=WHOLE)] = None,
+                                                rich_help_panel=RUN, parser=whole_option,
+                                                metavar="N")] = None,
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Run the batches on the "
                                                   "Dask cluster at this address "
                                                   "(tcp://HOST:PORT); the store stays here.",

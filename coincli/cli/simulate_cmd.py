@@ -12,7 +12,6 @@ from ..enums import Certainty, Status
 from ..version import __version__
 from . import app
 from .common import (
-    NUMBER,
     COpt,
     DiameterOpt,
     DtOpt,
@@ -41,6 +40,7 @@ from .common import (
     console,
     err_console,
     fail,
+    number_option,
     print_json,
     user_errors,
 )
@@ -66,7 +66,7 @@ ConnectOpt = Annotated[str | None, typer.Option("--connect", metavar="URL", help
 LogEveryOpt = Annotated[float, typer.Option("--log-every", metavar="SECONDS", help="Simulated "
                                             "time between frames of the recording (contact "
                                             "onsets and lift-offs are added at their exact "
-                                            "times).", rich_help_panel=REC, click_type=NUMBER)]
+                                            "times).", rich_help_panel=REC, parser=number_option)]
 
 
 @app.command("simulate")
