@@ -494,6 +494,22 @@ def open_basin(store: str | os.PathLike):
     return to_dataset(read_basin(store))
 
 
+def cell_scene(basin, *, cell=None, **values) -> Scene:
+    """The Scene of one cell of a basin (Dataset or store path): the basin's parameters with
+    the cell's initial state exactly as the sweep gave it, so that ``simulate`` replays the
+    throw the map shows (the label comes out the same). The cell nearest to ``values`` of
+    both swept axes (``vy=1.2, vphi=3.5``), or ``cell=(i, j)`` by index."""
+    from .io.cells import cell_scene as scene_of
+    from .io.cells import locate
+    from .io.store import open_view
+
+    if isinstance(basin, str | os.PathLike):
+        attrs = open_view(basin).attrs
+    else:
+        attrs = _as_basin(basin).attrs
+    return scene_of(attrs, locate(attrs, cell=cell, **values))
+
+
 def verify_basin(store: str | os.PathLike):
     """Check a store without computing anything: every tile's chunks (checksums) against its
     digest, and every metadata file (a :class:`coincli.io.store.StoreCheck`: ``intact``,
@@ -572,15 +588,17 @@ def _store_stats(path) -> dict:
 
 
 def render_basin(basin, out: str | os.PathLike, *, field: str = "n", title: str | None = None,
-                 dpi: int = 150, n_max: int | None = None) -> Path:
+                 dpi: int = 150, n_max: int | None = None, marks=()) -> Path:
     """Draw a basin (Dataset or store path) to a PNG, SVG or PDF (by the extension): the count
     n in the paper's colours (``field="n"``; colour scale fixed to |n| <= ``n_max``, 24 by
-    default) or the time each outcome was decided (``field="settle_time"``)."""
+    default) or the time each outcome was decided (``field="settle_time"``). ``marks``: throws
+    to mark on the map, (value of the first swept axis, value of the second) pairs, each a
+    white circle with a black edge (:func:`cell_scene` gives the Scene of one)."""
     from .io.basin_render import render_map
 
     try:
         return render_map(_as_basin(basin), out, title=title, dpi=dpi, n_max=n_max,
-                          field=field)
+                          field=field, marks=marks)
     except ValueError as exc:
         raise ParameterError(str(exc)) from None
 
@@ -767,7 +785,8 @@ __all__ = ["Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
            "FractionsProgress", "Method", "Outcome", "ParameterError", "Scene", "Status",
            "StopReason", "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport",
            "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin", "basin_stats",
-           "classify", "estimate_fractions", "estimate_sweep", "fractions", "fractions_over",
+           "cell_scene", "classify", "estimate_fractions", "estimate_sweep", "fractions",
+           "fractions_over",
            "load_preset", "open_basin", "open_fractions", "plan_fractions", "plan_sweep",
            "render_analysis", "render_basin", "render_fractions", "run_fractions", "simulate",
            "stability", "sweep", "verify_basin"]

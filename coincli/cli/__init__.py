@@ -42,7 +42,7 @@ def _register() -> None:
 
     from . import methods_cmd, presets_cmd, simulate_cmd, stability_cmd  # noqa: F401
 
-    for optional in ("basin_cmd", "accuracy_cmd", "bench_cmd", "fractions_cmd"):
+    for optional in ("basin_cmd", "inspect_cmd", "accuracy_cmd", "bench_cmd", "fractions_cmd"):
         try:
             importlib.import_module(f"{__name__}.{optional}")
         except ModuleNotFoundError as exc:

@@ -394,6 +394,20 @@ def verify_command(
         raise typer.Exit(code=1)
 
 
+def _mark(text: str) -> tuple[float, float]:
+    """--mark V,W as two numbers."""
+    from ..params import parse_number, shown
+
+    parts = text.split(",")
+    if len(parts) != 2:
+        raise ParameterError(f"--mark '{shown(text)}' is not V,W (the values of the two swept "
+                             "axes)")
+    try:
+        return parse_number(parts[0]), parse_number(parts[1])
+    except ParameterError as exc:
+        raise ParameterError(f"--mark '{shown(text)}': {exc}") from None
+
+
 @basin_app.command("render")
 def render_command(
     path: Annotated[Path, typer.Argument(help="A basin store (complete or partial).",
@@ -413,6 +427,11 @@ def render_command(
     rrd: Annotated[Path | None, typer.Option("--rrd", help="Also save the map to this Rerun "
                                              "recording (SegmentationImage with an "
                                              "AnnotationContext).")] = None,
+    mark: Annotated[list[str] | None, typer.Option("--mark", metavar="V,W", help="Mark the "
+                                                   "throw at V (first swept axis), W (second) "
+                                                   "with a white circle; repeatable. `coin "
+                                                   "basin inspect STORE` with the same values "
+                                                   "replays it.")] = None,
 ) -> None:
     """Draw a basin store to a PNG, SVG or PDF in the paper's colours, or its settle-time map.
 
@@ -433,12 +452,14 @@ def render_command(
             raise ParameterError(f"-o {target}: the file name must end in .png, .svg or .pdf")
         if n_max is not None and n_max < 1:
             raise ParameterError(f"--n-max must be at least 1, got {n_max}")
+        marks = [_mark(text) for text in mark or ()]
         basin = read_basin(path)
         check_writable(target, what="picture")  # before drawing
         if rrd is not None:
             check_rrd_path(rrd)
         try:
-            api.render_basin(basin, target, title=title, dpi=dpi, n_max=n_max, field=field)
+            api.render_basin(basin, target, title=title, dpi=dpi, n_max=n_max, field=field,
+                             marks=marks)
         except OSError as exc:
             raise fail(describe(exc, f"cannot write {target}")) from None
         console.print(f"wrote {target}")

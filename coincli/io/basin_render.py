@@ -120,10 +120,11 @@ FIELDS = ("n", "settle_time")
 
 def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
                dpi: int = 150, size: tuple[float, float] = (8.6, 6.8),
-               n_max: int | None = None, field: str = "n") -> Path:
+               n_max: int | None = None, field: str = "n", marks=()) -> Path:
     """Draw the map to a PNG, SVG or PDF file (by its extension); returns its path.
     ``field``: "n", the outcome in the paper's colours, or "settle_time", when each throw's
-    outcome was decided (its energy fell below E_crit)."""
+    outcome was decided (its energy fell below E_crit). ``marks``: points (value of the first
+    swept axis, value of the second) drawn as white circles with a black edge."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -140,6 +141,7 @@ def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
     dx = (x[-1] - x[0]) / (x.size - 1)
     dy = (y[-1] - y[0]) / (y.size - 1)
     extent = (x[0] - dx / 2, x[-1] + dx / 2, y[0] - dy / 2, y[-1] + dy / 2)
+    marks = check_marks(basin, marks)
 
     fig, ax = plt.subplots(figsize=size, layout="constrained")
     ax.set_facecolor(NOT_COMPUTED_BG)
@@ -164,6 +166,10 @@ def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
         handles = _class_handles(basin, classes, Patch)
     else:
         handles = _settle_time_image(basin, ax, fig, extent, Patch)
+    if marks:
+        mx, my = zip(*marks, strict=True)
+        ax.scatter(mx, my, s=MARK_SIZE, marker="o", facecolors="white", edgecolors="black",
+                   linewidths=1.2, zorder=5)
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])
     ax.set_xlabel(_axis_label(ax0))
@@ -191,6 +197,29 @@ def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
                  f"c = {params['foundation']['c']:g} N s/m; {method['name']} {setting}, "
                  f"$t_{{end}}$ = {method['t_end']:g} s", fontsize=8, color="#444444")
     save_figure(fig, out, dpi)
+    return out
+
+
+MARK_SIZE = 64.0  # points^2: a circle about 3 mm wide at any resolution
+
+
+def check_marks(basin: Basin, marks) -> list[tuple[float, float]]:
+    """The marks as (first axis, second axis) pairs of finite numbers inside the swept ranges;
+    ValueError naming the mark otherwise."""
+    out = []
+    axes = basin.axes
+    for mark in marks or ():
+        try:
+            v, w = (float(c) for c in mark)
+        except (TypeError, ValueError):
+            raise ValueError(f"a mark is a pair of numbers ({axes[0]['name']}, "
+                             f"{axes[1]['name']}), got {mark!r:.40}") from None
+        for axis, value in zip(axes, (v, w), strict=True):
+            if not (math.isfinite(value) and axis["lo"] <= value <= axis["hi"]):
+                raise ValueError(f"mark {v:g},{w:g}: {axis['name']} = {value:g} is outside the "
+                                 f"swept range {axis['lo']:g} to {axis['hi']:g} "
+                                 f"{axis['units']}")
+        out.append((v, w))
     return out
 
 
@@ -306,4 +335,5 @@ def log_rerun(basin: Basin, rrd: str | os.PathLike) -> Path:
     return rrd
 
 
-__all__ = ["DEFAULT_N_MAX", "FIELDS", "basin_rgba", "log_rerun", "render_map"]
+__all__ = ["DEFAULT_N_MAX", "FIELDS", "MARK_SIZE", "basin_rgba", "check_marks", "log_rerun",
+           "render_map"]
