@@ -124,6 +124,7 @@ class SweepProgress:
     cells_done: int  # cells this run has filled so far (mirror images included)
     cells_todo: int  # cells this run set out to fill
     elapsed: float  # s of wall time since this run started
+    written: tuple[tuple[int, int], ...] = ()  # the tiles this update wrote (its mirror too)
 
 
 @dataclass(frozen=True)
@@ -372,7 +373,8 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
                 mirrored += done.cells - grid.tile_cells(done.tile)
             if progress is not None:
                 progress(SweepProgress(before + computed + tiles_elsewhere(), total,
-                                       cells, cells_todo, time.perf_counter() - wall0))
+                                       cells, cells_todo, time.perf_counter() - wall0,
+                                       grid.task_tiles(done.tile) if done.written else ()))
     except KeyboardInterrupt:
         interrupted = True
         hard_stop(runner)  # the tiles in flight stop now, unwritten
@@ -459,7 +461,8 @@ def _basin_in_memory(plan: SweepPlan, threads, progress, stop):
                 cells += result.cells
             if progress is not None:
                 progress(SweepProgress(int(done.sum()), len(tiles), cells, grid.n_cells,
-                                       time.perf_counter() - wall0))
+                                       time.perf_counter() - wall0,
+                                       grid.task_tiles(computed.tile)))
     except KeyboardInterrupt:
         hard_stop(runner)
         raise

@@ -5,6 +5,7 @@ Zarr store; `coin basin render` draws one, `coin basin stats` summarises one.
 routes any first argument that is not a subcommand name to `sweep`.
 """
 
+import contextlib
 import math
 import signal
 import threading
@@ -18,7 +19,7 @@ from typer.core import TyperGroup
 from ..defaults import DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES
 from ..params import ParameterError
 from ..version import __version__
-from . import app
+from . import app, recording
 from .common import (
     INIT,
     COpt,
@@ -47,6 +48,7 @@ from .common import (
     user_errors,
     whole_option,
 )
+from .recording import LiveConnectOpt, LiveRrdOpt, LiveSpawnOpt
 from .text import TURN, command, counted, percent, print_rows, say, share
 
 SWEEP = "Sweep"
@@ -170,6 +172,7 @@ def sweep_command(
     yes: Annotated[bool, typer.Option("--yes", "-y", help="Start a sweep estimated to take "
                                       "more than 12 hours anyway.",
                                       rich_help_panel=RUN)] = False,
+    rrd: LiveRrdOpt = None, spawn: LiveSpawnOpt = False, connect: LiveConnectOpt = None,
     preset: PresetOpt = "paper",
     diameter: DiameterOpt = None, thickness: ThicknessOpt = None, mass: MassOpt = None,
     inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, g: GOpt = None,
@@ -187,6 +190,7 @@ def sweep_command(
     """  # noqa: E501
     from .. import api
     from ..io import store as store_io
+    from ..io.live import SweepRecorder
     from ..io.paths import DISK_ERRORS, NotWritable, describe
     from ..io.runner import SchedulerLost
     from . import interruptions
@@ -199,6 +203,7 @@ def sweep_command(
         plan = api.plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=not no_mirror,
                               x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
         api.check_where(threads, workers, scheduler)
+    where_to, no_viewer = recording.destination(rrd, spawn, connect)
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     from .progress import Bars, RateColumn
@@ -218,8 +223,12 @@ def sweep_command(
             task = progress.add_task("sweep", total=update.cells_todo, tiles=0,
                                      ntiles=update.tiles_total)
         progress.update(task, completed=update.cells_done, tiles=update.tiles_done)
+        if recorder is not None:  # the tiles just written, read back from the store
+            recorder.progress(update)
 
     def started(start) -> None:
+        if recorder is not None:
+            recorder.started()
         if start.repaired:
             say(err_console, f"[yellow]repaired:[/] {path}: {len(start.repaired)} metadata "
                              f"file(s) differed from the sweep's and were rewritten: "
@@ -242,8 +251,10 @@ def sweep_command(
     # before the sweep: its pilot estimate is the first run of the kernels (a store that is
     # already complete on a fresh install is the one case that is told so without need)
     announce_compilation()
+    recorder = None if where_to is None else SweepRecorder(
+        path, plan.attrs, grid, where_to, verified=plan.spec.ladder.verified)
     try:
-        with _Stop() as stop:
+        with _Stop() as stop, recorder or contextlib.nullcontext():
             try:
                 report = api.sweep(plan, path, overwrite=overwrite, threads=threads,
                                    workers=workers, scheduler=scheduler, progress=show,
@@ -263,12 +274,15 @@ def sweep_command(
         raise fail(describe(exc, f"cannot write {path}" if disk else "cannot run the sweep")
                    + ("; the tiles written so far are kept: rerun the command to resume"
                       if disk and store_io.is_store(path) else "")) from None
+    if recorder is not None and recorder.error is None:
+        say(console, recording.recorded(where_to))
     total = report.tiles_total
     if report.tiles_before == total:
         say(console, f"{path}: every tile is done already ({counted(total, 'tile')}, "
                      f"{counted(grid.n_cells, 'cell')}). "
                      f"Next: {command('coin', 'basin', 'render', path)}; "
                      f"{command('coin', 'basin', 'stats', path)}")
+        recording.finish(recorder, no_viewer)
         return
     rate = report.cells / report.wall_seconds if report.wall_seconds > 0 else math.nan
     where = (counted(report.workers, "thread") if report.mode == "threads"
@@ -289,9 +303,11 @@ def sweep_command(
         say(err_console, f"[yellow]stopped:[/] {interruptions.stopped_by()}"
                          f"{counted(total - report.tiles_done, 'tile')} left; run the same "
                          "command again to resume.")
+        recording.finish(recorder, no_viewer, exit_code=None)
         raise typer.Exit(code=130)
     say(console, f"Next: {command('coin', 'basin', 'render', path, '-o', 'basin.png')}; "
                  f"{command('coin', 'basin', 'stats', path)}")
+    recording.finish(recorder, no_viewer)
 
 
 MAX_SECONDS = 12 * 3600.0  # a sweep estimated longer is refused without --yes
@@ -470,6 +486,50 @@ def render_command(
             except OSError as exc:
                 raise fail(describe(exc, f"cannot write {rrd}")) from None
             say(console, f"wrote {rrd} (open with: {command('rerun', rrd)})")
+
+
+@basin_app.command("show")
+def show_command(
+    path: Annotated[Path, typer.Argument(help="A basin store (complete or partial).",
+                                         metavar="STORE")],
+    rrd: LiveRrdOpt = None, spawn: LiveSpawnOpt = False, connect: LiveConnectOpt = None,
+) -> None:
+    """Open a basin store in the Rerun viewer: the map of n in the paper's colours (hover a cell: "n = 7, standing"), the uncertain and unfinished cells over it, cells not computed left grey.
+
+    Opens a viewer unless --rrd or --connect is given (--spawn as well: both). Works on partial stores, also while a sweep is filling them.
+
+    Example:
+
+    coin basin show out.zarr --rrd out.rrd
+    """  # noqa: E501
+    from ..io.live import show_basin
+    from ..io.store import read_basin
+
+    with user_errors():
+        basin = read_basin(path)
+    if rrd is None and connect is None:  # a viewer, then, or nothing to do
+        from ..io.rrd import NO_DISPLAY, display_available
+
+        if not display_available():
+            say(err_console, f"[bold red]error:[/] {NO_DISPLAY} here: write the recording "
+                             "with --rrd FILE (open it with `rerun FILE` where there is one), "
+                             "or stream it to a running viewer with --connect URL")
+            raise typer.Exit(code=1)
+        spawn = True
+    where_to, no_viewer = recording.destination(rrd, spawn, connect)
+    _damaged_note(path, basin.damaged, "shown as not computed")
+    try:
+        show_basin(basin, where_to)
+    except (OSError, RuntimeError) as exc:
+        from ..io.paths import describe
+
+        raise fail("could not write the recording: "
+                   + (describe(exc) if isinstance(exc, OSError) else str(exc))) from None
+    done, total = int(basin.done.sum()), int(basin.done.size)
+    say(console, f"{path}: {done} of {counted(total, 'tile')} computed; "
+                 f"{recording.recorded(where_to)}")
+    if no_viewer:
+        raise typer.Exit(code=1)
 
 
 def _damaged_note(path, damaged, treated: str) -> None:

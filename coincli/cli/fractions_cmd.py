@@ -2,6 +2,7 @@
 initial conditions, with 95 % intervals; resumable in a Zarr store; continuation along a
 physical parameter (--over) with a plot."""
 
+import contextlib
 import math
 from pathlib import Path
 from typing import Annotated
@@ -14,7 +15,7 @@ from ..defaults import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION, PA
 from ..enums import StopReason
 from ..params import ParameterError
 from ..version import __version__
-from . import app
+from . import app, recording
 from .basin_cmd import _Stop
 from .common import (
     INIT,
@@ -44,6 +45,7 @@ from .common import (
     user_errors,
     whole_option,
 )
+from .recording import LiveConnectOpt, LiveRrdOpt, LiveSpawnOpt
 from .text import TURN, counted, interval, percent, print_rows, resolving, say, share
 
 SAMPLING = "Sampling and stopping"
@@ -141,6 +143,7 @@ def fractions_command(
                                       "more than 12 hours, or to spend its budget before "
                                       "--precision, anyway.", rich_help_panel=RUN)] = False,
     json_out: JsonOpt = False,
+    rrd: LiveRrdOpt = None, spawn: LiveSpawnOpt = False, connect: LiveConnectOpt = None,
     preset: PresetOpt = "paper",
     diameter: DiameterOpt = None, thickness: ThicknessOpt = None, mass: MassOpt = None,
     inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, g: GOpt = None,
@@ -178,6 +181,7 @@ def fractions_command(
             of=of, max_samples=parse_count("--max-samples", max_samples), seed=seed,
             sampler=sampler, batch=batch, over=over, keep=keep, force=force)
         api.check_where(threads, workers, scheduler)
+    where_to, no_viewer = recording.destination(rrd, spawn, connect)
     if plan.note and not json_out and not console.is_terminal:  # else the result shows it
         say(err_console, f"[cyan]note:[/] {plan.note}")
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
@@ -208,6 +212,8 @@ def fractions_command(
         progress.update(tasks[v], completed=update.samples, total=max(update.expected,
                                                                       update.samples, 1),
                         estimate=estimate, width=width)
+        if recorder is not None:
+            recorder.progress(update)
 
     announce_compilation()
     with user_errors():
@@ -219,14 +225,19 @@ def fractions_command(
                                      scheduler=scheduler, store=store)
     _check_estimate(est, plan, scheduler, yes, quiet)
     from ..io.fractions_run import StoreIncomplete
+    from ..io.live import FractionsRecorder
     from ..io.runner import SchedulerLost
     from . import interruptions
 
+    recorder = None if where_to is None else FractionsRecorder(plan, where_to)
     try:
-        with user_errors(), _BatchStop() as stop, progress:
+        with user_errors(), _BatchStop() as stop, recorder or contextlib.nullcontext(), \
+                progress:
             result = api.run_fractions(plan, store=store, overwrite=overwrite, threads=threads,
                                        workers=workers, scheduler=scheduler, progress=show,
                                        stop=stop.event)
+            if recorder is not None:
+                recorder.result(result)
     except StoreIncomplete as exc:
         say(err_console, f"[bold red]error:[/] {escape(str(exc))}")
         raise typer.Exit(code=1) from None
@@ -244,11 +255,14 @@ def fractions_command(
         _print_over(plan, result)
     if plot is not None and not json_out:
         say(console, f"wrote {plot}")
+    if recorder is not None and recorder.error is None and not json_out:
+        say(console, recording.recorded(where_to))
     if result.interrupted:
         say(err_console, f"[yellow]stopped:[/] {interruptions.stopped_by()}interrupted; the "
                          "estimates above are from the "
                          "samples done" + (f"; rerun the same command to resume {store}"
                                            if store is not None else ""))
+        recording.finish(recorder, no_viewer, exit_code=None)
         raise typer.Exit(code=130)
     runs = result.results if plan.parameter is not None else [result]
     short = [r for r in runs if r.stopped is StopReason.BUDGET]
@@ -259,7 +273,9 @@ def fractions_command(
                          f"{plan.goal.max_samples:,} samples was spent before the precision "
                          f"asked for{where}; raise --max-samples (the same command with "
                          "--store resumes from the samples done) or ask for less precision")
+        recording.finish(recorder, no_viewer, exit_code=None)
         raise typer.Exit(code=1)
+    recording.finish(recorder, no_viewer)
 
 
 MAX_SECONDS = 12 * 3600.0  # a run estimated longer is refused without --yes

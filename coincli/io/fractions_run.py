@@ -284,7 +284,7 @@ def _progress(progs, v: int, goal, size: int, computed: int, wall0: float) -> Fr
     return FractionsProgress(v, len(progs), sum(p.done for p in progs), t.samples,
                              (p, float(lo[0]), float(hi[0])), widest(t, goal.of),
                              goal.precision, int(expected), computed,
-                             time.perf_counter() - wall0)
+                             time.perf_counter() - wall0, t)
 
 
 class StoreIncomplete(RuntimeError):

@@ -200,6 +200,38 @@ def _sinks(rr, rec, rrd: Path | None, spawn: bool, connect: str | None, port: in
     return sinks
 
 
+@contextlib.contextmanager
+def open_stream(name: str, *, rrd: Path | None = None, spawn: bool = False,
+                connect: str | None = None, port: int = 9876, flush_timeout: float = 30.0):
+    """A new Rerun recording stream named ``name``, sent to an ``.rrd`` file (written through
+    a temporary file renamed into place on success: complete or absent, checked to read back),
+    a spawned viewer and/or the viewer at ``connect``; flushed and closed on leaving. Shared by
+    every command that records (simulate, basin, fractions). The paths and URL are taken as
+    checked (:func:`check_rrd_path`, :func:`check_connect_url`); ``spawn`` without a display
+    raises RuntimeError (:func:`display_available`)."""
+    import rerun as rr
+
+    if rrd is None and not spawn and connect is None:
+        raise ValueError("a recording needs a destination: rrd, spawn or connect")
+    if spawn and not display_available():
+        raise RuntimeError(f"{NO_DISPLAY}: write the recording to a file (rrd=...) and open it "
+                           "where there is one, or stream it to a running viewer (connect=...)")
+    with contextlib.ExitStack() as outputs:
+        file_out = outputs.enter_context(atomic_output(rrd)) if rrd is not None else None
+        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
+        rec.set_sinks(*_sinks(rr, rec, file_out, spawn, connect, port))
+        rec.send_recording_name(name)
+        try:
+            yield rec
+        finally:
+            try:
+                rec.flush(timeout_sec=flush_timeout)
+            finally:
+                rec.disconnect()  # closes the file sink (writes its footer), hangs up on viewers
+        if file_out is not None:
+            _check_complete(file_out)
+
+
 def write_recording(trajectory, *, rrd: str | os.PathLike | None = None, spawn: bool = False,
                     connect: str | None = None, frames: Frames | None = None,
                     log_every: float | None = None, port: int = 9876,
@@ -216,35 +248,21 @@ def write_recording(trajectory, *, rrd: str | os.PathLike | None = None, spawn: 
     rrd_path = check_rrd_path(rrd) if rrd is not None else None
     if connect is not None:
         check_connect_url(connect)
-    if rrd_path is None and not spawn and connect is None:
-        raise ValueError("write_recording needs a destination: rrd, spawn or connect")
-    if spawn and not display_available():
-        raise RuntimeError(f"{NO_DISPLAY}: write the recording to a file (rrd=...) and open it "
-                           "where there is one, or stream it to a running viewer (connect=...)")
     if frames is None:
         frames = build_frames(trajectory)
     scene = trajectory.scene
+    init = scene.initial
 
-    with contextlib.ExitStack() as outputs:
-        # Written through a temporary file renamed into place: complete or absent.
-        file_out = outputs.enter_context(atomic_output(rrd_path)) if rrd_path else None
-        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
-        rec.set_sinks(*_sinks(rr, rec, file_out, spawn, connect, port))
-        init = scene.initial
-        rec.send_recording_name(f"coin simulate vy={init.vy:g} vphi={init.vphi:g} "
-                                f"phi0={init.phi0:g} ({scene.integration.method.label})")
+    with open_stream(f"coin simulate vy={init.vy:g} vphi={init.vphi:g} "
+                     f"phi0={init.phi0:g} ({scene.integration.method.label})",
+                     rrd=rrd_path, spawn=spawn, connect=connect, port=port,
+                     flush_timeout=flush_timeout) as rec:
         rec.send_blueprint(blueprint(frames, scene), make_active=True, make_default=True)
         _log_static(rec, rr, trajectory, frames, log_every)
         if len(frames):
             _send_scene(rec, rr, trajectory, frames)
             _send_plots(rec, rr, trajectory, frames)
         _send_text_log(rec, rr, trajectory, frames)
-        try:
-            rec.flush(timeout_sec=flush_timeout)
-        finally:
-            rec.disconnect()  # closes the file sink (writes its footer), hangs up on viewers
-        if file_out is not None:
-            _check_complete(file_out)
     return RecordingInfo(rrd=rrd_path, connect=connect, spawn=spawn, frames=len(frames),
                          events=len(frames.events), recording_id=str(rec.get_recording_id()))
 

@@ -105,3 +105,4 @@ class FractionsProgress:
     expected: int  # samples this value will likely need (a guess, for a progress bar)
     computed: int  # samples computed by this run so far (all values)
     elapsed: float  # s of wall time
+    tally: object = None  # the montecarlo.tally.Tally of that prefix: every outcome's count

@@ -1,0 +1,93 @@
+"""The Rerun options of `coin basin`, `coin basin show` and `coin fractions` (--rrd, --spawn,
+--connect), checked before any work, and the policy for --spawn without a display (as
+`coin simulate`'s: one warning line before the run, the work and its output as usual, any
+--rrd file written, exit 1 at the end)."""
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.markup import escape
+
+from .common import err_console, fail
+from .text import command, say
+
+REC = "Recording (Rerun)"
+
+LiveRrdOpt = Annotated[Path | None, typer.Option(
+    "--rrd", metavar="FILE", help="Write the recording to this .rrd file (open it with "
+    "`rerun FILE`).", rich_help_panel=REC)]
+LiveSpawnOpt = Annotated[bool, typer.Option(
+    "--spawn", help="Open a Rerun viewer and stream to it as the work goes (without a "
+    "display: says so, does the work, writes any --rrd file, exit 1).", rich_help_panel=REC)]
+LiveConnectOpt = Annotated[str | None, typer.Option(
+    "--connect", metavar="URL", help="Stream to a running viewer, e.g. "
+    "rerun+http://127.0.0.1:9876/proxy.", rich_help_panel=REC)]
+
+
+def destination(rrd: Path | None, spawn: bool, connect: str | None):
+    """The checked destination of a recording (None if none was asked for), and whether a
+    --spawn was dropped for want of a display (then said in one line: the caller exits 1 once
+    its work is done). Fails in one line, before any work, on an unusable path or URL."""
+    from ..io.live import Destination
+    from ..io.paths import check_rrd_path, probe_viewer
+    from ..io.rrd import NO_DISPLAY, display_available
+    from ..params import ParameterError
+
+    if rrd is not None:
+        if rrd.suffix != ".rrd":
+            raise fail(f"--rrd {rrd}: the file name must end in .rrd")
+        try:
+            check_rrd_path(rrd)
+        except (ParameterError, OSError) as exc:
+            raise fail(str(exc)) from None
+    if connect is not None:
+        try:
+            probe_viewer(connect)
+        except (ValueError, ConnectionError) as exc:
+            raise fail(str(exc)) from None
+    no_viewer = spawn and not display_available()
+    if no_viewer:
+        spawn = False
+        where = (f"the recording is written to {rrd} (open it with {command('rerun', rrd)} "
+                 "where there is a display)" if rrd is not None else
+                 "record it with --rrd FILE (open it with `rerun FILE` where there is a "
+                 "display)")
+        say(err_console, f"[yellow]warning[/]: --spawn: {escape(NO_DISPLAY)}; the work is done "
+                         f"and its result printed; {escape(where)}, or stream it with "
+                         "--connect URL")
+    where = Destination(rrd, spawn, connect)
+    return (where if where else None), no_viewer
+
+
+def recorded(where) -> str:
+    """Where a recording went, for the last line of a command."""
+    out = []
+    if where.rrd is not None:
+        out.append(f"wrote {where.rrd} (open with: {command('rerun', where.rrd)})")
+    if where.spawn:
+        out.append("streamed to a new viewer")
+    if where.connect is not None:
+        out.append(f"streamed to {where.connect}")
+    return "; ".join(out)
+
+
+def finish(recorder, no_viewer: bool, exit_code: int | None = 1) -> None:
+    """After the work and its output: say why a recording asked for failed, and exit
+    ``exit_code`` (None: leave the exit to the caller) if it did, or if --spawn found no
+    display."""
+    if recorder is not None and recorder.error is not None:
+        from ..io.paths import describe
+
+        error = recorder.error
+        why = describe(error) if isinstance(error, OSError) else str(error)
+        if exit_code is None:
+            say(err_console, f"[bold red]error:[/] could not write the recording: {escape(why)}")
+            return
+        raise fail(f"could not write the recording: {why}")
+    if no_viewer and exit_code is not None:
+        raise typer.Exit(code=exit_code)
+
+
+__all__ = ["LiveConnectOpt", "LiveRrdOpt", "LiveSpawnOpt", "destination", "finish",
+           "recorded"]

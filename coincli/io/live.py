@@ -1,0 +1,505 @@
+"""Rerun streams of a basin sweep as it fills in, of a basin store (`coin basin show`), and of
+the running estimates of `coin fractions`.
+
+The map is two SegmentationImages over one AnnotationContext: ``basin/n`` the outcome n in the
+paper's colours (one class per n present, named "n = 7, standing", so that hovering a pixel
+says what it is), ``basin/certainty`` over it: uncertain grey, unsettled purple, non-finite
+magenta (certain cells transparent); cells not computed are transparent in both, over the
+view's light grey background. The first swept axis is horizontal (growing to the right), the
+second vertical (growing upwards), as in `coin basin render`.
+
+A sweep sends the whole map again after each tile written (at most every ``min_interval``
+seconds, and always at the end, read back from the store: the recording's last map is the
+store's), with the cells done and the rate as time series on the ``sweep_time`` timeline; one
+call per layer, never one per cell. Rerun is imported lazily (as in :mod:`coincli.io.rrd`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..enums import Certainty, Status
+from ..grid import AXIS_INFO
+from ..integrators import NO_LABEL
+from .basin_render import NONFINITE, STANDING, UNCERTAIN, UNSETTLED, _ramp_colours, n_range
+from .dataset import Basin
+from .rrd import open_stream
+
+# Entity paths.
+BASIN = "basin"  # holds the annotation context of both layers
+BASIN_N = "basin/n"
+BASIN_CERTAINTY = "basin/certainty"
+PROGRESS_CELLS = "progress/cells"
+PROGRESS_RATE = "progress/rate"
+INFO = "info"
+SWEEP_TIME = "sweep_time"
+
+# Class ids of the n layer: 0 is "no n"; a labelled cell's id is n + N_BIAS (n is an int16
+# and NO_LABEL, -32768, never a label, so ids run 1 to 65535 in a uint16 image).
+NO_N = 0
+N_BIAS = 32768
+# Class ids of the certainty layer.
+CERTAIN, UNCERTAIN_ID, UNSETTLED_ID, NONFINITE_ID, NOT_COMPUTED_ID = 0, 1, 2, 3, 4
+BACKGROUND = (238, 238, 238, 255)  # not computed: as the hatched background of the PNG
+
+
+def _rgb(colour) -> tuple[int, int, int]:
+    return tuple(int(round(255 * c)) for c in colour[:3])
+
+
+def n_class_ids(quarter_turns: np.ndarray, status: np.ndarray) -> np.ndarray:
+    """The n layer's class ids of cells: n + N_BIAS where there is a label, else NO_N."""
+    labelled = (((status == Status.SETTLED) | (status == Status.UNSETTLED))
+                & (quarter_turns != NO_LABEL))
+    ids = np.zeros(quarter_turns.shape, dtype=np.uint16)
+    ids[labelled] = (quarter_turns[labelled].astype(np.int32) + N_BIAS).astype(np.uint16)
+    return ids
+
+
+def certainty_class_ids(status: np.ndarray, certainty: np.ndarray | None) -> np.ndarray:
+    """The certainty layer's class ids of cells (``certainty`` None: a single-pass sweep)."""
+    ids = np.full(status.shape, CERTAIN, dtype=np.uint8)
+    labelled = (status == Status.SETTLED) | (status == Status.UNSETTLED)
+    if certainty is not None:
+        ids[labelled & (certainty == Certainty.UNCERTAIN)] = UNCERTAIN_ID
+    ids[status == Status.UNSETTLED] = UNSETTLED_ID
+    ids[status == Status.NONFINITE] = NONFINITE_ID
+    ids[status == Status.NOT_COMPUTED] = NOT_COMPUTED_ID
+    return ids
+
+
+def n_classes(rr, ns) -> list:
+    """One class per n in ``ns``, in the colours of `coin basin render` (even n beyond its
+    colour bar take its end colours)."""
+    top = n_range(None)
+    ramp = _ramp_colours(top)
+    out = [rr.ClassDescription(info=(NO_N, "no n (not computed or no outcome)",
+                                     (0, 0, 0, 0)))]
+    for n in sorted(int(n) for n in ns):
+        if n % 2:
+            colour, pose = STANDING, "standing"
+        else:
+            colour, pose = ramp[max(-top, min(top, n))], "lying"
+        out.append(rr.ClassDescription(info=(n + N_BIAS, f"n = {n}, {pose}", _rgb(colour))))
+    return out
+
+
+def certainty_classes(rr, verified: bool) -> list:
+    grey = (*_rgb(UNCERTAIN), 255)
+    return [rr.ClassDescription(info=(CERTAIN, "certain" if verified else
+                                      "settled (single pass: not verified)", (0, 0, 0, 0))),
+            rr.ClassDescription(info=(UNCERTAIN_ID, "uncertain: no two rungs agreed", grey)),
+            rr.ClassDescription(info=(UNSETTLED_ID, "unsettled at t_end",
+                                      (*_rgb(UNSETTLED), 255))),
+            rr.ClassDescription(info=(NONFINITE_ID, "non-finite", (*_rgb(NONFINITE), 255))),
+            rr.ClassDescription(info=(NOT_COMPUTED_ID, "not computed", (0, 0, 0, 0)))]
+
+
+def _image(cells: np.ndarray) -> np.ndarray:
+    """Cells (axis 0 the first swept axis) as an image: rows from the top, the second axis's
+    highest value first; columns the first axis."""
+    return np.ascontiguousarray(cells.T[::-1])
+
+
+def _axes_text(attrs: dict) -> tuple[str, str]:
+    ax0, ax1 = attrs["sweep"]["axes"][:2]
+
+    def one(ax, where):
+        label, unit, _ = AXIS_INFO[ax["name"]]
+        return f"{label} {ax['lo']:g} to {ax['hi']:g} {unit} {where}"
+
+    return one(ax0, "(left to right)"), one(ax1, "(bottom to top)")
+
+
+def basin_blueprint(attrs: dict, live: bool):
+    import rerun.blueprint as rrb
+
+    horizontal, vertical = _axes_text(attrs)
+    the_map = rrb.Spatial2DView(name=f"n: {horizontal}, {vertical}", origin=BASIN,
+                                background=BACKGROUND)
+    side = [rrb.TextDocumentView(name="sweep", origin=INFO)]
+    if live:
+        side = [rrb.TimeSeriesView(name="cells done", origin=PROGRESS_CELLS,
+                                   plot_legend=rrb.PlotLegend(visible=False)),
+                rrb.TimeSeriesView(name="rate [cells/s]", origin=PROGRESS_RATE,
+                                   plot_legend=rrb.PlotLegend(visible=False)), *side]
+    return rrb.Blueprint(
+        rrb.Horizontal(the_map, rrb.Vertical(*side), column_shares=[3, 1]),
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed" if not live else "expanded", timeline=SWEEP_TIME,
+                      play_state="following") if live else rrb.TimePanel(state="collapsed"),
+    )
+
+
+def _info_markdown(attrs: dict, path, shape, note: str = "") -> str:
+    horizontal, vertical = _axes_text(attrs)
+    fixed = ", ".join(f"{AXIS_INFO[k][0]} = {v:.4g} {AXIS_INFO[k][1]}"
+                      for k, v in attrs["sweep"].get("fixed", {}).items())
+    return "\n".join([
+        f"# coin basin {path}", "", f"**{shape[0]} x {shape[1]} cells.** Horizontal: "
+        f"{horizontal}; vertical: {vertical}." + (f" Fixed: {fixed}." if fixed else ""), "",
+        "Colours as `coin basin render`: n < 0 (clockwise) yellow to red, n > 0 "
+        "(counter-clockwise) green to blue, n = 0 white, standing (odd n) black; the certainty "
+        "layer over it: uncertain grey, unsettled at t_end purple, non-finite magenta; cells "
+        "not computed show the light grey background. Hover a pixel for its class.",
+        *([""] + [note] if note else [])])
+
+
+class BasinStream:
+    """The map of one basin store in a Rerun recording stream ``rec``: :meth:`update` with
+    tiles' arrays as they are written, :meth:`whole` with a whole :class:`Basin`; ``live``
+    puts everything on the ``sweep_time`` timeline, else all is static."""
+
+    def __init__(self, rec, attrs: dict, shape: tuple[int, int], *, path, verified: bool,
+                 live: bool, min_interval: float = 0.2):
+        import rerun as rr
+
+        self.rr, self.rec, self.live = rr, rec, live
+        self.shape = tuple(shape)
+        self.n_ids = np.zeros(self.shape[::-1], dtype=np.uint16)  # image: rows x columns
+        self.certainty_ids = np.full(self.shape[::-1], NOT_COMPUTED_ID, dtype=np.uint8)
+        self.known: set[int] = set()
+        self.min_interval = min_interval
+        self.last_sent = -math.inf
+        self.pending = False
+        self.start = time.perf_counter()
+        rec.send_blueprint(basin_blueprint(attrs, live), make_active=True, make_default=True)
+        rec.log(BASIN_CERTAINTY, rr.AnnotationContext(certainty_classes(rr, verified)),
+                static=True)
+        rec.log(BASIN_N, rr.AnnotationContext(n_classes(rr, ())), static=True)
+        rec.log(INFO, rr.TextDocument(_info_markdown(attrs, path, self.shape),
+                                      media_type=rr.MediaType.MARKDOWN), static=True)
+        if live:
+            rec.log(PROGRESS_CELLS, rr.SeriesLines(names=["cells done"], widths=[2.0]),
+                    static=True)
+            rec.log(PROGRESS_RATE, rr.SeriesLines(names=["cells/s"], widths=[2.0],
+                                                  colors=[(255, 127, 14)]), static=True)
+
+    def _put(self, s0: slice, s1: slice, arrays: dict) -> None:
+        """Cells [s0, s1] of the map (s0 along the first axis, s1 along the second)."""
+        q, st = arrays["quarter_turns"], arrays["status"]
+        n_ids = n_class_ids(q, st)
+        rows = slice(self.shape[1] - s1.stop, self.shape[1] - s1.start)
+        self.n_ids[rows, s0] = _image(n_ids)
+        self.certainty_ids[rows, s0] = _image(certainty_class_ids(st, arrays.get("certainty")))
+        new = set(np.unique(n_ids).tolist()) - {NO_N} - self.known
+        if new:  # one class per n present: the context grows as new outcomes come in
+            self.known |= {int(i) for i in new}
+            self.rec.log(BASIN_N, self.rr.AnnotationContext(
+                n_classes(self.rr, [i - N_BIAS for i in self.known])), static=True)
+
+    def update(self, tiles: dict, grid, progress=None) -> None:
+        """Tiles written (``{tile: arrays}``); the map is sent if ``min_interval`` has passed
+        since it last was. ``progress``: the sweep's SweepProgress, for the time series."""
+        for tile, arrays in tiles.items():
+            self._put(*grid.tile_slices(tile), arrays)
+        self.pending = self.pending or bool(tiles)
+        now = time.perf_counter()
+        if progress is not None and self.live:
+            self._time(progress.elapsed)
+            rate = progress.cells_done / progress.elapsed if progress.elapsed > 0 else 0.0
+            self.rec.log(PROGRESS_CELLS, self.rr.Scalars(float(progress.cells_done)))
+            self.rec.log(PROGRESS_RATE, self.rr.Scalars(rate))
+        if self.pending and now - self.last_sent >= self.min_interval:
+            self.send(None if progress is None else progress.elapsed)
+
+    def whole(self, basin: Basin, elapsed: float | None = None) -> None:
+        """The whole map of ``basin`` (a store read back), sent at once."""
+        whole = (slice(0, self.shape[0]), slice(0, self.shape[1]))
+        self._put(*whole, basin.arrays)
+        self.send(elapsed)
+
+    def _time(self, elapsed: float) -> None:
+        self.rec.set_time(SWEEP_TIME, duration=float(elapsed))
+
+    def send(self, elapsed: float | None = None) -> None:
+        rr = self.rr
+        static = not self.live
+        if self.live:
+            self._time(time.perf_counter() - self.start if elapsed is None else elapsed)
+        self.rec.log(BASIN_N, rr.SegmentationImage(self.n_ids, draw_order=1.0), static=static)
+        self.rec.log(BASIN_CERTAINTY, rr.SegmentationImage(self.certainty_ids, draw_order=2.0),
+                     static=static)
+        self.last_sent = time.perf_counter()
+        self.pending = False
+
+
+@dataclass
+class Destination:
+    """Where a recording goes: an .rrd file, a spawned viewer, a running viewer's URL."""
+
+    rrd: Path | None = None
+    spawn: bool = False
+    connect: str | None = None
+
+    def __bool__(self) -> bool:
+        return self.rrd is not None or self.spawn or self.connect is not None
+
+
+def show_basin(basin: Basin, where: Destination) -> None:
+    """A static recording of a basin store, finished or partial (`coin basin show`)."""
+    shape = tuple(basin.arrays["quarter_turns"].shape)
+    with open_stream(f"coin basin show {basin.path or ''}".strip(), rrd=where.rrd,
+                     spawn=where.spawn, connect=where.connect) as rec:
+        stream = BasinStream(rec, basin.attrs, shape, path=basin.path, verified=basin.verified,
+                             live=False)
+        stream.whole(basin)
+
+
+class SweepRecorder:
+    """The live recording of a sweep into the store at ``path``: a context manager whose
+    :meth:`progress` takes the sweep's SweepProgress (in the thread that runs the sweep) and
+    reads the tiles just written back from the store; on leaving, the whole store is read
+    back and sent, so that the recording's last map is the store's, tiles of other processes
+    included."""
+
+    def __init__(self, path, attrs: dict, grid, where: Destination, *, verified: bool,
+                 min_interval: float = 0.2):
+        self.path, self.attrs, self.grid, self.where = Path(path), attrs, grid, where
+        self.verified, self.min_interval = verified, min_interval
+        self.view = None
+        self.stream = None
+        self.error: Exception | None = None  # why the recording failed (the sweep goes on)
+        self._context = None
+
+    def __enter__(self):
+        try:
+            self._context = open_stream(f"coin basin {self.path}", rrd=self.where.rrd,
+                                        spawn=self.where.spawn, connect=self.where.connect)
+            rec = self._context.__enter__()
+            self.stream = BasinStream(rec, self.attrs, self.grid.shape, path=self.path,
+                                      verified=self.verified, live=True,
+                                      min_interval=self.min_interval)
+        except (OSError, RuntimeError, ValueError) as exc:  # no viewer, no file: no recording
+            self.error, self.stream, self._context = exc, None, None
+        return self
+
+    def started(self) -> None:
+        """The store is open: send what it holds already (a resumed sweep)."""
+        from .store import open_view, read_basin
+
+        if self.stream is None:
+            return
+        self.view = open_view(self.path, self.grid)
+        basin = read_basin(self.path)
+        if basin.done.any():
+            self.stream.whole(basin, 0.0)
+
+    def progress(self, update) -> None:
+        from .store import Tile, open_view, scan
+
+        if self.stream is None:
+            return
+        if self.view is None:
+            self.view = open_view(self.path, self.grid)
+        tiles = {}
+        if update.written:
+            for tile, state, data, _ in scan(self.view, with_data=True, tiles=update.written):
+                if state is Tile.DONE:
+                    tiles[tile] = data
+        self.stream.update(tiles, self.grid, update)
+
+    def __exit__(self, *exc):
+        from .store import read_basin
+
+        if self._context is None:
+            return False
+        try:
+            try:
+                basin = read_basin(self.path)
+            except Exception:  # noqa: BLE001 - no store (the sweep failed first): no map
+                basin = None
+            if basin is not None:
+                self.stream.whole(basin)
+        finally:
+            try:  # the sweep ended (whatever happened to it): keep the recording of it
+                self._context.__exit__(None, None, None)
+            except (OSError, RuntimeError) as error:
+                self.error = error
+        return False
+
+
+
+
+# -- coin fractions ------------------------------------------------------------------------------
+ESTIMATE = "estimate"  # P(outcome) in % against the samples counted
+LEADING_N = "leading_n"
+OVER = "over"  # P(outcome) in % against the parameter of a continuation
+SAMPLES = "samples"
+SERIES = (  # (name, label, colour)
+    ("standing", "P(standing)", (200, 40, 200)),
+    ("lying", "P(lying)", (0, 160, 200)),
+    ("uncertain", "uncertain", (140, 140, 140)),
+    ("leading", "P(leading n)", (255, 127, 14)),
+)
+
+
+def parameter_timeline(parameter: str, unit: str, values) -> tuple[str, int]:
+    """A sequence timeline for the values of a continuation (Rerun's timelines are whole
+    numbers): its name, with the unit the values are counted in, and the power of ten k they
+    are multiplied by (the smallest that makes them whole)."""
+    for k in range(13):
+        scaled = np.asarray(values, dtype=np.float64) * 10.0 ** k
+        if np.all(np.abs(scaled - np.round(scaled)) < 1e-6 * np.maximum(1.0, np.abs(scaled))):
+            break
+    return (f"{parameter} [{unit}]" if k == 0 else f"{parameter} [1e-{k} {unit}]"), k
+
+
+def fractions_blueprint(over: str | None):
+    import rerun.blueprint as rrb
+
+    legend = rrb.PlotLegend(rrb.Corner2D.RightTop)
+    if over is not None:
+        main = rrb.TimeSeriesView(name=f"P(outcome) [%] against {over}, 95 % bands "
+                                       "(thin lines), as each value finishes", origin=OVER,
+                                  plot_legend=legend)
+        return rrb.Blueprint(rrb.Vertical(main, rrb.TextDocumentView(name="run", origin=INFO),
+                                          row_shares=[4, 1]),
+                             rrb.BlueprintPanel(state="collapsed"),
+                             rrb.SelectionPanel(state="collapsed"),
+                             rrb.TimePanel(state="collapsed"))
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.TimeSeriesView(name="running estimate [%] against the samples, 95 % bands "
+                                    "(thin lines)", origin=ESTIMATE, plot_legend=legend),
+            rrb.Vertical(rrb.TimeSeriesView(name="leading n", origin=LEADING_N,
+                                            plot_legend=rrb.PlotLegend(visible=False)),
+                         rrb.TextDocumentView(name="run", origin=INFO)),
+            column_shares=[3, 1]),
+        rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed", timeline=SAMPLES, play_state="following"))
+
+
+def _estimates(tally, verified: bool) -> dict:
+    """{series name: (P, low, high)} in %, and the leading n (None without a counted label)."""
+    from ..montecarlo.tally import summary
+
+    s = summary(tally, verified)
+    out = {name: tuple(100.0 * s[name][key] for key in ("probability", "low", "high"))
+           for name in ("standing", "lying", "uncertain")}
+    leading = max(s["outcomes"], key=lambda row: row["count"], default=None)
+    if leading is not None:
+        out["leading"] = tuple(100.0 * leading[key] for key in ("probability", "low", "high"))
+    return out, (None if leading is None else int(leading["n"]))
+
+
+class FractionsRecorder:
+    """The live recording of a `coin fractions` run: :meth:`progress` takes each
+    FractionsProgress; :meth:`result` the run's result (a continuation's values are sent as
+    they finish, and all of them again from the result, which is what counts). A recording
+    that cannot be made leaves ``error`` set and the run alone."""
+
+    def __init__(self, plan, where: Destination):
+        from ..defaults import PARAMETER_UNITS
+        from ..integrators.ladder import ladder_of
+
+        self.plan, self.where = plan, where
+        self.verified = ladder_of(plan.scene.integration).verified
+        self.error: Exception | None = None
+        self.rec = self._context = None
+        self.sent: set[int] = set()  # values of a continuation sent
+        self.values_done = 0
+        if plan.parameter is not None:
+            self.timeline, self.power = parameter_timeline(
+                plan.parameter, PARAMETER_UNITS[plan.parameter], plan.values)
+
+    def __enter__(self):
+        import rerun as rr
+
+        try:
+            self._context = open_stream("coin fractions" + (
+                f" over {self.plan.parameter}" if self.plan.parameter else ""),
+                rrd=self.where.rrd, spawn=self.where.spawn, connect=self.where.connect)
+            self.rec = self._context.__enter__()
+        except (OSError, RuntimeError, ValueError) as exc:
+            self.error, self.rec, self._context = exc, None, None
+            return self
+        rec = self.rec
+        rec.send_blueprint(fractions_blueprint(self.plan.parameter), make_active=True,
+                           make_default=True)
+        root = OVER if self.plan.parameter is not None else ESTIMATE
+        for name, label, colour in SERIES:
+            faint = (*colour, 150)
+            rec.log(f"{root}/{name}", rr.SeriesLines(colors=[colour], names=[label],
+                                                     widths=[2.5]), static=True)
+            for side in ("low", "high"):
+                rec.log(f"{root}/{name}/{side}", rr.SeriesLines(
+                    colors=[faint], names=[f"{label} 95 % {side}"], widths=[1.0]),
+                    static=True)
+        rec.log(LEADING_N, rr.SeriesLines(names=["leading n"], widths=[2.0],
+                                          interpolation_mode="StepAfter"), static=True)
+        rec.log(INFO, rr.TextDocument(self._info(), media_type=rr.MediaType.MARKDOWN),
+                static=True)
+        return self
+
+    def _info(self) -> str:
+        plan = self.plan
+        lines = ["# coin fractions", "", f"Drawn: {plan.sampling.describe(plan.scene)}", ""]
+        if plan.parameter is not None:
+            lines.append(f"Over {plan.parameter} ({len(plan.values)} values): timeline "
+                         f"`{self.timeline}`.")
+        else:
+            lines.append("Timeline `samples`: the samples counted so far.")
+        lines += ["", "Probabilities over the certain labels (single pass: the settled ones) "
+                      "with 95 % Wilson intervals; uncertain: the share of all samples "
+                      "without one."]
+        return "\n".join(lines)
+
+    def _log(self, root: str, estimates: dict) -> None:
+        import rerun as rr
+
+        for name, (p, low, high) in estimates.items():
+            if math.isnan(p):
+                continue
+            self.rec.log(f"{root}/{name}", rr.Scalars(p))
+            self.rec.log(f"{root}/{name}/low", rr.Scalars(low))
+            self.rec.log(f"{root}/{name}/high", rr.Scalars(high))
+
+    def progress(self, update) -> None:
+        if self.rec is None or update.tally is None:
+            return
+        estimates, leading = _estimates(update.tally, self.verified)
+        if self.plan.parameter is None:
+            self.rec.set_time(SAMPLES, sequence=update.samples)
+            self._log(ESTIMATE, estimates)
+            if leading is not None:
+                import rerun as rr
+
+                self.rec.log(LEADING_N, rr.Scalars(float(leading)))
+        elif update.values_done > self.values_done:  # this value just met its goal
+            self._send_value(update.value, estimates)
+        self.values_done = update.values_done
+
+    def _send_value(self, v: int, estimates: dict) -> None:
+        value = self.plan.values[v]
+        self.rec.set_time(self.timeline, sequence=int(round(value * 10.0 ** self.power)))
+        self._log(OVER, {k: e for k, e in estimates.items() if k != "leading"})
+        self.sent.add(v)
+
+    def result(self, result) -> None:
+        """The run's result: a continuation's every value, from it."""
+        if self.rec is None or self.plan.parameter is None:
+            return
+        for v, r in enumerate(result.results):
+            if v in self.sent:  # sent as it finished, with these same counts
+                continue
+            self._send_value(v, {name: tuple(100.0 * getattr(r, name)[key] for key in
+                                             ("probability", "low", "high"))
+                                 for name in ("standing", "lying", "uncertain")})
+
+    def __exit__(self, *exc):
+        if self._context is not None:
+            try:
+                self._context.__exit__(None, None, None)
+            except (OSError, RuntimeError) as error:
+                self.error = error
+        return False
+
+
+__all__ = ["BasinStream", "Destination", "FractionsRecorder", "SweepRecorder", "show_basin"]

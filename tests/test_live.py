@@ -1,0 +1,202 @@
+"""Rerun streams of sweeps and estimates (coincli.io.live; `coin basin --rrd`, `coin basin show`,
+`coin fractions --rrd`): the recordings are read back with Rerun's own reader and compared with
+the store and the printed result; --spawn without a display."""
+
+from __future__ import annotations
+
+import json
+from collections import defaultdict
+
+import numpy as np
+import pyarrow as pa
+import pytest
+from typer.testing import CliRunner
+
+from coincli.cli import app
+from coincli.enums import Certainty, Status
+from coincli.integrators import NO_LABEL
+from coincli.io.store import read_basin
+
+rr = pytest.importorskip("rerun")
+from rerun.chunk import RrdReader  # noqa: E402
+
+runner = CliRunner()
+CHANNEL_DTYPES = {6: np.uint8, 8: np.uint16}  # Rerun's ChannelDatatype U8, U16
+SMALL = ["--res", "16", "--chunk", "8", "-q", "--threads", "1"]
+
+
+@pytest.fixture(autouse=True)
+def strict_rerun():
+    """Logging mistakes raise instead of warning."""
+    before = rr.strict_mode()
+    rr.set_strict_mode(True)
+    yield
+    rr.set_strict_mode(before)
+
+
+def rows(path) -> dict:
+    """{(entity, static): pyarrow table of its rows in the order logged} of a recording."""
+    parts = defaultdict(list)
+    for chunk in RrdReader(path).store().stream().to_chunks():
+        parts[(chunk.entity_path, chunk.is_static)].append(chunk.to_record_batch())
+    return {key: pa.concat_tables([pa.Table.from_batches([b]) for b in batches],
+                                  promote_options="default")
+            for key, batches in parts.items()}
+
+
+def last_image(tables: dict, entity: str, static: bool) -> np.ndarray:
+    """The last SegmentationImage logged at ``entity`` (the latest on sweep_time), decoded."""
+    table = tables[(entity, static)]
+    if not static:
+        table = table.sort_by("sweep_time")
+    fmt = [f for f in table.column("SegmentationImage:format").to_pylist() if f][-1][0]
+    data = [b for b in table.column("SegmentationImage:buffer").to_pylist() if b][-1][0]
+    buffer = np.frombuffer(bytes(data),
+                           dtype=CHANNEL_DTYPES[fmt["channel_datatype"]])
+    # image rows from the top: the second swept axis, highest first; back to cells [i, j]
+    return buffer.reshape(fmt["height"], fmt["width"])[::-1].T
+
+
+def class_labels(tables: dict, entity: str) -> dict[int, str]:
+    """Class id -> label of the last annotation context at ``entity``."""
+    logged = tables[(entity, True)].column("AnnotationContext:context").to_pylist()
+    context = [c for c in logged if c is not None][-1][0]
+    return {c["class_id"]: c["class_description"]["info"]["label"] for c in context}
+
+
+def check_map(tables: dict, basin, static: bool) -> None:
+    """The recording's map equals the store, cell for cell: n where there is a label (its
+    class named after it), nothing elsewhere; the certainty layer from status and certainty."""
+    n_ids = last_image(tables, "/basin/n", static).astype(np.int64)
+    flags = last_image(tables, "/basin/certainty", static)
+    q = basin.arrays["quarter_turns"].astype(np.int64)
+    st = basin.arrays["status"]
+    labelled = ((st == Status.SETTLED) | (st == Status.UNSETTLED)) & (q != NO_LABEL)
+    assert n_ids.shape == q.shape
+    assert np.array_equal(np.where(n_ids > 0, n_ids - 32768, NO_LABEL), np.where(labelled, q,
+                                                                                  NO_LABEL))
+    labels = class_labels(tables, "/basin/n")
+    for n in np.unique(q[labelled]):
+        assert labels[int(n) + 32768] == f"n = {n}, {'standing' if n % 2 else 'lying'}"
+    assert np.array_equal(flags == 4, st == Status.NOT_COMPUTED)
+    assert np.array_equal(flags == 3, st == Status.NONFINITE)
+    assert np.array_equal(flags == 2, st == Status.UNSETTLED)
+    uncertain = labelled & (basin.arrays["certainty"] == Certainty.UNCERTAIN) & (
+        st != Status.UNSETTLED)
+    assert np.array_equal(flags == 1, uncertain)
+    assert class_labels(tables, "/basin/certainty")[4] == "not computed"
+
+
+def test_basin_rrd_reads_back_as_the_store(tmp_path):
+    store, rrd = tmp_path / "s.zarr", tmp_path / "s.rrd"
+    result = runner.invoke(app, ["basin", str(store), *SMALL, "--rrd", str(rrd)])
+    assert result.exit_code == 0, result.output
+    assert f"wrote {rrd}" in result.output
+    tables = rows(rrd)
+    check_map(tables, read_basin(store), static=False)
+    # the progress series: cells done grow to the whole map, one point at most per tile
+    cells = tables[("/progress/cells", False)].sort_by("sweep_time")
+    done = [r[0] for r in cells.column("Scalars:scalars").to_pylist()]
+    assert done == sorted(done) and done[-1] == 16 * 16 and len(done) <= 4
+    assert ("/progress/rate", False) in tables
+
+
+def test_basin_rrd_of_a_resumed_sweep_holds_the_tiles_done_before(tmp_path):
+    """A resumed sweep sends what the store holds first, then the rest: the last map is the
+    whole store, also the tiles this run did not compute."""
+    store, rrd = tmp_path / "s.zarr", tmp_path / "s.rrd"
+    assert runner.invoke(app, ["basin", str(store), *SMALL]).exit_code == 0
+    (store / "done" / "c" / "1" / "1").unlink()  # the tile (1, 1) is to be done again
+    result = runner.invoke(app, ["basin", str(store), *SMALL, "--rrd", str(rrd)])
+    assert result.exit_code == 0, result.output
+    tables = rows(rrd)
+    first = tables[("/basin/n", False)].sort_by("sweep_time")
+    assert first.num_rows >= 2  # the store as found, then the sweep's
+    check_map(tables, read_basin(store), static=False)
+
+
+def test_basin_show_opens_a_partial_store(tmp_path):
+    store, rrd = tmp_path / "s.zarr", tmp_path / "show.rrd"
+    assert runner.invoke(app, ["basin", str(store), *SMALL]).exit_code == 0
+    (store / "done" / "c" / "0" / "1").unlink()  # a tile not computed (yet)
+    result = runner.invoke(app, ["basin", "show", str(store), "--rrd", str(rrd)],
+                           env={"COLUMNS": "400"})
+    assert result.exit_code == 0, result.output
+    assert "3 of 4 tiles computed" in result.output
+    basin = read_basin(store)
+    assert (basin.arrays["status"][0:8, 8:16] == Status.NOT_COMPUTED).all()
+    tables = rows(rrd)
+    assert ("/basin/n", False) not in tables  # a static recording
+    check_map(tables, basin, static=True)
+    n_ids = last_image(tables, "/basin/n", True)
+    assert (n_ids[0:8, 8:16] == 0).all() and (n_ids[8:, :] > 0).any()
+
+
+def test_fractions_rrd_has_the_running_estimates_with_bands(tmp_path):
+    rrd = tmp_path / "f.rrd"
+    result = runner.invoke(app, ["fractions", "--samples", "2000", "--batch", "500",
+                                 "--threads", "1", "-q", "--json", "--rrd", str(rrd)])
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.stdout)
+    tables = rows(rrd)
+    for name in ("standing", "lying", "uncertain", "leading"):
+        series = tables[(f"/estimate/{name}", False)].sort_by("samples")
+        samples = series.column("samples").to_pylist()
+        assert samples == [500, 1000, 1500, 2000]
+        p = np.array([r[0] for r in series.column("Scalars:scalars").to_pylist()])
+        low, high = (np.array([r[0] for r in tables[(f"/estimate/{name}/{side}", False)]
+                               .sort_by("samples").column("Scalars:scalars").to_pylist()])
+                     for side in ("low", "high"))
+        assert np.all(low <= p) and np.all(p <= high)
+        if name != "leading":
+            final = out[name]
+            assert p[-1] == pytest.approx(100 * final["probability"])
+            assert (low[-1], high[-1]) == pytest.approx((100 * final["low"],
+                                                        100 * final["high"]))
+    leading = max(out["outcomes"], key=lambda row: row["count"])
+    n = tables[("/leading_n", False)].sort_by("samples").column("Scalars:scalars").to_pylist()
+    assert n[-1][0] == leading["n"]
+
+
+def test_fractions_over_rrd_has_one_point_a_value(tmp_path):
+    rrd = tmp_path / "o.rrd"
+    result = runner.invoke(app, ["fractions", "--samples", "500", "--batch", "500",
+                                 "--threads", "1", "-q", "--json", "--over",
+                                 "thickness=0.001:0.003:3", "--rrd", str(rrd)])
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.stdout)
+    series = rows(rrd)[("/over/standing", False)]
+    timeline = "thickness [1e-3 m]"
+    series = series.sort_by(timeline)
+    assert series.column(timeline).to_pylist() == [1, 2, 3]
+    assert [r[0] for r in series.column("Scalars:scalars").to_pylist()] == pytest.approx(
+        [100 * r["standing"]["probability"] for r in out["results"]])
+
+
+@pytest.mark.parametrize("command", [["basin", "STORE", *SMALL],
+                                     ["fractions", "--samples", "500", "--batch", "500",
+                                      "--threads", "1", "-q"]])
+def test_spawn_without_a_display(tmp_path, monkeypatch, command):
+    """One warning line before the work; the work and its result as usual; the --rrd file
+    written; exit 1 (as coin simulate)."""
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    rrd = tmp_path / "x.rrd"
+    args = [str(tmp_path / "s.zarr") if a == "STORE" else a for a in command]
+    result = runner.invoke(app, [*args, "--spawn", "--rrd", str(rrd)], env={"COLUMNS": "400"})
+    assert result.exit_code == 1, result.output
+    warnings = [line for line in result.stderr.splitlines() if "--spawn" in line]
+    assert len(warnings) == 1 and "no display" in warnings[0]
+    assert ("tiles done" if command[0] == "basin" else "P(standing)") in result.stdout \
+        or "standing" in result.stdout
+    assert rrd.stat().st_size > 0 and RrdReader(rrd).recordings()
+
+
+def test_basin_show_without_a_display_or_file_says_so(tmp_path, monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    store = tmp_path / "s.zarr"
+    assert runner.invoke(app, ["basin", str(store), *SMALL]).exit_code == 0
+    result = runner.invoke(app, ["basin", "show", str(store)], env={"COLUMNS": "400"})
+    assert result.exit_code == 1
+    assert len(result.stderr.strip().splitlines()) == 1 and "--rrd FILE" in result.stderr
