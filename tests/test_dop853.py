@@ -207,8 +207,9 @@ def test_the_driver_compiled_beside_is_the_one_integrate_calls():
     driver = compiled(batch.integrate_adaptive_dop853)
     batch.final_state(*batch.dop853_sample_run())  # integrate, which calls the driver: loaded
     batch.compile_dop853_driver()  # the helper's call, in this process
-    assert dict(driver._cache_misses) == {} and sum(driver._cache_hits.values()) == 1
-    assert len(driver._cache._cache_file._load_index()) == 1
+    stats = driver.stats  # numba's public counts of this dispatcher's cache look-ups
+    assert dict(stats.cache_misses) == {} and sum(stats.cache_hits.values()) == 1
+    assert len(driver.signatures) == 1
     helper = batch._compile_beside()
     assert helper is not None and helper.wait(timeout=600) == 0
 
