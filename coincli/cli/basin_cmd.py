@@ -227,8 +227,6 @@ def sweep_command(
             recorder.progress(update)
 
     def started(start) -> None:
-        if recorder is not None:
-            recorder.started()
         if start.repaired:
             say(err_console, f"[yellow]repaired:[/] {path}: {len(start.repaired)} metadata "
                              f"file(s) differed from the sweep's and were rewritten: "

@@ -8,7 +8,7 @@ magenta (certain cells transparent); cells not computed are transparent in both,
 view's light grey background. The first swept axis is horizontal (growing to the right), the
 second vertical (growing upwards), as in `coin basin render`.
 
-A sweep sends the whole map again after each tile written (at most every ``min_interval``
+A sweep sends the whole map again after the tiles written (at most every ``min_interval``
 seconds, and always at the end, read back from the store: the recording's last map is the
 store's), with the cells done and the rate as time series on the ``sweep_time`` timeline; one
 call per layer, never one per cell. Rerun is imported lazily (as in :mod:`coincli.io.rrd`).
@@ -16,6 +16,7 @@ call per layer, never one per cell. Rerun is imported lazily (as in :mod:`coincl
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -73,19 +74,24 @@ def certainty_class_ids(status: np.ndarray, certainty: np.ndarray | None) -> np.
     return ids
 
 
+@functools.cache
+def _ramp() -> dict:
+    return {n: _rgb(colour) for n, colour in _ramp_colours(n_range(None)).items()}
+
+
 def n_classes(rr, ns) -> list:
     """One class per n in ``ns``, in the colours of `coin basin render` (even n beyond its
     colour bar take its end colours)."""
     top = n_range(None)
-    ramp = _ramp_colours(top)
+    ramp = _ramp()
     out = [rr.ClassDescription(info=(NO_N, "no n (not computed or no outcome)",
                                      (0, 0, 0, 0)))]
     for n in sorted(int(n) for n in ns):
         if n % 2:
-            colour, pose = STANDING, "standing"
+            colour, pose = _rgb(STANDING), "standing"
         else:
             colour, pose = ramp[max(-top, min(top, n))], "lying"
-        out.append(rr.ClassDescription(info=(n + N_BIAS, f"n = {n}, {pose}", _rgb(colour))))
+        out.append(rr.ClassDescription(info=(n + N_BIAS, f"n = {n}, {pose}", colour)))
     return out
 
 
@@ -109,9 +115,8 @@ def _image(cells: np.ndarray) -> np.ndarray:
 def _axes_text(attrs: dict) -> tuple[str, str]:
     ax0, ax1 = attrs["sweep"]["axes"][:2]
 
-    def one(ax, where):
-        label, unit, _ = AXIS_INFO[ax["name"]]
-        return f"{label} {ax['lo']:g} to {ax['hi']:g} {unit} {where}"
+    def one(ax, where):  # the plain names: the viewer shows no TeX
+        return f"{ax['name']} {ax['lo']:g} to {ax['hi']:g} {AXIS_INFO[ax['name']][1]} {where}"
 
     return one(ax0, "(left to right)"), one(ax1, "(bottom to top)")
 
@@ -120,8 +125,10 @@ def basin_blueprint(attrs: dict, live: bool):
     import rerun.blueprint as rrb
 
     horizontal, vertical = _axes_text(attrs)
+    n0, n1 = (ax["n"] for ax in attrs["sweep"]["axes"][:2])
     the_map = rrb.Spatial2DView(name=f"n: {horizontal}, {vertical}", origin=BASIN,
-                                background=BACKGROUND)
+                                background=BACKGROUND, visual_bounds=rrb.VisualBounds2D(
+                                    x_range=[0, n0], y_range=[0, n1]))
     side = [rrb.TextDocumentView(name="sweep", origin=INFO)]
     if live:
         side = [rrb.TimeSeriesView(name="cells done", origin=PROGRESS_CELLS,
@@ -132,14 +139,14 @@ def basin_blueprint(attrs: dict, live: bool):
         rrb.Horizontal(the_map, rrb.Vertical(*side), column_shares=[3, 1]),
         rrb.BlueprintPanel(state="collapsed"),
         rrb.SelectionPanel(state="collapsed"),
-        rrb.TimePanel(state="collapsed" if not live else "expanded", timeline=SWEEP_TIME,
-                      play_state="following") if live else rrb.TimePanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed", timeline=SWEEP_TIME, play_state="following")
+        if live else rrb.TimePanel(state="collapsed"),
     )
 
 
 def _info_markdown(attrs: dict, path, shape, note: str = "") -> str:
     horizontal, vertical = _axes_text(attrs)
-    fixed = ", ".join(f"{AXIS_INFO[k][0]} = {v:.4g} {AXIS_INFO[k][1]}"
+    fixed = ", ".join(f"{k} = {v:.4g} {AXIS_INFO[k][1]}"
                       for k, v in attrs["sweep"].get("fixed", {}).items())
     return "\n".join([
         f"# coin basin {path}", "", f"**{shape[0]} x {shape[1]} cells.** Horizontal: "
@@ -157,7 +164,7 @@ class BasinStream:
     puts everything on the ``sweep_time`` timeline, else all is static."""
 
     def __init__(self, rec, attrs: dict, shape: tuple[int, int], *, path, verified: bool,
-                 live: bool, min_interval: float = 0.2):
+                 live: bool, min_interval: float = 0.5):
         import rerun as rr
 
         self.rr, self.rec, self.live = rr, rec, live
@@ -166,6 +173,7 @@ class BasinStream:
         self.certainty_ids = np.full(self.shape[::-1], NOT_COMPUTED_ID, dtype=np.uint8)
         self.known: set[int] = set()
         self.min_interval = min_interval
+        self.points: list[tuple[float, int]] = []  # (s, cells done) not sent yet
         self.last_sent = -math.inf
         self.pending = False
         self.start = time.perf_counter()
@@ -200,32 +208,47 @@ class BasinStream:
         for tile, arrays in tiles.items():
             self._put(*grid.tile_slices(tile), arrays)
         self.pending = self.pending or bool(tiles)
-        now = time.perf_counter()
         if progress is not None and self.live:
-            self._time(progress.elapsed)
-            rate = progress.cells_done / progress.elapsed if progress.elapsed > 0 else 0.0
-            self.rec.log(PROGRESS_CELLS, self.rr.Scalars(float(progress.cells_done)))
-            self.rec.log(PROGRESS_RATE, self.rr.Scalars(rate))
-        if self.pending and now - self.last_sent >= self.min_interval:
+            self.points.append((progress.elapsed, progress.cells_done))
+        if time.perf_counter() - self.last_sent >= self.min_interval:
             self.send(None if progress is None else progress.elapsed)
+
+    def series(self, points) -> None:
+        """The cells done and the rate at each (elapsed seconds, cells done) of ``points``."""
+        rr = self.rr
+        t, cells = (np.asarray(x, dtype=np.float64) for x in zip(*points, strict=True))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rate = np.where(t > 0, cells / t, 0.0)
+        times = [rr.TimeColumn(SWEEP_TIME, duration=t)]
+        self.rec.send_columns(PROGRESS_CELLS, indexes=times,
+                              columns=rr.Scalars.columns(scalars=cells))
+        self.rec.send_columns(PROGRESS_RATE, indexes=times,
+                              columns=rr.Scalars.columns(scalars=rate))
 
     def whole(self, basin: Basin, elapsed: float | None = None) -> None:
         """The whole map of ``basin`` (a store read back), sent at once."""
         whole = (slice(0, self.shape[0]), slice(0, self.shape[1]))
         self._put(*whole, basin.arrays)
+        self.pending = True
         self.send(elapsed)
 
     def _time(self, elapsed: float) -> None:
         self.rec.set_time(SWEEP_TIME, duration=float(elapsed))
 
     def send(self, elapsed: float | None = None) -> None:
+        """The map (if it changed) and the progress points gathered since the last send."""
         rr = self.rr
         static = not self.live
+        if self.points:
+            self.series(self.points)
+            self.points = []
         if self.live:
             self._time(time.perf_counter() - self.start if elapsed is None else elapsed)
-        self.rec.log(BASIN_N, rr.SegmentationImage(self.n_ids, draw_order=1.0), static=static)
-        self.rec.log(BASIN_CERTAINTY, rr.SegmentationImage(self.certainty_ids, draw_order=2.0),
-                     static=static)
+        if self.pending or static:
+            self.rec.log(BASIN_N, rr.SegmentationImage(self.n_ids, draw_order=1.0),
+                         static=static)
+            self.rec.log(BASIN_CERTAINTY, rr.SegmentationImage(self.certainty_ids,
+                                                               draw_order=2.0), static=static)
         self.last_sent = time.perf_counter()
         self.pending = False
 
@@ -257,18 +280,26 @@ class SweepRecorder:
     :meth:`progress` takes the sweep's SweepProgress (in the thread that runs the sweep) and
     reads the tiles just written back from the store; on leaving, the whole store is read
     back and sent, so that the recording's last map is the store's, tiles of other processes
-    included."""
+    included.
+
+    The stream is opened in a thread of its own (importing Rerun takes about half a second,
+    a tenth of a short sweep): until it is ready the tiles are only counted, and the first
+    update after that sends the store as it is then. A recording that cannot be made (no
+    viewer, no file) leaves ``error`` set and the sweep alone."""
 
     def __init__(self, path, attrs: dict, grid, where: Destination, *, verified: bool,
-                 min_interval: float = 0.2):
+                 min_interval: float = 0.5):
         self.path, self.attrs, self.grid, self.where = Path(path), attrs, grid, where
         self.verified, self.min_interval = verified, min_interval
         self.view = None
         self.stream = None
         self.error: Exception | None = None  # why the recording failed (the sweep goes on)
         self._context = None
+        self._opening = None
+        self._behind = True  # tiles were written that the stream has not been sent
+        self._backlog: list[tuple[float, int]] = []  # progress before the stream was ready
 
-    def __enter__(self):
+    def _open(self) -> None:
         try:
             self._context = open_stream(f"coin basin {self.path}", rrd=self.where.rrd,
                                         spawn=self.where.spawn, connect=self.where.connect)
@@ -278,24 +309,33 @@ class SweepRecorder:
                                       min_interval=self.min_interval)
         except (OSError, RuntimeError, ValueError) as exc:  # no viewer, no file: no recording
             self.error, self.stream, self._context = exc, None, None
+
+    def __enter__(self):
+        import threading
+
+        self._opening = threading.Thread(target=self._open, name="coin-rerun", daemon=True)
+        self._opening.start()
         return self
 
-    def started(self) -> None:
-        """The store is open: send what it holds already (a resumed sweep)."""
-        from .store import open_view, read_basin
-
-        if self.stream is None:
-            return
-        self.view = open_view(self.path, self.grid)
-        basin = read_basin(self.path)
-        if basin.done.any():
-            self.stream.whole(basin, 0.0)
+    def _ready(self, wait: bool = False) -> bool:
+        if self._opening is not None:
+            if self._opening.is_alive() and not wait:
+                return False
+            self._opening.join()
+            self._opening = None
+        return self.stream is not None
 
     def progress(self, update) -> None:
-        from .store import Tile, open_view, scan
+        from .store import Tile, open_view, read_basin, scan
 
-        if self.stream is None:
+        if not self._ready():
+            self._backlog.append((update.elapsed, update.cells_done))
             return
+        self.stream.points += self._backlog
+        self._backlog = []
+        if self._behind:  # what the store holds (tiles done before, tiles written meanwhile)
+            self.stream.whole(read_basin(self.path), update.elapsed)
+            self._behind = False
         if self.view is None:
             self.view = open_view(self.path, self.grid)
         tiles = {}
@@ -308,9 +348,10 @@ class SweepRecorder:
     def __exit__(self, *exc):
         from .store import read_basin
 
-        if self._context is None:
+        if not self._ready(wait=True):
             return False
         try:
+            self.stream.points += self._backlog
             try:
                 basin = read_basin(self.path)
             except Exception:  # noqa: BLE001 - no store (the sweep failed first): no map
@@ -323,8 +364,6 @@ class SweepRecorder:
             except (OSError, RuntimeError) as error:
                 self.error = error
         return False
-
-
 
 
 # -- coin fractions ------------------------------------------------------------------------------
@@ -352,28 +391,29 @@ def parameter_timeline(parameter: str, unit: str, values) -> tuple[str, int]:
 
 
 def fractions_blueprint(over: str | None):
+    """One plot a quantity (each on its own scale: P(standing) may be 0.2 % and P(lying)
+    99.8 %), the thin lines its 95 % band; the leading n beside them."""
     import rerun.blueprint as rrb
 
-    legend = rrb.PlotLegend(rrb.Corner2D.RightTop)
-    if over is not None:
-        main = rrb.TimeSeriesView(name=f"P(outcome) [%] against {over}, 95 % bands "
-                                       "(thin lines), as each value finishes", origin=OVER,
-                                  plot_legend=legend)
-        return rrb.Blueprint(rrb.Vertical(main, rrb.TextDocumentView(name="run", origin=INFO),
-                                          row_shares=[4, 1]),
-                             rrb.BlueprintPanel(state="collapsed"),
-                             rrb.SelectionPanel(state="collapsed"),
-                             rrb.TimePanel(state="collapsed"))
+    root = OVER if over is not None else ESTIMATE
+    against = f"against {over}, as each value finishes" if over is not None else \
+        "against the samples"
+    whole = rrb.TimeAxis(view_range=rrb.TimeRange(start=rrb.TimeRangeBoundary.infinite(),
+                                                  end=rrb.TimeRangeBoundary.infinite()))
+    plots = [rrb.TimeSeriesView(name=f"{label} [%] {against} (thin: 95 % band)",
+                                origin=f"{root}/{name}", axis_x=whole,
+                                plot_legend=rrb.PlotLegend(visible=False))
+             for name, label, _ in SERIES if over is None or name != "leading"]
+    side = [rrb.TextDocumentView(name="run", origin=INFO)]
+    if over is None:
+        side.insert(0, rrb.TimeSeriesView(name="leading n (the most frequent)",
+                                          origin=LEADING_N, axis_x=whole,
+                                          plot_legend=rrb.PlotLegend(visible=False)))
     return rrb.Blueprint(
-        rrb.Horizontal(
-            rrb.TimeSeriesView(name="running estimate [%] against the samples, 95 % bands "
-                                    "(thin lines)", origin=ESTIMATE, plot_legend=legend),
-            rrb.Vertical(rrb.TimeSeriesView(name="leading n", origin=LEADING_N,
-                                            plot_legend=rrb.PlotLegend(visible=False)),
-                         rrb.TextDocumentView(name="run", origin=INFO)),
-            column_shares=[3, 1]),
+        rrb.Horizontal(rrb.Grid(*plots, grid_columns=2), rrb.Vertical(*side),
+                       column_shares=[3, 1]),
         rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),
-        rrb.TimePanel(state="collapsed", timeline=SAMPLES, play_state="following"))
+        rrb.TimePanel(state="collapsed"))
 
 
 def _estimates(tally, verified: bool) -> dict:
