@@ -70,7 +70,8 @@ basin_app = typer.Typer(
     help="Map the final number n of quarter turns over two initial conditions.\n\n"
          "coin basin OUT.zarr [OPTIONS] runs (or resumes) a sweep: it is short for "
          "`coin basin sweep OUT.zarr`, whose --help lists the options. Then "
-         "`coin basin render OUT.zarr -o basin.png`, `coin basin stats OUT.zarr`, and "
+         "`coin basin render OUT.zarr -o basin.png`, `coin basin stats OUT.zarr`, "
+         "`coin basin show OUT.zarr` (in the Rerun viewer), and "
          "`coin basin verify OUT.zarr` to check a store.",
 )
 app.add_typer(basin_app, name="basin")
@@ -494,7 +495,7 @@ def show_command(
 ) -> None:
     """Open a basin store in the Rerun viewer: the map of n in the paper's colours (hover a cell: "n = 7, standing"), the uncertain and unfinished cells over it, cells not computed left grey.
 
-    Opens a viewer unless --rrd or --connect is given (--spawn as well: both). Works on partial stores, also while a sweep is filling them.
+    Opens a viewer unless --rrd or --connect is given (--spawn as well: both). Works on partial stores.
 
     Example:
 
