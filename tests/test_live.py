@@ -197,3 +197,12 @@ def test_basin_show_without_a_display_or_file_says_so(tmp_path, monkeypatch):
     result = runner.invoke(app, ["basin", "show", str(store)], env={"COLUMNS": "400"})
     assert result.exit_code == 1
     assert len(result.stderr.strip().splitlines()) == 1 and "--rrd FILE" in result.stderr
+
+
+def test_an_unwritable_recording_is_refused_before_any_work(tmp_path):
+    store = tmp_path / "s.zarr"
+    result = runner.invoke(app, ["basin", str(store), *SMALL, "--rrd",
+                                 str(tmp_path / "missing" / "s.rrd")], env={"COLUMNS": "400"})
+    assert result.exit_code == 2
+    assert result.stderr.count("\n") == 1 and "does not exist" in result.stderr
+    assert not store.exists()
