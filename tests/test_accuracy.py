@@ -116,8 +116,8 @@ def test_bench_times_the_basin_command_with_its_own_peak_memory(tmp_path):
 
 def test_bench_measures_the_import_floor_of_a_kernel_command(tmp_path):
     """The imports `coin bench` reports as the floor of a command's start-up are those a basin
-    command makes before its kernels load: numpy, typer, rich and numba (as it imports numba),
-    not the kernels or the store's libraries."""
+    command makes before its kernels load: numpy, typer, rich and numba, not the kernels or the
+    store's libraries."""
     from coincli.cli import bench_cmd
 
     wall, _ = bench_cmd._run([], str(tmp_path), code=bench_cmd.IMPORT_FLOOR)
@@ -127,6 +127,7 @@ def test_bench_measures_the_import_floor_of_a_kernel_command(tmp_path):
     loaded = set(subprocess.run([sys.executable, "-c", listing], capture_output=True, text=True,
                                 check=True, cwd=tmp_path).stdout.split())
     assert {"numpy", "typer", "rich.progress", "numba"} <= loaded
-    assert not loaded & {"coincli.integrators.batch", "numcodecs", "zarr", "yaml", "scipy"}
+    # (numba's own import brings pyyaml and scipy along: they count in the floor)
+    assert not loaded & {"coincli.integrators.batch", "numcodecs", "zarr"}
     with pytest.raises(RuntimeError, match="the import floor failed"):
         bench_cmd._run([], str(tmp_path), code="raise SystemExit(3)")
