@@ -88,3 +88,14 @@ def sigint_raises():
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+@pytest.fixture
+def strict_rerun():
+    """Rerun logging mistakes raise instead of warning (for the recording tests)."""
+    import rerun as rr
+
+    before = rr.strict_mode()
+    rr.set_strict_mode(True)
+    yield
+    rr.set_strict_mode(before)

@@ -32,13 +32,7 @@ RED = rrd_io._rgba(rrd_io.CONTACT_COLOUR)
 BLUE = rrd_io._rgba(rrd_io.FREE_COLOUR)
 
 
-@pytest.fixture(autouse=True)
-def strict_rerun():
-    """Logging mistakes raise instead of warning."""
-    before = rr.strict_mode()
-    rr.set_strict_mode(True)
-    yield
-    rr.set_strict_mode(before)
+pytestmark = pytest.mark.usefixtures("strict_rerun")  # conftest.py
 
 
 def fig2_scene(**overrides) -> Scene:

@@ -22,6 +22,7 @@ from .common import (
     print_json,
     user_errors,
 )
+from .recording import record_throw
 from .simulate_cmd import (
     LABEL_WIDTH,
     REC,
@@ -190,16 +191,8 @@ def inspect_command(
             raise typer.Exit(code=130) from None
     info, not_written = None, None
     if recording:
-        from ..io.paths import describe
-        from ..io.rrd import write_recording
-
-        try:
-            info = write_recording(run, rrd=rrd, spawn=spawn, connect=connect,
-                                   log_every=log_every)
-        except OSError as exc:
-            not_written = describe(exc)
-        except (RuntimeError, ValueError) as exc:
-            not_written = str(exc)
+        info, not_written = record_throw(run, rrd=rrd, spawn=spawn, connect=connect,
+                                         log_every=log_every)
     ladder = ladder_of(scene.integration)
     same_ladder = ladder_matches(attrs, scene)
     replay_rung = len(run.rungs) - 1

@@ -60,16 +60,40 @@ def destination(rrd: Path | None, spawn: bool, connect: str | None):
     return (where if where else None), no_viewer
 
 
-def recorded(where) -> str:
-    """Where a recording went, for the last line of a command."""
+def places(where) -> list[str]:
+    """Where a recording went (anything with ``rrd``, ``spawn`` and ``connect``), a phrase
+    each."""
     out = []
     if where.rrd is not None:
-        out.append(f"wrote {where.rrd} (open with: {command('rerun', where.rrd)})")
+        out.append(f"{where.rrd} (open with: {command('rerun', where.rrd)})")
     if where.spawn:
         out.append("streamed to a new viewer")
     if where.connect is not None:
         out.append(f"streamed to {where.connect}")
+    return out
+
+
+def recorded(where) -> str:
+    """Where a recording went, for the last line of a command."""
+    out = places(where)
+    if where.rrd is not None:
+        out[0] = f"wrote {out[0]}"
     return "; ".join(out)
+
+
+def record_throw(run, *, rrd, spawn: bool, connect, log_every: float):
+    """Record one throw (:func:`coincli.io.rrd.write_recording`): (its RecordingInfo, None), or
+    (None, why it was not written, in one line) for the command to say after its outcome."""
+    from ..io.paths import describe
+    from ..io.rrd import write_recording
+
+    try:
+        return write_recording(run, rrd=rrd, spawn=spawn, connect=connect,
+                               log_every=log_every), None
+    except OSError as exc:
+        return None, describe(exc)
+    except (RuntimeError, ValueError) as exc:
+        return None, str(exc)
 
 
 def finish(recorder, no_viewer: bool, exit_code: int | None = 1) -> None:

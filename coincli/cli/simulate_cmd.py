@@ -44,7 +44,8 @@ from .common import (
     print_json,
     user_errors,
 )
-from .text import NBSP, command, print_rows, say
+from .recording import places, record_throw
+from .text import NBSP, print_rows, say
 
 REC = "Recording (Rerun)"
 MAX_FRAMES = 1_000_000
@@ -117,16 +118,8 @@ def simulate_command(
     info = None
     not_written = None  # why the recording asked for was not written
     if recording:
-        from ..io.paths import describe
-        from ..io.rrd import write_recording
-
-        try:
-            info = write_recording(trajectory, rrd=rrd_path, spawn=spawn, connect=connect,
-                                   log_every=log_every)
-        except OSError as exc:
-            not_written = describe(exc)
-        except (RuntimeError, ValueError) as exc:
-            not_written = str(exc)
+        info, not_written = record_throw(trajectory, rrd=rrd_path, spawn=spawn,
+                                         connect=connect, log_every=log_every)
     if json_out:
         print_json({**trajectory.summary(), "version": __version__,
                     "parameters": scene.to_dict(),
@@ -205,14 +198,7 @@ def _check_recording_options(scene, rrd_path, connect, log_every) -> None:
 
 
 def print_recording(info) -> None:
-    where = []
-    if info.rrd is not None:
-        where.append(f"{info.rrd} (open with: {command('rerun', info.rrd)})")
-    if info.spawn:
-        where.append("streamed to a new viewer")
-    if info.connect is not None:
-        where.append(f"streamed to {info.connect}")
-    print_rows(console, [("recording", f"{'; '.join(where)}: {info.frames:,} frames, "
+    print_rows(console, [("recording", f"{'; '.join(places(info))}: {info.frames:,} frames, "
                               f"{info.events} contact events")], LABEL_WIDTH)
 
 
