@@ -16,7 +16,6 @@ from .continuation import PARAMETERS, continuation_note, parse_over, scene_at
 from .sampling import DEFAULT_BATCH, SOBOL_MAX, Sampling, check_box, make_sampling
 from .tally import DEFAULT_MAX_SAMPLES, Goal, make_goal
 
-
 STORE_FORMAT = 2  # of a fractions store (coincli.io.fractions_store): 2, a chunk a batch
 
 
