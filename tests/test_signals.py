@@ -210,3 +210,20 @@ def test_run_dask_tasks_reports_a_lost_scheduler_and_the_workers():
                     killed = time.monotonic()
         assert time.monotonic() - killed < 5
     assert seen and set(seen) == {1}
+
+
+def test_a_claim_made_as_a_signal_came_is_released_too(tmp_path):
+    """A signal between a claim file's creation and its record as held (the window of
+    Claims.try_claim) must not leave the claim for other hosts to wait out."""
+    from coincli.io.claims import Claims
+
+    claims = Claims(tmp_path / "claims", heartbeat=3600)
+    assert claims.try_claim((0, 1)) and claims.try_claim((2, 3))
+    with claims._lock:
+        del claims.held[(2, 3)]  # as if interrupted before it was recorded
+    other = Claims(tmp_path / "claims", heartbeat=3600)
+    assert other.try_claim((4, 5))
+    claims.close()
+    assert sorted(p.name for p in (tmp_path / "claims").iterdir()) == ["tile_4_5"]
+    other.close()
+    assert not (tmp_path / "claims").exists()

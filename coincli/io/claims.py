@@ -222,6 +222,14 @@ class Claims:
         for tile in tiles:
             with contextlib.suppress(OSError):
                 self.release(tile)
+        # a claim made as a signal came (its file written, not yet recorded as held) is ours
+        # all the same: it carries our token
+        with contextlib.suppress(OSError):
+            for path in self.folder.iterdir():
+                owner, _ = read_claim(path)
+                if owner is not None and owner.get("token") == self.token:
+                    with contextlib.suppress(OSError):
+                        path.unlink()
         _live_tokens.discard(self.token)
         with contextlib.suppress(OSError):
             self.folder.rmdir()  # empty once nobody holds a claim
