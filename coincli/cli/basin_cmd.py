@@ -191,7 +191,6 @@ def sweep_command(
     """  # noqa: E501
     from .. import api
     from ..io import store as store_io
-    from ..io.live import SweepRecorder
     from ..io.paths import DISK_ERRORS, NotWritable, describe
     from ..io.runner import SchedulerLost
     from . import interruptions
@@ -250,8 +249,12 @@ def sweep_command(
     # before the sweep: its pilot estimate is the first run of the kernels (a store that is
     # already complete on a fresh install is the one case that is told so without need)
     announce_compilation()
-    recorder = None if where_to is None else SweepRecorder(
-        path, plan.attrs, grid, where_to, verified=plan.spec.ladder.verified)
+    recorder = None
+    if where_to is not None:
+        from ..io.live import SweepRecorder  # Rerun's code only when a recording is asked for
+
+        recorder = SweepRecorder(path, plan.attrs, grid, where_to,
+                                 verified=plan.spec.ladder.verified)
     try:
         with _Stop() as stop, recorder or contextlib.nullcontext():
             try:

@@ -225,11 +225,14 @@ def fractions_command(
                                      scheduler=scheduler, store=store)
     _check_estimate(est, plan, scheduler, yes, quiet)
     from ..io.fractions_run import StoreIncomplete
-    from ..io.live import FractionsRecorder
     from ..io.runner import SchedulerLost
     from . import interruptions
 
-    recorder = None if where_to is None else FractionsRecorder(plan, where_to)
+    recorder = None
+    if where_to is not None:
+        from ..io.live import FractionsRecorder  # Rerun's code only when asked for
+
+        recorder = FractionsRecorder(plan, where_to)
     try:
         with user_errors(), _BatchStop() as stop, recorder or contextlib.nullcontext(), \
                 progress:

@@ -29,6 +29,8 @@ def destination(rrd: Path | None, spawn: bool, connect: str | None):
     """The checked destination of a recording (None if none was asked for), and whether a
     --spawn was dropped for want of a display (then said in one line: the caller exits 1 once
     its work is done). Fails in one line, before any work, on an unusable path or URL."""
+    if rrd is None and not spawn and connect is None:
+        return None, False  # nothing asked: Rerun's code is not even imported
     from ..io.live import Destination
     from ..io.paths import check_rrd_path, probe_viewer
     from ..io.rrd import NO_DISPLAY, display_available
