@@ -211,3 +211,23 @@ def test_whole_number_options_take_ascii_digits_only(args):
     result = CliRunner().invoke(app, args)  # click's usage box here; `coin` makes it one line
     assert result.exit_code == 2, result.output
     assert "ASCII digits" in " ".join(result.stderr.replace("│", " ").split()), result.stderr
+
+
+@pytest.mark.parametrize("array", ["status", "initial", "filled", "settle_time"])
+def test_a_damaged_chunk_is_found_and_its_batch_computed_again(tmp_path, whole, array):
+    """A bit flipped in any chunk of a stored batch (its labels, its initial states, its count)
+    fails the chunk's CRC-32C: the resume computes that batch again, says so, and the store
+    ends as the uninterrupted one."""
+    reference, clean = whole
+    store = tmp_path / "f.zarr"
+    coincli.fractions(PAPER, samples=6144, store=store, **RUN)
+    chunk = store / array / "c" / "5"
+    chunk = chunk / "0" if array == "initial" else chunk
+    data = bytearray(chunk.read_bytes())
+    data[len(data) // 2] ^= 0x10
+    chunk.write_bytes(bytes(data))
+    resumed = coincli.fractions(PAPER, samples=6144, store=store, **RUN)
+    assert resumed.cost["computed"] == 256 and resumed.cost["damaged_batches"] == (
+        0 if array == "filled" else 1)  # a damaged count reads as a batch never written
+    assert resumed.standing == reference.standing
+    assert _files(store) == _files(clean)

@@ -320,8 +320,10 @@ def _header(plan, samples: int) -> str:
 
 def _from_store(cost: dict) -> str:
     """What a resumed run found counted in its store already, for its cost line."""
-    held = cost.get("from_store")
-    return f"; {held:,} samples were in the store already" if held else ""
+    held, damaged = cost.get("from_store"), cost.get("damaged_batches")
+    return ((f"; {held:,} samples were in the store already" if held else "")
+            + (f"; {counted(damaged, 'damaged batch', 'damaged batches')} of the store (a "
+               "chunk that did not read back) computed again" if damaged else ""))
 
 
 def _stopped(result) -> str:

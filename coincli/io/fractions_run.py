@@ -42,7 +42,7 @@ class BatchQueue:
 
     def __init__(self, progs, make_task: Callable, claims=None,
                  written: Callable[[int, int], bool] | None = None,
-                 found: Callable[[int, int], None] | None = None, poll: float = 0.5):
+                 found: Callable[[int, int], bool] | None = None, poll: float = 0.5):
         self.progs = progs
         self.make_task = make_task
         self.claims = claims
@@ -54,11 +54,11 @@ class BatchQueue:
         self._last_look = 0.0
 
     def _elsewhere(self, value: int, batch: int) -> bool:
-        """Whether another process wrote the batch; if so it is counted here."""
+        """Whether another process wrote the batch (whole, reading back); if so it is counted
+        here."""
         if self.written is None or not self.written(value, batch):
             return False
-        self.found(value, batch)
-        return True
+        return self.found(value, batch)
 
     def _claim(self, value: int, batch: int) -> bool:
         """True if this process is to compute the batch (claimed, and not written since)."""
@@ -166,11 +166,12 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     layout = fstore.Layout(size, goal.batches(size),
                            None if plan.parameter is None else n_values, plan.parameter)
     writer = claims = None
+    damaged: list[tuple[int, int]] = []
     if store is not None:
         check_store_writable(store)
         filled = fstore.prepare(store, plan.attrs, layout, None if plan.values is None
                                 else np.asarray(plan.values), overwrite=overwrite)
-        _resume(plan, progs, draws, layout, store, filled)
+        damaged = _resume(plan, progs, draws, layout, store, filled)
         writer = fstore.Writer(store, layout)
     # read from the store: every whole batch, also those past a gap
     from_store = sum(t.samples for p in progs for t in p.tallies.values())
@@ -181,12 +182,18 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
         states = initial_states(plan.scenes[v], sampling, draws.batch(index)[:count])
         return BatchTask(v, index, count, states)
 
-    def found(v: int, index: int) -> None:  # a batch another process wrote
+    def found(v: int, index: int) -> bool:  # a batch another process wrote: counted here
         count = goal.count(index, size)
-        lab = fstore.read_batches(store, layout, v, [index], [count])[index]
+        if fstore.filled_count(store, layout, v, index) != count:
+            return False  # its count does not read back: computed again
+        labels, _ = fstore.read_batches(store, layout, v, [index], [count])
+        if index not in labels:
+            return False  # its samples do not read back: computed again
+        lab = labels[index]
         progs[v].add(index, Tally.of(lab["quarter_turns"], lab["status"], lab["certainty"],
                                      verified))
         found_elsewhere[0] += count
+        return True
 
     if store is not None:
         claims = Claims(fstore.claims_dir(store))
@@ -259,7 +266,7 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                   "trajectories_per_second": computed / wall if wall > 0 else math.nan,
                   "cpu_ms_per_trajectory": 1e3 * sum(cpu) / computed if computed else math.nan,
                   "mode": mode, "workers": n_workers, "from_store": from_store,
-                  "from_others": found_elsewhere[0]}
+                  "from_others": found_elsewhere[0], "damaged_batches": len(damaged)}
     path = None if store is None else str(store)
     results = []
     for v, (prog, s) in enumerate(zip(progs, plan.scenes, strict=True)):
@@ -313,13 +320,15 @@ def _seal(store, layout, progs, goal, size: int, held: Callable[[int, int], bool
                               "compute them")
 
 
-def _resume(plan: FractionsPlan, progs, draws, layout, store, filled) -> None:
+def _resume(plan: FractionsPlan, progs, draws, layout, store, filled) -> list[tuple[int, int]]:
     """Count the batches a store holds already (each value's, in its progression), after
-    checking that this installation draws the same samples as the one that wrote them."""
+    checking that this installation draws the same samples as the one that wrote them; the
+    (value, batch) of those that do not read back (damaged: they are computed again)."""
     from . import fractions_store as fstore
 
     goal, size = plan.goal, plan.sampling.batch
     checked = False
+    damaged: list[tuple[int, int]] = []
     for v, prog in enumerate(progs):
         have = np.asarray(filled[v] if plan.parameter is not None else filled)
         batches, counts = [], []
@@ -330,8 +339,11 @@ def _resume(plan: FractionsPlan, progs, draws, layout, store, filled) -> None:
                 counts.append(need)
         if not batches:
             continue
-        if not checked:
-            index, count = batches[0], counts[0]
+        labels, bad = fstore.read_batches(store, layout, v, batches, counts)
+        damaged += [(v, index) for index in bad]
+        if labels and not checked:
+            index = min(labels)
+            count = goal.count(index, size)
             drawn = initial_states(plan.scenes[v], plan.sampling, draws.batch(index)[:count])
             stored = fstore.read_initial(store, layout, v, index, count)
             if not np.array_equal(drawn[:, 1:], stored):
@@ -339,8 +351,7 @@ def _resume(plan: FractionsPlan, progs, draws, layout, store, filled) -> None:
                                      "in the store (numpy or scipy changed?); --overwrite "
                                      "starts it again")
             checked = True
-        labels = fstore.read_batches(store, layout, v, batches, counts)
-        for index in batches:
-            lab = labels[index]
+        for index, lab in labels.items():
             prog.add(index, Tally.of(lab["quarter_turns"], lab["status"], lab["certainty"],
                                      prog.verified))
+    return damaged

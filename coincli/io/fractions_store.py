@@ -55,6 +55,7 @@ from ..montecarlo.plan import STORE_FORMAT
 from ..params import ParameterError
 from .schema import VARIABLES
 from .store import (
+    ZSTD_LEVEL,
     check_is_store,
     claims_dir,
     cost_dir,
@@ -70,6 +71,7 @@ FORMAT = STORE_FORMAT  # 2: ``filled`` in one chunk a batch (1: 1024 batches a c
 MARK = "coin_fractions"
 COMPARED = ("version", "parameters", "sampling", "method", "over")
 COLUMNS = ("y0", "phi0", "vx", "vy", "vphi")
+READ_RUN = 64  # batches read in one slice (every array: about 30 MB at the default batch)
 LABELS = ("quarter_turns", "status", "settle_time", "steps", "certainty", "rung")
 FILLED_ATTRS = {"long_name": "samples of the batch written (written after them); the batch "
                              "counts only when this equals the samples it needs",
@@ -132,6 +134,15 @@ def _consolidate(path: Path) -> None:
         _zarr().consolidate_metadata(str(path))
 
 
+def _compressors() -> list:
+    """Every array's codecs after ``bytes``: zstd, then a CRC-32C of the compressed chunk (as
+    basin stores), so that a chunk damaged on disk fails to read instead of decoding to other
+    labels."""
+    from zarr.codecs import Crc32cCodec, ZstdCodec
+
+    return [ZstdCodec(level=ZSTD_LEVEL, checksum=False), Crc32cCodec()]
+
+
 def _create(path: Path, attrs: dict, layout: Layout, values: np.ndarray | None) -> None:
     """Create the store in a temporary directory beside it and rename it into place (call with
     the creation lock held)."""
@@ -145,20 +156,23 @@ def _create(path: Path, attrs: dict, layout: Layout, values: np.ndarray | None) 
         arr = group.create_array(layout.parameter, shape=(len(values),),
                                  chunks=(len(values),), dtype="float64", fill_value=0.0,
                                  dimension_names=(layout.parameter,),
-                                 attributes={"long_name": f"the value of {layout.parameter}"})
+                                 attributes={"long_name": f"the value of {layout.parameter}"},
+                                 compressors=_compressors())
         arr[:] = values
     group.create_array("initial", shape=(*lead, layout.samples, len(COLUMNS)),
                        chunks=(*chunk, layout.batch, len(COLUMNS)), dtype="float64",
                        fill_value=math.nan, dimension_names=(*dims, "sample", "ic"),
-                       attributes=INITIAL_ATTRS, config={"write_empty_chunks": True})
+                       attributes=INITIAL_ATTRS, config={"write_empty_chunks": True},
+                       compressors=_compressors())
     for name in LABELS:
         dtype, fill, array_attrs = VARIABLES[name]
         group.create_array(name, shape=(*lead, layout.samples), chunks=(*chunk, layout.batch),
                            dtype=dtype, fill_value=fill, dimension_names=(*dims, "sample"),
-                           attributes=array_attrs, config={"write_empty_chunks": True})
+                           attributes=array_attrs, config={"write_empty_chunks": True},
+                           compressors=_compressors())
     group.create_array("filled", shape=(*lead, layout.batches), chunks=(*chunk, 1),
                        dtype="uint32", fill_value=0, dimension_names=(*dims, "batch"),
-                       attributes=FILLED_ATTRS)
+                       attributes=FILLED_ATTRS, compressors=_compressors())
     _consolidate(tmp)
     shutil.rmtree(cost_dir(path), ignore_errors=True)  # the records of an older store
     os.rename(tmp, path)
@@ -241,8 +255,17 @@ def open_attrs(path) -> dict:
 
 
 def read_filled(path) -> np.ndarray:
-    """The ``filled`` counts of every batch ([value,] batch), read now."""
-    return np.asarray(_zarr().open_group(str(path), mode="r")["filled"][:])
+    """The ``filled`` counts of every batch ([value,] batch), read now; 0 for a batch whose
+    ``filled`` chunk does not read back (damaged: the batch is computed again)."""
+    filled = _zarr().open_group(str(path), mode="r")["filled"]
+    try:
+        return np.asarray(filled[:])
+    except Exception:  # noqa: BLE001 - a damaged chunk: read them one by one
+        out = np.zeros(filled.shape, dtype=np.uint32)
+        for index in np.ndindex(*filled.shape):
+            with contextlib.suppress(Exception):
+                out[index] = filled[index]
+        return out
 
 
 def _chunk_files(path: Path, layout: Layout, value: int, batch: int) -> list[Path]:
@@ -258,6 +281,15 @@ def batch_written(path, layout: Layout, value: int, batch: int) -> bool:
     """Whether a batch's ``filled`` chunk exists (one stat): written last, after all its data,
     so one that appears while a run waits for it means another process finished the batch."""
     return _chunk_files(Path(path), layout, value, batch)[0].is_file()
+
+
+def filled_count(path, layout: Layout, value: int, batch: int) -> int:
+    """One batch's ``filled`` count, read now (0 if its chunk does not read back)."""
+    try:
+        filled = _zarr().open_group(str(path), mode="r")["filled"]
+        return int(filled[(*layout.at(value), batch)])
+    except Exception:  # noqa: BLE001 - damaged: the batch counts as not written
+        return 0
 
 
 def trim(path, layout: Layout, value: int, keep: int,
@@ -304,28 +336,51 @@ class Writer:
 
 
 def read_batches(path, layout: Layout, value: int, batches: list[int],
-                 counts: list[int]) -> dict[int, dict]:
-    """The labels of the given batches of one value, ``counts[i]`` samples of each (read in one
-    slice per run of consecutive batches)."""
+                 counts: list[int]) -> tuple[dict[int, dict], list[int]]:
+    """The labels of the given batches of one value, ``counts[i]`` samples of each, and the
+    batches that do not read back (a chunk of any of their arrays damaged: their checksum
+    fails, or a chunk is missing). Read in one slice per run of consecutive batches, batch by
+    batch where a run fails."""
     if not batches:
-        return {}
+        return {}, []
     group = _zarr().open_group(str(path), mode="r")
     at = layout.at(value)
     out: dict[int, dict] = {}
+    damaged: list[int] = []
+
+    def read(first: int, last: int) -> dict:
+        lo = batches[first] * layout.batch
+        hi = batches[last] * layout.batch + counts[last]
+        block = {name: np.asarray(group[name][(*at, slice(lo, hi))])
+                 for name in ("initial", *LABELS)}
+        written = batches[last] - batches[first] + 1  # whole batches: none reads as the fill
+        if np.isnan(block["initial"]).all(axis=-1).sum() > 0 or \
+                (block["status"] == VARIABLES["status"][1]).sum() > 0:
+            raise ValueError(f"{written} batch(es) hold samples never written")
+        return block
+
     start = 0
     while start < len(batches):
         end = start
-        while end + 1 < len(batches) and batches[end + 1] == batches[end] + 1:
+        while end + 1 < len(batches) and batches[end + 1] == batches[end] + 1 and \
+                end - start + 1 < READ_RUN:
             end += 1
-        lo = batches[start] * layout.batch
-        hi = batches[end] * layout.batch + counts[end]
-        block = {name: np.asarray(group[name][(*at, slice(lo, hi))])
-                 for name in ("quarter_turns", "status", "certainty")}
-        for i in range(start, end + 1):
-            a = (batches[i] - batches[start]) * layout.batch
-            out[batches[i]] = {name: arr[a:a + counts[i]] for name, arr in block.items()}
+        try:
+            runs = [(start, end, read(start, end))]
+        except Exception:  # noqa: BLE001 - some chunk of the run is damaged: batch by batch
+            runs = []
+            for i in range(start, end + 1):
+                try:
+                    runs.append((i, i, read(i, i)))
+                except Exception:  # noqa: BLE001
+                    damaged.append(batches[i])
+        for first, last, block in runs:
+            for i in range(first, last + 1):
+                a = (batches[i] - batches[first]) * layout.batch
+                out[batches[i]] = {name: block[name][a:a + counts[i]]
+                                   for name in ("quarter_turns", "status", "certainty")}
         start = end + 1
-    return out
+    return out, damaged
 
 
 def read_initial(path, layout: Layout, value: int, batch: int, count: int) -> np.ndarray:
@@ -354,5 +409,6 @@ def open_fractions(path):
 
 
 __all__ = ["COLUMNS", "LABELS", "Layout", "Writer", "batch_written", "claims_dir", "cost_dir",
-           "differences", "open_attrs", "open_fractions", "prepare", "read_batches", "read_filled",
-           "read_initial", "read_runs", "record_run", "run_record", "trim"]
+           "differences", "filled_count", "open_attrs", "open_fractions", "prepare",
+           "read_batches", "read_filled", "read_initial", "read_runs", "record_run", "run_record",
+           "trim"]
