@@ -563,11 +563,13 @@ def _dataset_stats(basin) -> dict:
     out = counts.summary()
     out.update(_tiles(view.done, view.damaged))
     out["cost"] = cost_summary(out["computed"], view.tile_seconds, view.done, view.runs)
+    out["metadata_damaged"], out["parameters_changed"] = [], []  # a store's, checked on reading
+    out["warnings"] = _stats_warnings(out)
     return out
 
 
 def _store_stats(path) -> dict:
-    from .io.store import Tile, open_view, read_costs, scan
+    from .io.store import Tile, damaged_metadata, open_view, read_costs, scan
     from .stats import BasinCounts, cost_summary
 
     view = open_view(path)
@@ -587,6 +589,30 @@ def _store_stats(path) -> dict:
     out.update(_tiles(done, damaged))
     seconds, runs = read_costs(view.path, grid.tile_grid)
     out["cost"] = cost_summary(out["computed"], seconds, done, runs)
+    out["metadata_damaged"] = damaged_metadata(view)
+    out["parameters_changed"] = list(view.problems)
+    out["warnings"] = _stats_warnings(out)
+    return out
+
+
+def _stats_warnings(stats: dict) -> list[str]:
+    """What the numbers of a basin's statistics do not say: a partial store's fractions are of
+    the tiles computed so far, which are no random sample of the map (a sweep computes the
+    highest-energy tiles first); changed parameters and damaged metadata (what verifying the
+    store finds)."""
+    out = []
+    done, total = stats["tiles_done"], stats["tiles_total"]
+    if done < total:
+        out.append(f"partial store: {done} of {total} tiles computed "
+                   f"({100 * done / total:.1f} %); the fractions and intervals are over the "
+                   "computed cells only, which are no random sample of the map: they need not "
+                   "hold for the whole map")
+    out += [f"parameters changed in {problem}" for problem in stats.get("parameters_changed", [])]
+    metadata = stats.get("metadata_damaged", [])
+    if metadata:
+        out.append(f"{len(metadata)} metadata file{'s' if len(metadata) > 1 else ''} damaged "
+                   f"({', '.join(metadata[:4])}{' ...' if len(metadata) > 4 else ''}): "
+                   "verifying the store lists them, resuming the sweep rewrites them")
     return out
 
 

@@ -30,6 +30,7 @@ from test_store import (
     one_line_error,
 )
 
+import coincli
 from coincli import api
 from coincli.io import schema, store
 
@@ -253,6 +254,10 @@ def test_stats_on_a_partial_store_warns_with_the_fraction_computed(tmp_path, cle
     stats = json.loads(coin_ok("stats", path, "--json").stdout)
     assert len(stats["warnings"]) == 1 and "3 of 4 tiles" in stats["warnings"][0]
     assert json.loads(coin_ok("stats", clean, "--json").stdout)["warnings"] == []
+    # the same from Python, for a store and for the Dataset of one
+    assert coincli.basin_stats(path)["warnings"] == stats["warnings"]
+    assert coincli.basin_stats(coincli.open_basin(path))["warnings"] == stats["warnings"]
+    assert coincli.basin_stats(clean)["warnings"] == []
 
 
 def test_a_read_only_store_is_named_in_one_line(tmp_path, clean, monkeypatch):

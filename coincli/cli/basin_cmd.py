@@ -556,11 +556,10 @@ def stats_command(
     """  # noqa: E501 (typer keeps a docstring's line breaks)
     from .. import api
     from ..io.paths import check_writable, describe
-    from ..io.store import damaged_metadata, open_view
+    from ..io.store import open_view
 
     with user_errors():
         view = open_view(path)
-        metadata = damaged_metadata(view)
         if csv_out is not None:
             check_writable(csv_out, what="CSV file")  # before reading the whole store
         stats = api.basin_stats(path)
@@ -570,12 +569,11 @@ def stats_command(
             except OSError as exc:
                 raise fail(describe(exc, f"cannot write {csv_out}")) from None
     attrs = view.attrs
-    warnings = _stats_warnings(stats, view.problems, metadata)
+    warnings = stats["warnings"]
     if json_out:
         print_json({"path": str(path), "version": __version__, "store_version": attrs["version"],
                     "sweep": attrs["sweep"], "method": attrs["method"],
-                    "tiles": stats["tiles_total"], **stats, "metadata_damaged": metadata,
-                    "parameters_changed": view.problems, "warnings": warnings})
+                    "tiles": stats["tiles_total"], **stats})
         return
     ax0, ax1 = attrs["sweep"]["axes"]
     console.print(f"[bold]coin basin stats[/] {path}", highlight=False)
@@ -640,24 +638,6 @@ def stats_command(
                                 f"run{'s' if runs != 1 else ''}, "
                                 f"{_num(cost['trajectories_per_second'], ',.0f')} cells/s"))
     print_rows(console, summary)
-
-
-def _stats_warnings(stats: dict, problems: list[str], metadata: list[str]) -> list[str]:
-    """What the numbers of `coin basin stats` do not say: a partial store's fractions are of
-    the tiles computed so far, which are no random sample of the map (the sweep computes the
-    highest-energy tiles first); damaged metadata (what `coin basin verify` finds)."""
-    out = []
-    done, total = stats["tiles_done"], stats["tiles_total"]
-    if done < total:
-        out.append(f"partial store: {done} of {total} tiles computed ({percent(done / total)}); "
-                   "the fractions and intervals are over the computed cells only, which are no "
-                   "random sample of the map: they need not hold for the whole map")
-    out += [f"parameters changed in {problem}" for problem in problems]
-    if metadata:
-        out.append(f"{counted(len(metadata), 'metadata file')} damaged "
-                   f"({', '.join(metadata[:4])}{' ...' if len(metadata) > 4 else ''}): "
-                   "`coin basin verify` lists them, rerunning the sweep command rewrites them")
-    return out
 
 
 def _write_csv(stats: dict, target: Path) -> None:
