@@ -231,3 +231,67 @@ def test_a_damaged_chunk_is_found_and_its_batch_computed_again(tmp_path, whole, 
         0 if array == "filled" else 1)  # a damaged count reads as a batch never written
     assert resumed.standing == reference.standing
     assert _files(store) == _files(clean)
+
+
+def test_fewer_samples_from_a_store_of_more_is_complete_and_keeps_them(tmp_path):
+    """A store of 2,048 samples asked for 1,000 (a partial last batch): the run counts what it
+    needs and is complete; asked again, nothing is computed, and the 2,048 stay."""
+    store = tmp_path / "f.zarr"
+    coincli.fractions(PAPER, samples=2048, batch=512, store=store, phi0="-pi:pi")
+    fewer = coincli.fractions(PAPER, samples=1000, batch=512, store=store, phi0="-pi:pi")
+    assert fewer.samples == 1000 and fewer.cost["computed"] == 0
+    assert fewer.standing == coincli.fractions(PAPER, samples=1000, batch=512,
+                                               phi0="-pi:pi").standing
+    assert int((fstore.read_filled(store) > 0).sum()) == 4
+
+
+def test_a_looser_precision_keeps_what_a_tighter_one_computed(tmp_path):
+    store = tmp_path / "f.zarr"
+    tight = coincli.fractions(PAPER, precision=0.004, of="standing", store=store, **RUN)
+    loose = coincli.fractions(PAPER, precision=0.03, of="standing", store=store, **RUN)
+    assert loose.samples < tight.samples and loose.cost["computed"] == 0
+    assert int((fstore.read_filled(store) > 0).sum()) * 256 == tight.samples
+
+
+@pytest.mark.parametrize("array", ["quarter_turns", "certainty", "filled"])
+def test_a_missing_chunk_is_damage_not_a_label(tmp_path, whole, array):
+    reference, clean = whole
+    store = tmp_path / "f.zarr"
+    coincli.fractions(PAPER, samples=6144, store=store, **RUN)
+    (store / array / "c" / "0").unlink()
+    resumed = coincli.fractions(PAPER, samples=6144, store=store, **RUN)
+    assert resumed.cost["computed"] == 256 and resumed.outcomes == reference.outcomes
+    assert _files(store) == _files(clean)
+
+
+def test_damaged_store_metadata_is_one_line(tmp_path):
+    store = tmp_path / "f.zarr"
+    args = ["fractions", "--samples", "512", "--batch", "256", "--store", str(store)]
+    assert CliRunner().invoke(app, args).exit_code == 0
+    (store / "zarr.json").write_text("garbage")
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    err = " ".join(result.stderr.split())
+    assert "metadata cannot be read" in err and "--overwrite" in err
+
+
+def test_a_second_interrupt_stops_the_batches_in_flight_at_once(tmp_path):
+    """A KeyboardInterrupt (a second Ctrl-C, SIGTERM) while a result is handled stops the
+    batches in flight at once, unwritten, instead of waiting for them."""
+    import time
+
+    calls = []
+
+    def interrupt(update):
+        calls.append(time.perf_counter())
+        raise KeyboardInterrupt
+
+    store = tmp_path / "f.zarr"
+    t0 = time.perf_counter()
+    part = coincli.run_fractions(coincli.plan_fractions(PAPER, samples=8 * 65536, batch=65536,
+                                                        phi0="-pi:pi"),
+                                 store=store, threads=2, progress=interrupt)
+    assert part.stopped == "interrupted" and len(calls) == 1
+    # the other thread's batch of 65,536 throws (over a second) was stopped, not waited for
+    assert time.perf_counter() - calls[0] < 0.5, time.perf_counter() - t0
+    assert part.cost["computed"] == 65536

@@ -295,7 +295,7 @@ def _check_estimate(est, plan, scheduler, yes: bool, quiet: bool) -> None:
             f"({est.cpu_per_sample * 1e3:.3g} ms a sample, from a pilot of "
             f"{est.pilot_samples:,})")
     over = f" over {len(plan.scenes)} values" if plan.parameter is not None else ""
-    if not est.budget_suffices and not yes:
+    if not est.budget_suffices and not yes and not est.held:  # a resume goes on
         raise fail(f"--precision needs about {est.needed:,} samples{over} (from a pilot of "
                    f"{est.pilot_samples:,}), more than the budget of {est.budget:,}: raise "
                    "--max-samples, ask for less precision, or give --yes to run to the "

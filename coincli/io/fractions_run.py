@@ -151,7 +151,7 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     once: they share the batches by claims, and each ends with the same results and store."""
     from . import fractions_store as fstore
     from .claims import Claims
-    from .runner import SchedulerLost, check_where, run_threads, usable_cores
+    from .runner import SchedulerLost, check_where, hard_stop, run_threads, usable_cores
     from .store import check_store_writable
 
     check_where(threads, workers, scheduler)
@@ -167,11 +167,13 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                            None if plan.parameter is None else n_values, plan.parameter)
     writer = claims = None
     damaged: list[tuple[int, int]] = []
+    kept = [0] * n_values  # batches the store held whole from batch 0 when the run started
     if store is not None:
         check_store_writable(store)
         filled = fstore.prepare(store, plan.attrs, layout, None if plan.values is None
                                 else np.asarray(plan.values), overwrite=overwrite)
         damaged = _resume(plan, progs, draws, layout, store, filled)
+        kept = _whole_prefix(plan, layout, filled, damaged)
         writer = fstore.Writer(store, layout)
     # read from the store: every whole batch, also those past a gap
     from_store = sum(t.samples for p in progs for t in p.tallies.values())
@@ -245,13 +247,13 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
             runner.close()
         except KeyboardInterrupt:
             interrupted = True
-            runner.close()
+            hard_stop(runner)  # the batches in flight stop now, unwritten (a second Ctrl-C)
         except SchedulerLost as exc:  # the batches received are written already
             interrupted, lost = True, exc
         interrupted = interrupted or not all(p.done for p in progs)
         if store is not None and not interrupted:
             _seal(store, layout, progs, goal, size,
-                  lambda v, index: claims.path((v, index)).exists())
+                  lambda v, index: claims.path((v, index)).exists(), kept)
     finally:
         if claims is not None:
             claims.close()
@@ -298,7 +300,8 @@ class StoreIncomplete(RuntimeError):
     """A run that met its goal, but whose store does not hold every batch it counted."""
 
 
-def _seal(store, layout, progs, goal, size: int, held: Callable[[int, int], bool]) -> None:
+def _seal(store, layout, progs, goal, size: int, held: Callable[[int, int], bool],
+          kept: list[int]) -> None:
     """Once every value's goal is met: remove the batches beyond each value's stop (so the
     store is the same whoever computed what; not those another process is computing, which it
     removes itself once written: ``held``), then prove that the store holds every batch the
@@ -306,18 +309,34 @@ def _seal(store, layout, progs, goal, size: int, held: Callable[[int, int], bool
     from . import fractions_store as fstore
 
     for v, prog in enumerate(progs):
-        fstore.trim(store, layout, v, prog.prefix, held)
+        # what the store held whole from batch 0 when this run started stays: an earlier run
+        # (a tighter precision, more samples) needed it
+        fstore.trim(store, layout, v, max(prog.prefix, kept[v]), held)
     filled = fstore.read_filled(store)
     missing = []
     for v, prog in enumerate(progs):
         have = np.asarray(filled[v] if layout.values is not None else filled)
-        missing += [(v, b) for b in range(prog.prefix) if have[b] != goal.count(b, size)]
+        missing += [(v, b) for b in range(prog.prefix) if have[b] < goal.count(b, size)]
     if missing:
         v, b = missing[0]
         where = f"batch {b}" + ("" if layout.values is None else f" of value {v}")
         raise StoreIncomplete(f"{store}: {len(missing)} batch(es) counted in the results are "
                               f"not in the store ({where} first); rerun the same command to "
                               "compute them")
+
+
+def _whole_prefix(plan: FractionsPlan, layout, filled, damaged) -> list[int]:
+    """Per value, the batches from 0 on that the store holds whole (none damaged)."""
+    goal, size = plan.goal, plan.sampling.batch
+    out = []
+    for v in range(len(plan.scenes)):
+        have = np.asarray(filled[v] if layout.values is not None else filled)
+        index = 0
+        while index < have.shape[0] and have[index] >= goal.count(index, size) > 0 and \
+                (v, index) not in damaged:
+            index += 1
+        out.append(index)
+    return out
 
 
 def _resume(plan: FractionsPlan, progs, draws, layout, store, filled) -> list[tuple[int, int]]:

@@ -222,8 +222,12 @@ def prepare(path, attrs: dict, layout: Layout, values: np.ndarray | None = None,
 def _check_stored(path: Path, attrs: dict, layout: Layout) -> None:
     """Refuse, in one line, a store of anything but these samples, or one whose arrays do not
     have the layout its attributes describe."""
-    group = _zarr().open_group(str(path), mode="r")
-    stored = dict(group.attrs)
+    try:
+        group = _zarr().open_group(str(path), mode="r")
+        stored = dict(group.attrs)
+    except Exception as exc:  # noqa: BLE001 - any failure to parse is damage
+        raise ParameterError(f"{path}: its metadata cannot be read ({type(exc).__name__}): the "
+                             "store is damaged; --overwrite starts it again") from None
     if MARK not in stored:
         raise ParameterError(f"{path} is a Zarr store but not of coin fractions; "
                              "--overwrite replaces it")
@@ -237,14 +241,21 @@ def _check_stored(path: Path, attrs: dict, layout: Layout) -> None:
                              f"{' ...' if len(diff) > 4 else ''}. Run again with the "
                              "store's settings to resume it, or --overwrite to "
                              "replace it")
-    names = set(group.array_keys())
-    missing = [n for n in ("initial", "filled", *LABELS) if n not in names]
+    try:
+        names = set(group.array_keys())
+        missing = [n for n in ("initial", "filled", *LABELS) if n not in names]
+        shapes_fit = not missing and (
+            tuple(group["filled"].shape[:-1]) == layout.lead()
+            and group["filled"].chunks[-1] == 1
+            and tuple(group["initial"].chunks[-2:]) == (layout.batch, len(COLUMNS)))
+    except Exception as exc:  # noqa: BLE001 - an array's metadata that does not parse
+        raise ParameterError(f"{path}: an array's metadata cannot be read "
+                             f"({type(exc).__name__}): the store is damaged; --overwrite "
+                             "starts it again") from None
     if missing:
         raise ParameterError(f"{path} is damaged: array '{missing[0]}' is missing; "
-                         "--overwrite starts it again")
-    filled = group["filled"]
-    if tuple(filled.shape[:-1]) != layout.lead() or filled.chunks[-1] != 1 or \
-            tuple(group["initial"].chunks[-2:]) != (layout.batch, len(COLUMNS)):
+                             "--overwrite starts it again")
+    if not shapes_fit:
         raise ParameterError(f"{path} is damaged: its arrays do not have the shape "
                              "of its attributes; --overwrite starts it again")
 
@@ -346,7 +357,6 @@ def read_batches(path, layout: Layout, value: int, batches: list[int],
     group = _zarr().open_group(str(path), mode="r")
     at = layout.at(value)
     out: dict[int, dict] = {}
-    damaged: list[int] = []
 
     def read(first: int, last: int) -> dict:
         lo = batches[first] * layout.batch
@@ -359,6 +369,11 @@ def read_batches(path, layout: Layout, value: int, batches: list[int],
             raise ValueError(f"{written} batch(es) hold samples never written")
         return block
 
+    whole = [all(f.is_file() for f in _chunk_files(Path(path), layout, value, index))
+             for index in batches]  # a missing chunk would read back as fill values
+    damaged = [index for index, ok in zip(batches, whole, strict=True) if not ok]
+    counts = [c for c, ok in zip(counts, whole, strict=True) if ok]
+    batches = [index for index, ok in zip(batches, whole, strict=True) if ok]
     start = 0
     while start < len(batches):
         end = start

@@ -35,6 +35,7 @@ class FractionsEstimate:
     seconds: float  # wall time on ``workers`` (CPU time if workers is None)
     workers: int | None  # threads or Dask workers assumed; None: a cluster of unknown size
     pilot_samples: int  # samples the pilot computed
+    held: int = 0  # samples a store holds already (every value)
 
     @property
     def budget_suffices(self) -> bool:
@@ -91,7 +92,7 @@ def estimate_fractions(plan: FractionsPlan, workers: int | None,
     samples = sum(max(0, per_value - h) for h in held)
     seconds = per_sample * samples / (workers or 1)
     return FractionsEstimate(samples, needed, budget, per_sample, seconds, workers,
-                             count * len(piloted))
+                             count * len(piloted), sum(held))
 
 
 __all__ = ["FractionsEstimate", "PILOT_SAMPLES", "estimate_fractions", "needed_samples"]
