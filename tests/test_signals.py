@@ -228,3 +228,21 @@ def test_a_claim_made_as_a_signal_came_is_released_too(tmp_path):
     assert sorted(p.name for p in (tmp_path / "claims").iterdir()) == ["tile_4_5"]
     other.close()
     assert not (tmp_path / "claims").exists()
+
+
+def _die(code: int) -> None:
+    import os
+
+    os._exit(code)  # a worker killed by its task (out of memory, a crash)
+
+
+def test_workers_that_keep_dying_are_one_error_not_a_traceback():
+    import dask
+
+    from coincli.io.dask_tasks import run_dask_tasks
+    from coincli.io.runner import WorkersLost
+
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        tasks = run_dask_tasks(_die, iter([(3,)]), key=lambda item: "coin-test-die", workers=1)
+        with pytest.raises(WorkersLost, match="the Dask workers kept dying on a task"):
+            list(tasks)

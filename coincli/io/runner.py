@@ -48,6 +48,17 @@ class SchedulerLost(RuntimeError):
         super().__init__(f"lost the Dask scheduler {where}: {reason}")
 
 
+class WorkersLost(SchedulerLost):
+    """The Dask workers kept dying on a task (distributed's KilledWorker: out of memory, a
+    crash): the run cannot go on there, and what was finished is in the store, as after a lost
+    scheduler."""
+
+    def __init__(self, address: str | None, reason: str):
+        self.address = address
+        self.reason = reason
+        RuntimeError.__init__(self, f"the Dask workers kept dying on a task: {reason}")
+
+
 class TileDone(NamedTuple):
     """What a tile task reports back: no data, only what it cost and whether it was written."""
 
@@ -291,12 +302,15 @@ def losing_scheduler(client, scheduler: str | None):
     futures cancelled with reason scheduler-connection-lost, a CommClosedError from a call to
     the scheduler) into :class:`SchedulerLost`, raised at once; other errors (a task's own)
     go on as they are."""
+    from distributed import KilledWorker
     from distributed.comm.core import CommClosedError
 
     if scheduler_gone(client):
         raise SchedulerLost(scheduler, "the connection to it closed")
     try:
         yield
+    except KilledWorker as exc:
+        raise WorkersLost(scheduler, str(exc).splitlines()[0][:200]) from exc
     except Exception as exc:
         # CommClosedError: a call to the scheduler (not a task: a task's OSError, say a full
         # disk, is its own) that met the loss before the client's stream did
@@ -388,6 +402,6 @@ def check_where(threads, workers, scheduler) -> None:
                              "tcp://HOST:PORT")
 
 
-__all__ = ["ItemQueue", "SchedulerLost", "TileDone", "check_where", "close_dask",
+__all__ = ["ItemQueue", "SchedulerLost", "TileDone", "WorkersLost", "check_where", "close_dask",
            "cluster_window", "hard_stop", "losing_scheduler", "open_dask", "run_dask",
            "run_threads", "run_tile_task", "scheduler_gone", "usable_cores"]
