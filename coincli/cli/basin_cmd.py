@@ -456,7 +456,6 @@ def render_command(
     n < 0 (clockwise) yellow to red, n > 0 (counter-clockwise) green to blue, n = 0 white, standing (odd n) black; uncertain cells grey, no outcome by t_end purple, non-finite magenta, not computed hatched. Works on partial stores.
     """  # noqa: E501
     from .. import api
-    from ..io.basin_render import log_rerun
     from ..io.paths import check_rrd_path, check_writable, describe
     from ..io.store import read_basin
 
@@ -483,8 +482,10 @@ def render_command(
         console.print(f"wrote {target}")
         _damaged_note(path, basin.damaged, "drawn as not computed")
         if rrd is not None:
+            from ..io.live import Destination, show_basin  # as `coin basin show --rrd`
+
             try:
-                log_rerun(basin, rrd)
+                show_basin(basin, Destination(rrd=rrd))
             except OSError as exc:
                 raise fail(describe(exc, f"cannot write {rrd}")) from None
             say(console, f"wrote {rrd} (open with: {command('rerun', rrd)})")

@@ -284,56 +284,5 @@ def _settle_time_image(basin: Basin, ax, fig, extent, Patch) -> list:
     return handles
 
 
-def log_rerun(basin: Basin, rrd: str | os.PathLike) -> Path:
-    """Save the map to a Rerun recording: ``basin/n`` a SegmentationImage of the outcome classes
-    (one class per n, plus not computed and non-finite) with their colours and names in an
-    AnnotationContext, and ``basin/flags`` the uncertain and unsettled cells."""
-    import rerun as rr
-
-    rrd = Path(rrd)
-    q = basin.arrays["quarter_turns"].astype(np.int64)
-    st = basin.arrays["status"]
-    labelled = _labelled_mask(basin)
-    n_even = n_range(basin)
-    n_max = n_even + 1  # odd n up to one past the largest even n
-    offset = 10
-    ramp = _ramp_colours(n_even)
-    classes = [rr.ClassDescription(info=(0, "not computed", (0, 0, 0, 0))),
-               rr.ClassDescription(info=(1, "non-finite", (255, 0, 255, 255)))]
-    for n in range(-n_max, n_max + 1):
-        if n % 2:
-            colour, pose = STANDING, "standing"
-        else:
-            colour, pose = ramp.get(n, WHITE), "lying"
-        rgb = tuple(int(round(255 * c)) for c in colour)
-        classes.append(rr.ClassDescription(info=(offset + n + n_max, f"n = {n} ({pose})", rgb)))
-    ids = np.zeros(q.shape, dtype=np.uint16)
-    ids[labelled] = (offset + q[labelled] + n_max).astype(np.uint16)
-    ids[st == Status.NONFINITE] = 1
-    flags = np.zeros(q.shape, dtype=np.uint8)
-    flags[st == Status.UNSETTLED] = 2
-    if basin.verified:
-        flags[labelled & (basin.arrays["certainty"] == Certainty.UNCERTAIN)] = 1
-    # images are row = vertical axis from the top: second swept axis, highest value first
-    rec = rr.RecordingStream("coin_basin")
-    rec.save(str(rrd))
-    rec.log("basin", rr.AnnotationContext(classes), static=True)
-    rec.log("basin/n", rr.SegmentationImage(np.ascontiguousarray(ids.T[::-1])), static=True)
-    rec.log("basin/flags", rr.AnnotationContext([
-        rr.ClassDescription(info=(0, "certain", (0, 0, 0, 0))),
-        rr.ClassDescription(info=(1, "uncertain", (160, 160, 160, 255))),
-        rr.ClassDescription(info=(2, "unsettled at t_end", (143, 69, 173, 255)))]), static=True)
-    rec.log("basin/flags", rr.SegmentationImage(np.ascontiguousarray(flags.T[::-1]),
-                                                opacity=0.8), static=True)
-    ax0, ax1 = basin.axes
-    rec.log("basin/description", rr.TextDocument(
-        f"Basin map of {basin.path or 'a basin computed in memory'}: horizontal {ax0['name']} "
-        f"from {ax0['lo']} to {ax0['hi']} "
-        f"{ax0['units']} ({ax0['n']} cells), vertical {ax1['name']} from {ax1['hi']} (top) to "
-        f"{ax1['lo']} {ax1['units']} ({ax1['n']} cells)."), static=True)
-    rec.flush()
-    return rrd
-
-
-__all__ = ["DEFAULT_N_MAX", "FIELDS", "MARK_SIZE", "basin_rgba", "check_marks", "log_rerun",
+__all__ = ["DEFAULT_N_MAX", "FIELDS", "MARK_SIZE", "basin_rgba", "check_marks",
            "render_map"]
