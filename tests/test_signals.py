@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import os
 import signal
 import socket
 import subprocess
@@ -211,6 +212,47 @@ def test_run_dask_tasks_reports_a_lost_scheduler_and_the_workers():
                     killed = time.monotonic()
         assert time.monotonic() - killed < 5
     assert seen and set(seen) == {1}
+
+
+def test_a_call_that_meets_the_scheduler_gone_is_cut_short():
+    """distributed retries connecting to a gone scheduler for the client's whole timeout (20 s):
+    the window and the processing calls must give up within SCHEDULER_CALL_TIMEOUT, so that a
+    scheduler killed during one is reported in seconds (a CI run once took 20 s here)."""
+    from distributed import Client
+
+    from coincli.io.runner import (
+        SCHEDULER_CALL_TIMEOUT,
+        close_dask,
+        cluster_window,
+        losing_scheduler,
+        scheduler_gone,
+        scheduler_processing,
+    )
+
+    with dask_cluster() as (address, scheduler):
+        client = Client(address, timeout="20s")
+        assert cluster_window(client) == 2
+        os.kill(scheduler.pid, signal.SIGSTOP)  # alive but not answering: keep the window
+        try:
+            assert cluster_window(client, previous=7) == 7
+        finally:
+            os.kill(scheduler.pid, signal.SIGCONT)
+        scheduler.kill()
+        scheduler.wait()
+        deadline = time.monotonic() + 10
+        while not scheduler_gone(client) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert scheduler_gone(client)
+        start = time.monotonic()
+        with pytest.raises(TimeoutError):
+            cluster_window(client, previous=7)
+        assert scheduler_processing(client) == set()
+        took = time.monotonic() - start
+        with pytest.raises(SchedulerLost):
+            with losing_scheduler(client, address):
+                cluster_window(client)
+        close_dask(client, None, lost=True)
+    assert took < 2 * SCHEDULER_CALL_TIMEOUT + 2, f"{took:.1f} s"
 
 
 def test_a_claim_made_as_a_signal_came_is_released_too(tmp_path):

@@ -20,6 +20,7 @@ from .runner import (
     losing_scheduler,
     open_dask,
     scheduler_gone,
+    scheduler_processing,
 )
 
 
@@ -39,6 +40,7 @@ def run_dask_tasks(fn: Callable, items: Iterable[tuple], key: Callable[[tuple], 
     submitted = []
     completed = as_completed()
     hard_stop = lost = False
+    limit = 2  # tasks kept submitted: cluster_window's, re-read as workers come and go
 
     def submit(count: int) -> None:
         for _ in range(count):
@@ -50,7 +52,9 @@ def run_dask_tasks(fn: Callable, items: Iterable[tuple], key: Callable[[tuple], 
             completed.add(future)
 
     def window() -> int:
-        return cluster_window(client, on_workers)
+        nonlocal limit
+        limit = cluster_window(client, on_workers, limit)
+        return limit
 
     try:
         with losing_scheduler(client, scheduler):
@@ -76,12 +80,7 @@ def run_dask_tasks(fn: Callable, items: Iterable[tuple], key: Callable[[tuple], 
         lost = lost or scheduler_gone(client)
         unfinished = [f for f in submitted if not f.done()]
         if unfinished and not lost:  # lost: nothing to cancel or wait for
-            processing = set()
-            if not hard_stop:
-                try:
-                    processing = {k for keys in client.processing().values() for k in keys}
-                except Exception:  # noqa: BLE001 - the scheduler may be gone already
-                    processing = set()
+            processing = set() if hard_stop else scheduler_processing(client)
             running = [f for f in unfinished if f.key in processing]
             client.cancel([f for f in unfinished if f.key not in processing])
             if running and not hard_stop:

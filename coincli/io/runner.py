@@ -217,18 +217,10 @@ def run_dask(path: str, spec: SweepSpec, queue: TileQueue, scheduler: str | None
     running: dict = {}  # future -> tile
     hard = lost = False
     cancelled_queued = False
-
-    def window() -> int:
-        return cluster_window(client, on_workers)
-
-    def processing() -> set:
-        try:
-            return {k for keys in client.processing().values() for k in keys}
-        except Exception:  # noqa: BLE001 - the scheduler may be gone already
-            return set()
+    limit = 2  # tasks kept submitted: cluster_window's, re-read as workers come and go
 
     def cancel_queued() -> None:
-        busy = processing()
+        busy = scheduler_processing(client)
         queued = [f for f in running if f.key not in busy and not f.done()]
         client.cancel(queued)
         for future in queued:
@@ -242,7 +234,7 @@ def run_dask(path: str, spec: SweepSpec, queue: TileQueue, scheduler: str | None
                     cancel_queued()
                     cancelled_queued = True
                 if not stopping:
-                    limit = window()
+                    limit = cluster_window(client, on_workers, limit)
                     while len(running) < limit:
                         tile = queue.take()
                         if tile is None:
@@ -280,13 +272,37 @@ def run_dask(path: str, spec: SweepSpec, queue: TileQueue, scheduler: str | None
             close_dask(client, cluster, lost)
 
 
-def cluster_window(client, on_workers: Callable[[int], None] | None = None) -> int:
+# A call to the scheduler that meets it gone retries connecting for the client's whole
+# timeout (20 s), while the client's own stream notices the loss at once: calls are cut short
+# here, and the loss is then reported from the client's status.
+SCHEDULER_CALL_TIMEOUT = 2.0  # s
+
+
+def cluster_window(client, on_workers: Callable[[int], None] | None = None,
+                   previous: int = 2) -> int:
     """How many tasks to keep submitted: twice the cluster's threads (at least 2). Tells
-    ``on_workers`` how many workers the scheduler has now."""
-    nthreads = client.nthreads()
+    ``on_workers`` how many workers the scheduler has now. A scheduler too slow to answer
+    within :data:`SCHEDULER_CALL_TIMEOUT` keeps the ``previous`` window; a lost one raises
+    (:func:`losing_scheduler` turns that into :class:`SchedulerLost`)."""
+    try:
+        nthreads = client.nthreads(callback_timeout=SCHEDULER_CALL_TIMEOUT)
+    except TimeoutError:
+        if scheduler_gone(client):
+            raise
+        return previous
     if on_workers is not None:
         on_workers(len(nthreads))
     return max(2, 2 * sum(nthreads.values()))
+
+
+def scheduler_processing(client) -> set:
+    """The keys of the tasks workers are computing now; empty if the scheduler does not
+    answer within :data:`SCHEDULER_CALL_TIMEOUT` (it may be gone already)."""
+    try:
+        keys = client.processing(callback_timeout=SCHEDULER_CALL_TIMEOUT)
+    except Exception:  # noqa: BLE001 - the scheduler may be gone: nothing is processing
+        return set()
+    return {key for worker_keys in keys.values() for key in worker_keys}
 
 
 def scheduler_gone(client) -> bool:
@@ -403,5 +419,5 @@ def check_where(threads, workers, scheduler) -> None:
 
 
 __all__ = ["ItemQueue", "SchedulerLost", "TileDone", "WorkersLost", "check_where", "close_dask",
-           "cluster_window", "hard_stop", "losing_scheduler", "open_dask", "run_dask",
+           "cluster_window", "hard_stop", "scheduler_processing", "losing_scheduler", "open_dask", "run_dask",
            "run_threads", "run_tile_task", "scheduler_gone", "usable_cores"]
