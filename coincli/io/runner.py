@@ -419,5 +419,6 @@ def check_where(threads, workers, scheduler) -> None:
 
 
 __all__ = ["ItemQueue", "SchedulerLost", "TileDone", "WorkersLost", "check_where", "close_dask",
-           "cluster_window", "hard_stop", "scheduler_processing", "losing_scheduler", "open_dask", "run_dask",
-           "run_threads", "run_tile_task", "scheduler_gone", "usable_cores"]
+           "cluster_window", "hard_stop", "losing_scheduler", "open_dask", "run_dask",
+           "run_threads", "run_tile_task", "scheduler_gone", "scheduler_processing",
+           "usable_cores"]
