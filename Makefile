@@ -18,7 +18,7 @@ $(BIN)/activate:
 # An editable install leaves the package uncompiled; where PYTHONDONTWRITEBYTECODE is set (as in
 # some containers) Python would then compile every module from source on each start (0.1 s).
 $(VENV)/.installed: pyproject.toml $(BIN)/activate
-	$(BIN)/pip install --quiet -e ".[test]"
+	$(BIN)/pip install --quiet -e ".[test,docs,notebook]"
 	$(BIN)/python -m compileall -q coincli
 	touch $@
 
