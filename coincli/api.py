@@ -40,6 +40,7 @@ from .grid import (
 )
 from .integrators import check_step, warm_up
 from .integrators.batch import verified_labels
+from .io.rrd import record
 from .io.runner import check_where
 from .montecarlo import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, Fractions, FractionsOver
 from .montecarlo.plan import FractionsPlan, FractionsProgress, plan_fractions
@@ -817,5 +818,5 @@ __all__ = ["Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
            "cell_scene", "classify", "estimate_fractions", "estimate_sweep", "fractions",
            "fractions_over",
            "load_preset", "open_basin", "open_fractions", "plan_fractions", "plan_sweep",
-           "render_analysis", "render_basin", "render_fractions", "run_fractions", "simulate",
-           "stability", "sweep", "verify_basin"]
+           "record", "render_analysis", "render_basin", "render_fractions", "run_fractions",
+           "simulate", "stability", "sweep", "verify_basin"]
