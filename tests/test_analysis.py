@@ -96,9 +96,9 @@ def coincli_jsonable(value):
 
 def test_classifier_gives_the_verified_labels_on_any_thread_count(store):
     ds = coincli.open_basin(store)
-    scene = scene_of(ds.attrs)
+    scene = scene_of(coincli.basin_attrs(ds))
     p, s, lad = model_params(scene), run_settings(scene.integration), ladder_of(scene.integration)
-    base = base_state_of(ds.attrs)
+    base = base_state_of(coincli.basin_attrs(ds))
     assert base[0] == 0.0 and base[2] == 0.0 and base[1] == pytest.approx(scene.coin.r)
     # the store's own cells: the classifier at cell centres reproduces the stored labels
     vy, vphi = ds["vy"].values, ds["vphi"].values
