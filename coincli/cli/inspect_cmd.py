@@ -15,7 +15,7 @@ from ..enums import Certainty
 from ..version import __version__
 from .basin_cmd import basin_app
 from .common import (
-    announce_compilation,
+    compile_first,
     console,
     err_console,
     fail,
@@ -182,7 +182,7 @@ def inspect_command(
         if recording:
             _check_recording_options(scene, rrd, connect, log_every)
         words = simulate_words(scene, swept=tuple(attrs["sweep"]["dims"]))
-        announce_compilation()
+        compile_first()
         try:
             run = replay(scene, sample_dt=log_every if recording else None,
                          record_events=recording)

@@ -35,8 +35,8 @@ from .common import (
     VyOpt,
     X0Opt,
     Y0Opt,
-    announce_compilation,
     build_scene,
+    compile_first,
     console,
     err_console,
     fail,
@@ -185,7 +185,7 @@ def _announce(scene) -> None:
 
     integ = scene.integration
     if not (info(integ.method).adaptive and integ.stop_on_settle):
-        announce_compilation()  # not a short run: the compiled kernels do it
+        compile_first()  # not a short run: the compiled kernels do it
     if info(integ.method).adaptive:
         return
     ladder = ladder_of(integ)
