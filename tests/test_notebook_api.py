@@ -163,6 +163,8 @@ def test_record_needs_a_destination_and_a_usable_rate(run, tmp_path):
     for bad in (0, -1e-3, math.nan, True, "1e-3"):
         with pytest.raises(ParameterError, match="log_every"):
             coincli.record(run, rrd=tmp_path / "x.rrd", log_every=bad)
+    with pytest.raises(ParameterError, match="^connect must be the URL"):
+        coincli.record(run, connect="localhost:9876")
     assert not (tmp_path / "x.rrd").exists()
 
 

@@ -359,6 +359,12 @@ def record(trajectory, *, rrd: str | os.PathLike | None = None, spawn: bool = Fa
                                   not isinstance(log_every, numbers.Real) or
                                   not math.isfinite(log_every) or log_every <= 0):
         raise ParameterError(f"log_every must be a number of seconds > 0, got {log_every!r}")
+    if connect is not None:
+        try:
+            check_connect_url(connect)
+        except ValueError:
+            raise ParameterError(f"connect must be the URL of a running Rerun viewer, e.g. "
+                                 f"rerun+http://127.0.0.1:9876/proxy, got {connect!r}") from None
     if notebook:
         _viewer_class()
         if not in_notebook():
