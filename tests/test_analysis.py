@@ -166,9 +166,9 @@ def test_unverified_store_uses_settled_labels():
 
 
 def test_options_are_checked():
-    with pytest.raises(ParameterError, match="--bands"):
+    with pytest.raises(ParameterError, match="^bands must be between"):
         AnalysisOptions(box=5, bands=20).check((40, 40))
-    with pytest.raises(ParameterError, match="--box"):
+    with pytest.raises(ParameterError, match="^box must be between"):
         AnalysisOptions(box=50).check((40, 40))
     with pytest.raises(ParameterError, match="eps"):
         AnalysisOptions(eps=(1e-3,)).check((40, 40))
