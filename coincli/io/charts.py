@@ -5,6 +5,8 @@ shares: a new Figure or the caller's Axes (:func:`figure_axes`), writing a figur
 from __future__ import annotations
 
 import csv
+import functools
+import io
 import json
 import math
 from pathlib import Path
@@ -24,9 +26,7 @@ def figure_axes(ax, count: int, size: tuple[float, float], **subplots):
     arguments; own = True). A new Figure is made without pyplot: no backend is switched (a
     notebook's stays inline), and a figure nobody keeps is freed like any object."""
     if ax is None:
-        from matplotlib.figure import Figure
-
-        fig = Figure(figsize=size, layout="constrained")
+        fig = _shown_figure()(figsize=size, layout="constrained")
         axes = fig.subplots(squeeze=False, **subplots).ravel().tolist()
         return fig, axes, True
     axes = [ax] if _is_axes(ax) else list(ax) if isinstance(ax, list | tuple) else [ax]
@@ -39,6 +39,21 @@ def figure_axes(ax, count: int, size: tuple[float, float], **subplots):
         raise ValueError(f"ax: this chart has {count} panel{'s' * (count != 1)}, got "
                          f"{len(axes)} Axes")
     return axes[0].figure, axes, False
+
+
+@functools.cache
+def _shown_figure():
+    """A matplotlib Figure that shows itself in a notebook (as a PNG): a Figure made without
+    pyplot has no display of its own until pyplot has loaded a notebook's inline backend."""
+    from matplotlib.figure import Figure
+
+    class ShownFigure(Figure):
+        def _repr_png_(self) -> bytes:
+            buffer = io.BytesIO()
+            self.savefig(buffer, format="png", bbox_inches="tight")
+            return buffer.getvalue()
+
+    return ShownFigure
 
 
 def _is_axes(ax) -> bool:
