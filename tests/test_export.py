@@ -176,7 +176,7 @@ def test_two_maps_side_by_side_in_one_figure(tmp_path, partial, whole):
         assert one.get_position().x1 <= right.get_position().x0
     assert "8 x 8 cells" in a.get_title() and "partial" in b.get_title()
     assert list(tmp_path.iterdir()) == [tmp_path / "two.png"]  # no file without out
-    with pytest.raises(ParameterError, match="1 panel, got 2 Axes"):
+    with pytest.raises(ParameterError, match="1 panel to draw, got 2 Axes"):
         coincli.render_basin(whole, ax=[a, b])
     with pytest.raises(TypeError, match="matplotlib Axes"):
         coincli.render_basin(whole, ax="left")
@@ -208,3 +208,27 @@ def test_the_render_and_xarrays_plot_with_x_agree_on_orientation(partial):
     default = Figure().subplots()
     q.plot(ax=default)
     assert default.get_ylim() == pytest.approx(rendered.get_xlim())
+
+
+def test_the_charts_of_several_panels_draw_into_the_axes_given(whole):
+    analysis = coincli.analyze(whole, points=0, box=2, bands=2, threads=1)
+    fig = Figure()
+    axes = fig.subplots(1, 3)  # an array of Axes, as subplots gives
+    assert coincli.render_analysis(analysis, ax=axes) is fig
+    assert [ax.get_title() for ax in axes][1:] == ["Basin entropy by band",
+                                                  "Uncertainty exponent by band"]
+    one = Figure().subplots()
+    coincli.render_analysis(analysis, ax=one, panels=["alpha"])
+    assert one.get_title() == "Uncertainty exponent by band"
+    with pytest.raises(ParameterError, match="3 panels to draw, got 1 Axes .panels= says"):
+        coincli.render_analysis(analysis, ax=one)
+    over = coincli.fractions_over(Scene(), "thickness", [0.002, 0.004], samples=256, batch=256,
+                                  threads=1)
+    fig = Figure()
+    left, right = fig.subplots(1, 2)
+    assert coincli.render_fractions(over, ax=[right, left],
+                                    panels=["outcomes", "standing"]) is fig
+    assert left.get_ylabel() == "probability" and right.get_ylabel().startswith("P(n)")
+    assert left.get_xlabel() == right.get_xlabel() == "thickness (m)"
+    shown = coincli.render_fractions(over)  # a new figure, which a notebook shows as a PNG
+    assert len(shown.axes) == 2 and shown._repr_png_().startswith(b"\x89PNG")

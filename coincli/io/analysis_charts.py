@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ..boundary import LOG2
-from .charts import figure_axes, write_figure
+from .charts import PANELS_HINT, figure_axes, write_figure
 from .paths import check_figure_path
 
 WHOLE_COLOUR = "black"
@@ -97,7 +97,8 @@ def _plot_fractions(ax, analysis) -> None:
     ax.set_title(f"Perturbation method: {n_points:,} points, lines: fits "
                  r"$f \propto \varepsilon^{\alpha}$", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
-    ax.legend(loc="lower right", fontsize=7, framealpha=0.9)
+    if ax.get_legend_handles_labels()[0]:  # nothing to name without the perturbation method
+        ax.legend(loc="lower right", fontsize=7, framealpha=0.9)
 
 
 def _band_x(analysis):
@@ -194,7 +195,7 @@ def plot_analysis(analysis, path: Path | None = None, title: str | None = None,
     draw = {"fractions": _plot_fractions, "entropy": _plot_entropy, "alpha": _plot_alpha}
     fig, axes, own = figure_axes(ax, len(panels), (17 * sum(WIDTHS[p] for p in panels) / 3.35,
                                                    5.6),
-                                 ncols=len(panels),
+                                 hint=PANELS_HINT, ncols=len(panels),
                                  gridspec_kw={"width_ratios": [WIDTHS[p] for p in panels]})
     for name, one in zip(panels, axes, strict=True):
         draw[name](one, analysis)

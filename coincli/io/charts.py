@@ -19,25 +19,34 @@ COLOURS = {Method.SYMPLECTIC_EULER: "#d62728", Method.VERLET: "#ff7f0e", Method.
            Method.DOPRI5: "#1f77b4", Method.EVENT: "#9467bd", Method.EVENT_DOP853: "#8c564b"}
 
 
-def figure_axes(ax, count: int, size: tuple[float, float], **subplots):
+PANELS_HINT = " (panels= says which to draw)"  # for the charts of several panels
+
+
+def figure_axes(ax, count: int, size: tuple[float, float], hint: str = "", **subplots):
     """``(figure, axes, own)`` for a chart of ``count`` panels: the caller's ``ax`` (an Axes
     for one panel, a sequence of ``count`` Axes for more; own = False), or a new Figure of
     ``size`` inches with ``count`` Axes laid out by ``subplots`` (``Figure.subplots``
-    arguments; own = True). A new Figure is made without pyplot: no backend is switched (a
-    notebook's stays inline), and a figure nobody keeps is freed like any object."""
+    arguments; own = True). ``hint`` ends the message of a count that differs. A new Figure is
+    made without pyplot: no backend is switched (a notebook's stays inline), and a figure
+    nobody keeps is freed like any object."""
     if ax is None:
         fig = _shown_figure()(figsize=size, layout="constrained")
         axes = fig.subplots(squeeze=False, **subplots).ravel().tolist()
         return fig, axes, True
-    axes = [ax] if _is_axes(ax) else list(ax) if isinstance(ax, list | tuple) else [ax]
+    if _is_axes(ax) or isinstance(ax, str) or not hasattr(ax, "__iter__"):
+        axes = [ax]
+    else:  # a list, or the array of Axes that subplots gives
+        import numpy as np
+
+        axes = list(np.asarray(ax, dtype=object).ravel())
     for one in axes:
         if not _is_axes(one):
             raise TypeError(f"ax must be a matplotlib Axes"
                             f"{'' if count == 1 else f' or a sequence of {count}'}, got "
                             f"{type(one).__name__}")
     if len(axes) != count:
-        raise ValueError(f"ax: this chart has {count} panel{'s' * (count != 1)}, got "
-                         f"{len(axes)} Axes")
+        raise ValueError(f"ax: {count} panel{'s' * (count != 1)} to draw, got {len(axes)} "
+                         f"Axes{hint}")
     return axes[0].figure, axes, False
 
 

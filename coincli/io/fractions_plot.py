@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..montecarlo import PARAMETER_UNITS, FractionsOver, pender_uhrin
-from .charts import figure_axes, write_figure
+from .charts import PANELS_HINT, figure_axes, write_figure
 from .paths import check_figure_path
 
 
@@ -41,7 +41,7 @@ def plot_over(result: FractionsOver, out=None, *, title: str | None = None, dpi:
         raise ValueError(f"unknown panel {unknown[0] if unknown else '(none)'!r}; panels are "
                          f"{', '.join(PANELS)}")
     fig, axes, own = figure_axes(ax, len(panels), (7.5, 3.75 * len(panels)),
-                                 nrows=len(panels), sharex=True)
+                                 hint=PANELS_HINT, nrows=len(panels), sharex=True)
     x = np.asarray(result.values, dtype=float)
     draw = {"standing": _plot_standing, "outcomes": _plot_outcomes}
     for name, one in zip(panels, axes, strict=True):
