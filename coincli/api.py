@@ -538,14 +538,17 @@ def export_basin(basin, path: str | os.PathLike) -> Path:
 
 
 def basin_attrs(basin) -> dict:
-    """The attributes of a basin (Dataset or store path) as plain nested values: parameters,
-    sweep, method, version, coin_basin and, of a Dataset, runs, damaged_tiles, store. A
-    Dataset holds the nested ones as JSON text (NetCDF has no nested attributes); this decodes
-    them, whichever route the Dataset came by."""
+    """The attributes of a basin (Dataset, store path or NetCDF export) as plain nested
+    values: parameters, sweep, method, version, coin_basin and, of a Dataset, runs,
+    damaged_tiles, store. A Dataset holds the nested ones as JSON text (NetCDF has no nested
+    attributes); this decodes them, whichever route the Dataset came by."""
     from .io.dataset import decoded_attrs
+    from .io.export import open_export
     from .io.store import open_view
 
     if isinstance(basin, str | os.PathLike):
+        if Path(basin).is_file():
+            return decoded_attrs(open_export(basin))
         return dict(open_view(basin).attrs)
     return decoded_attrs(basin)
 
