@@ -161,9 +161,11 @@ class Trajectory:
         return events_table(self)
 
     def show(self, *, width: int | None = None, height: int | None = None):
-        """Show the throw inline in a notebook with Rerun's viewer (needs the extra
-        ``coincli[notebook]``); returns the viewer. A throw simulated without samples or events
-        is simulated again with them (at the default display rate)."""
+        """Show the throw in the notebook's cell now, in Rerun's viewer (``width`` and
+        ``height`` in pixels; needs the extra ``coincli[notebook]``). Outside a notebook a
+        one-line RuntimeError says what to do instead (:func:`coincli.record`). A throw that
+        kept no samples or events is simulated again keeping them (every DEFAULT_LOG_EVERY s);
+        ``coincli.record(run, notebook=True)`` also gives the viewer object."""
         from .io.rrd import show_inline
 
         return show_inline(self, width=width, height=height)

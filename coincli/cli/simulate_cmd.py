@@ -96,7 +96,7 @@ def simulate_command(
 ) -> None:
     """Run one throw and print its outcome: n quarter turns, lying or standing, and whether that label is certain.
 
-    The throw is verified on a ladder of tighter settings (--single-pass: once), and recorded for the Rerun viewer (coin.rrd unless --rrd or --no-rrd).
+    The throw is verified on a ladder of tighter settings (--single-pass: once), and recorded for the Rerun viewer (coin.rrd unless --rrd or --no-rrd); --csv and --gif export its time series and an animation.
 
     Example, the throw of the paper's fig. 2 (lying after six quarter turns here; from vy0 = 1.1974 m/s on it stands after seven, as the paper says):
 
