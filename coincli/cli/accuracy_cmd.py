@@ -183,6 +183,7 @@ def run_stability(scene, json_out: bool) -> None:
     from ..integrators import METHODS
 
     rows = []
+    compile_first()  # the bisection runs the compiled kernels
     with console.status("bisecting the failing step of each fixed-step method"):
         for method in METHODS.values():
             if method.adaptive:

@@ -58,6 +58,7 @@ from .text import (
     most_frequent,
     percent,
     print_rows,
+    print_table,
     say,
     share,
 )
@@ -820,8 +821,7 @@ def _print_analysis(path: Path, result, data: dict) -> None:
     head = f"{ax0['name']} ({ax0['units']})"
 
     # the tables fit 80 columns without their outer edges (rich would cut a cell short)
-    ent = Table(title=f"Basin entropy (boxes of {opts.box} x {opts.box} cells) and fractal "
-                      "tests", title_justify="left", show_edge=False, pad_edge=False)
+    ent = Table(show_edge=False, pad_edge=False)
     for col in (head, "S_b", "S_bb", "S_bb>log2", "balls S_bb", "ball test"):
         ent.add_column(col, justify="left" if col in (head, "ball test") else "right",
                        no_wrap=True)
@@ -832,7 +832,8 @@ def _print_analysis(path: Path, result, data: dict) -> None:
                     "-" if ft is None or not ft.balls
                     else f"{_num(ft.boundary_basin_entropy, '.3f')}±{_num(ft.stderr, '.3f')}",
                     "-" if ft is None else ft.verdict, style="bold" if r is w else None)
-    console.print(ent)
+    print_table(console, ent, f"Basin entropy (boxes of {opts.box} x {opts.box} cells) and "
+                              "fractal tests")
     ft = w.fractal_test
     say(console, f"[dim]S_bb>log2: the log-2 criterion (Daza et al. 2016), S_bb > {LOG2:.3f}: "
                  "sufficient for a fractal boundary, not necessary. ball test: Puy et al. "
@@ -845,9 +846,7 @@ def _print_analysis(path: Path, result, data: dict) -> None:
     p = w.perturbation
     if p is not None:
         conf = int(round(100 * opts.confidence))
-        exp = Table(title=f"Uncertainty exponent: perturbation method, {p.n_points:,} points, "
-                          f"eps {p.eps[0]:.0e} to {p.eps[-1]:.0e}", title_justify="left",
-                    show_edge=False, pad_edge=False)
+        exp = Table(show_edge=False, pad_edge=False)
         for col in (head, "alpha", f"{conf} % interval", "D", "local alpha", "left out",
                     "grid"):
             exp.add_column(col, justify="left" if col == head else "right", no_wrap=True)
@@ -871,7 +870,9 @@ def _print_analysis(path: Path, result, data: dict) -> None:
                                else []),
                         percent(r.uncertain_fraction), grid_alpha(r),
                         style="bold" if r is w else None)
-        console.print(exp)
+        print_table(console, exp, f"Uncertainty exponent: perturbation method, "
+                                  f"{p.n_points:,} points, eps {p.eps[0]:.0e} to "
+                                  f"{p.eps[-1]:.0e}")
         say(console, "[dim]alpha: slope of log f(eps) against log eps, f the fraction of "
                      "points whose certain label changes under a perturbation eps (relative to "
                      f"each axis's range; the grid spacing is {1 / (ax0['n'] - 1):.1e}); "

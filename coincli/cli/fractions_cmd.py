@@ -55,6 +55,7 @@ from .text import (
     most_frequent,
     percent,
     print_rows,
+    print_table,
     resolving,
     say,
     share,
@@ -377,8 +378,8 @@ def _print_result(plan, r, every_n: bool = False) -> None:
                  f"{_stopped(r)}")
     say(console, f"drawn: {plan.sampling.describe(scene)}")
     basis = "certain labels" if r.verified else "settled runs (single pass: unverified)"
-    table = Table(title=f"Outcomes: probabilities over the {r.counted:,} {basis}, 95 % "
-                        "Wilson intervals", title_justify="left")
+    title = f"Outcomes: probabilities over the {r.counted:,} {basis}, 95 % Wilson intervals"
+    table = Table()
     for col, just in (("n", "right"), ("pose", "left"), ("turn", "left"), ("count", "right"),
                       ("P", "right"), ("95 % interval", "right")):
         table.add_column(col, justify=just, no_wrap=True)
@@ -387,7 +388,7 @@ def _print_result(plan, r, every_n: bool = False) -> None:
         style = "bold magenta" if row["pose"] == "standing" else None
         table.add_row(str(row["n"]), row["pose"], TURN[row["direction"]], f"{row['count']:,}",
                       percent(row["probability"], resolving(row)), interval(row), style=style)
-    console.print(table)
+    print_table(console, table, title)
     if hidden:
         say(console, left_out(hidden, sum(row["probability"] for row in hidden),
                               "certain labels" if r.verified else "settled runs"))
@@ -445,8 +446,7 @@ def _print_over(plan, res) -> None:
     basis = "certain labels" if first.verified else "settled runs"
     # at 80 columns: P(standing) named once, in the title, and why each value stopped said
     # under the table, not in a column
-    table = Table(title=f"P(standing) over the {basis}, 95 % Wilson intervals",
-                  title_justify="left", show_edge=False, pad_edge=False)
+    table = Table(show_edge=False, pad_edge=False)
     unit = PARAMETER_UNITS[res.parameter]
     cols = [(f"{res.parameter} ({unit})", "right")]
     if res.parameter in ("thickness", "diameter"):
@@ -462,7 +462,7 @@ def _print_over(plan, res) -> None:
         row += [f"{r.samples:,}", percent(r.standing["probability"]), interval(r.standing),
                 percent(r.uncertain["probability"], 3)]
         table.add_row(*row)
-    console.print(table)
+    print_table(console, table, f"P(standing) over the {basis}, 95 % Wilson intervals")
     say(console, f"stopped: {_stopped_over(res)}")
     cost = res.cost
     if cost.get("computed"):

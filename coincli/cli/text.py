@@ -98,6 +98,13 @@ def print_rows(console, rows, label_width: int | None = None) -> None:
                       highlight=False, soft_wrap=True)
 
 
+def print_table(console, table, title: str) -> None:
+    """A table under its title, the title broken between phrases (as a table's own title,
+    rich would break '95 %' after the number)."""
+    say(console, f"[italic]{title}[/italic]")
+    console.print(table)
+
+
 TOP_OUTCOMES = 10  # the outcomes an outcome table lists without --all
 
 
