@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -438,3 +439,14 @@ def test_fractions_lists_the_ten_most_frequent_n_unless_all(in_tmp):
         top.stdout, top.stdout
     full = run(*args, "--all", env={"COLUMNS": "100"})
     assert outcome_rows(full.stdout) == [row["n"] for row in every], full.stdout
+
+
+@pytest.mark.skipif(shutil.which("make") is None, reason="no make")
+def test_make_demo_compiles_the_kernels_as_a_step_before_the_demo():
+    plan = subprocess.run(["make", "-n", "demo"], cwd=REPO, capture_output=True, text=True,
+                          timeout=60)
+    assert plan.returncode == 0, plan.stderr
+    commands = [line.split()[1] for line in plan.stdout.splitlines()
+                if line.split()[:1] and line.split()[0].endswith("/coin")]
+    assert commands[0] == "compile" and "simulate" in commands and "basin" in commands, \
+        plan.stdout
