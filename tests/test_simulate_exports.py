@@ -228,3 +228,20 @@ def test_gif_interrupted_while_drawn_leaves_nothing(tmp_path, monkeypatch, fig2)
         fig2.animate(tmp_path / "throw.gif")
     assert drawn == [0, 1, 2, 3, 4]
     assert not (tmp_path / "throw.gif").exists() and not leftovers(tmp_path)
+
+
+def test_cli_interrupted_while_writing_the_gif(tmp_path, monkeypatch):
+    """Ctrl-C while the animation is drawn: the outcome is printed, the CSV written before it
+    is whole, the animation absent, exit 130."""
+    def interrupted(*args):
+        raise KeyboardInterrupt
+        yield
+
+    monkeypatch.setattr(animation, "_pictures", interrupted)
+    csv, gif = tmp_path / "throw.csv", tmp_path / "throw.gif"
+    result = invoke("--csv", str(csv), "--gif", str(gif))
+    assert result.exit_code == 130
+    assert "n = 6 quarter turns" in result.output
+    assert "interrupted while writing the outputs" in result.output
+    assert len(np.loadtxt(csv, delimiter=",", skiprows=1)) > 300
+    assert not gif.exists() and not leftovers(tmp_path)

@@ -132,12 +132,19 @@ def simulate_command(
             raise typer.Exit(code=130) from None
     info = None
     not_written = []  # (what, why) of each output asked for and not written
-    if recording:
-        info, why = record_throw(trajectory, rrd=rrd_path, spawn=spawn, connect=connect,
-                                 log_every=log_every)
-        if why is not None:
-            not_written.append(("the recording", why))
-    written = _write_exports(trajectory, csv, gif, not_written)
+    try:
+        if recording:
+            info, why = record_throw(trajectory, rrd=rrd_path, spawn=spawn, connect=connect,
+                                     log_every=log_every)
+            if why is not None:
+                not_written.append(("the recording", why))
+        written = _write_exports(trajectory, csv, gif, not_written)
+    except KeyboardInterrupt:  # the outcome is known: printed; each output complete or absent
+        if not json_out:
+            print_summary(trajectory)
+        err_console.print("[yellow]interrupted[/] while writing the outputs: those not "
+                          "finished are absent", highlight=False, soft_wrap=True)
+        raise typer.Exit(code=130) from None
     if json_out:
         print_json({**trajectory.summary(), "version": __version__,
                     "parameters": scene.to_dict(),
