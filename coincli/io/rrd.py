@@ -305,8 +305,8 @@ def in_notebook() -> bool:
     shell = ipython.get_ipython() if ipython is not None else None
     if shell is not None and getattr(shell, "kernel", None) is not None:
         return True
-    marimo = sys.modules.get("rerun_notebook")
-    return bool(marimo is not None and marimo.running_in_marimo())
+    widget = sys.modules.get("rerun_notebook")  # imported by _viewer_class
+    return bool(widget is not None and widget.running_in_marimo())
 
 
 NOT_IN_NOTEBOOK = ("nothing to show the throw in: show() draws in a notebook (Jupyter); here "
