@@ -38,10 +38,11 @@ class CommandList(TyperGroup):
 
 
 def _flags_show_no_type() -> None:
-    """typer 0.28 and 0.29 show '<bool>' as the value of every flag in the option tables
-    (--help, --install-completion, --quiet), as if it took one: a flag shows no value. Our own
-    flags say so with metavar=""; the ones typer adds (--help and the completion options) are
-    built by typer, hence this one change of its option class."""
+    """typer 0.29 shows '<bool>' as the value of every flag in the option tables (--help,
+    --install-completion, --quiet), as if it took one (0.28 showed none, and has no
+    display_type_rich): a flag shows no value. Our own flags say so with metavar=""; the ones
+    typer adds (--help and the completion options) are built by typer, hence this one change
+    of its option class."""
     shown = getattr(TyperOption, "display_type_rich", None)
     if shown is None or getattr(shown, "flag_aware", False):
         return
