@@ -9,7 +9,7 @@ BIN    := $(VENV)/bin
 COIN   := $(BIN)/coin
 OUT    ?= out
 
-.PHONY: install install-oldest demo test test-oldest bench lint docs clean
+.PHONY: install install-oldest demo test test-oldest bench lint docs docs-build clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -65,9 +65,16 @@ test-oldest: install-oldest
 bench: install
 	$(COIN) bench
 
-# Regenerate every picture and table under docs/ (about 45 minutes on 2 idle cores; the
-# screenshot needs Debian's xvfb and mesa-vulkan-drivers).
+# The documentation site, into site/ (CI runs this: every warning is an error).
+docs-build: install
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
+
+# Regenerate every picture and table under docs/ (about an hour on 2 idle cores; the
+# screenshot needs Debian's xvfb and mesa-vulkan-drivers), and run the pages' commands marked
+# <!-- long --> (tests/test_docs.py).
 docs: install
+	$(BIN)/python benchmarks/docs_tables.py
+	COIN_DOCS_LONG=1 $(BIN)/python -m pytest -q -n 0 tests/test_docs.py
 	$(COIN) accuracy --res 32 -o docs/accuracy.png --table docs/accuracy.json
 	$(COIN) accuracy --preset thick --res 24 -o docs/accuracy-thick.png \
 		--table docs/accuracy-thick.json

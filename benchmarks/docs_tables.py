@@ -84,8 +84,9 @@ def bench_table(bench: dict) -> str:
     lines = [provenance(bench["measured"]), "", *rows, "",
              f"Start-up (median of {len(startup['help_runs'])}): `coin --help` "
              f"{startup['help_seconds']:.2f} s, a warm `coin simulate --no-rrd` "
-             f"{startup['simulate_seconds']:.2f} s, of which the imports every command that runs "
-             f"kernels needs {startup['import_floor_seconds']:.2f} s."]
+             f"{startup['simulate_seconds']:.2f} s; the imports alone that every command running "
+             f"kernels needs (Python, numpy, typer, rich, numba) "
+             f"{startup['import_floor_seconds']:.2f} s."]
     if basin:
         lines[-1] += (f" The default {basin['res']} x {basin['res']} `coin basin`, the whole "
                       f"command on {basin['threads']} threads: {basin['wall_seconds']:.2f} s "
@@ -120,7 +121,8 @@ def peers_table(peers: dict) -> str:
     versions, machine_info = peers["versions"], peers["machine"]
     where = (f"{machine_info.get('cpus_usable', machine_info['cpu_count'])} cores of "
              f"{machine_info.get('cpu_model', machine_info['processor'])}")
-    rows = [f"coincli {versions['coincli']}, scipy {versions['scipy']}, diffrax "
+    commit = f" ({versions['coincli_git'][:7]})" if versions.get("coincli_git") else ""
+    rows = [f"coincli {versions['coincli']}{commit}, scipy {versions['scipy']}, diffrax "
             f"{versions['diffrax']} (jax {versions['jax']}), {where}, {peers['date'][:10]}: "
             "`python benchmarks/peers.py`.", "",
             f"| method | ms a trajectory | times slower than ours | robust cells right (of "
