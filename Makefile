@@ -47,7 +47,7 @@ OLDEST      ?= .venv-oldest
 OLDEST_TESTS = tests/test_api.py tests/test_store.py tests/test_store_metadata.py \
                tests/test_basin.py tests/test_cli.py tests/test_inputs.py \
                tests/test_engines.py tests/test_jit_cache.py tests/test_threads.py \
-               tests/test_fractions.py --deselect \
+               tests/test_fractions.py tests/test_export.py --deselect \
                tests/test_fractions.py::test_an_interrupted_store_resumes_to_the_same_store_and_results
 
 $(OLDEST)/.installed: pyproject.toml constraints/oldest.txt
