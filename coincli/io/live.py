@@ -432,7 +432,12 @@ def recording_process() -> None:
     tear the interpreter down first (with Rerun loaded, 0.1 s of CPU and more), and the
     sweep's command waits for this process to end."""
     import os
+    import signal
 
+    # a Ctrl-C is the sweep's (this process has a session of its own where there are
+    # sessions; elsewhere a console's Ctrl-C reaches every process in it): this one ends
+    # when its input does
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     record_sweep()
     os._exit(0)
 
