@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import os
+import textwrap
 
 import numpy as np
 
@@ -129,6 +130,7 @@ def render_map(basin: Basin, out: str | os.PathLike | None = None, title: str | 
     of the first swept axis, value of the second) drawn as white circles with a black
     edge."""
     from matplotlib.patches import Patch
+    from matplotlib.transforms import offset_copy
 
     if out is not None:
         out = check_figure_path(out, "picture")
@@ -163,7 +165,7 @@ def render_map(basin: Basin, out: str | os.PathLike | None = None, title: str | 
                     i, j = np.nonzero(mask)
                     ax.scatter(x[i], y[j], s=side ** 2, marker="s", color=colour,
                                linewidths=0, zorder=3)
-        _n_colour_bar(fig, ax, n_range(basin, n_max))
+        _n_colour_bar(fig, ax, n_range(basin, n_max), short=not own)
         handles = _class_handles(basin, classes, Patch)
     else:
         handles = _settle_time_image(basin, ax, fig, extent, Patch)
@@ -175,8 +177,12 @@ def render_map(basin: Basin, out: str | os.PathLike | None = None, title: str | 
     ax.set_ylim(extent[2], extent[3])
     ax.set_xlabel(_axis_label(ax0))
     ax.set_ylabel(_axis_label(ax1))
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.09), ncols=3,
-              fontsize=8, frameon=False)
+    # a panel of the caller's figure: one column, so that the legend is no wider than the map
+    # (the layout would narrow the map to make room for a wider one)
+    # below the tick labels and the axis label, whatever the map's height
+    below = offset_copy(ax.transAxes, fig=fig, y=-LEGEND_DROP_PT, units="points")
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, 0.0),
+              bbox_transform=below, ncols=3 if own else 1, fontsize=8, frameon=False)
 
     attrs = basin.attrs
     method = attrs["method"]
@@ -199,8 +205,10 @@ def render_map(basin: Basin, out: str | os.PathLike | None = None, title: str | 
     if own:
         fig.suptitle(title, fontsize=11)
         ax.set_title(setting_text, fontsize=8, color="#444444")
-    else:  # the figure's title is the caller's: each map says what it is over itself
-        ax.set_title(f"{title}\n{setting_text}", fontsize=8)
+    else:  # the figure's title is the caller's: each map says what it is over itself, its
+        # settings wrapped to the map's width
+        chars = max(30, int(_axes_width(ax) * 72 / (0.5 * 8)))
+        ax.set_title(f"{title}\n{textwrap.fill(setting_text, chars)}", fontsize=8)
     if out is not None:
         write_figure(fig, out, dpi)
     return fig
@@ -211,6 +219,7 @@ def _axes_width(ax) -> float:
     return ax.get_position().width * ax.figure.get_size_inches()[0]
 
 
+LEGEND_DROP_PT = 30.0  # from the map's lower edge to the legend's top: under the axis label
 MARK_SIZE = 64.0  # points^2: a circle about 3 mm wide at any resolution
 
 
@@ -234,7 +243,7 @@ def check_marks(basin: Basin, marks) -> list[tuple[float, float]]:
     return out
 
 
-def _n_colour_bar(fig, ax, n_max: int) -> None:
+def _n_colour_bar(fig, ax, n_max: int, short: bool = False) -> None:
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
@@ -249,7 +258,8 @@ def _n_colour_bar(fig, ax, n_max: int) -> None:
     cbar.set_ticks(ticks)
     cbar.set_ticklabels([f"≤ {n}" if n == -n_max else f"≥ {n}" if n == n_max else str(n)
                          for n in ticks])
-    cbar.set_label("n lying (even): < 0 clockwise, > 0 counter-clockwise")
+    cbar.set_label("n (even: lying)" if short else
+                   "n lying (even): < 0 clockwise, > 0 counter-clockwise")
     cbar.ax.tick_params(labelsize=8)
 
 
