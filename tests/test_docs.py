@@ -184,3 +184,22 @@ def test_the_site_links_every_page():
     nav = (ROOT / "mkdocs.yml").read_text()
     for page in (ROOT / "docs").glob("*.md"):
         assert re.search(rf":\s*{re.escape(page.name)}\s*$", nav, re.M), f"{page.name} not in nav"
+
+
+def test_the_figures_shown_are_those_of_the_stored_benchmark():
+    """The tables of current figures are generated (benchmarks/docs_tables.py) from
+    benchmarks/bench.json and peers.json, never edited by hand: rendering them again changes
+    nothing."""
+    import importlib.util
+    import json
+
+    spec = importlib.util.spec_from_file_location("docs_tables",
+                                                  ROOT / "benchmarks" / "docs_tables.py")
+    tables = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tables)
+    bench = json.loads(tables.BENCH.read_text())
+    assert bench["measured"]["version"] and bench["measured"]["date"]
+    performance = (ROOT / "docs" / "performance.md").read_text()
+    assert tables.bench_table(bench) in performance
+    assert tables.peers_table(json.loads(tables.PEERS.read_text())) in performance
+    assert tables.headline_table(bench) in (ROOT / "README.md").read_text()
