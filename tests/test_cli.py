@@ -331,6 +331,7 @@ def uncompiled(monkeypatch):
 
     from rich.console import Console
 
+    import coincli.api as api
     import coincli.cli.common as common
     import coincli.jit as jit
 
@@ -341,7 +342,7 @@ def uncompiled(monkeypatch):
         monkeypatch.setattr(common, "err_console",
                             Console(file=out, force_terminal=terminal, width=80))
         monkeypatch.setattr(jit, "kernels_cached", lambda: False)
-        monkeypatch.setattr(jit, "compile_kernels",
+        monkeypatch.setattr(api, "compile_kernels",
                             lambda: (calls.append(1), compile_kernels())[1])
         return out
 
@@ -396,11 +397,12 @@ def test_ctrl_c_during_the_first_compilation_is_one_line_and_exit_130(uncompiled
 
 
 def test_compiled_kernels_are_not_compiled_again(monkeypatch):
+    import coincli.api as api
     import coincli.jit as jit
     from coincli.cli.common import compile_first
 
     monkeypatch.setattr(jit, "kernels_cached", lambda: True)
-    monkeypatch.setattr(jit, "compile_kernels", lambda: pytest.fail("compiled again"))
+    monkeypatch.setattr(api, "compile_kernels", lambda: pytest.fail("compiled again"))
     compile_first()
     result = run("compile")
     assert result.exit_code == 0, result.stderr

@@ -207,7 +207,8 @@ def compile_first(quiet: bool = False) -> None:
     stderr is no terminal, one line before and one after. Ctrl-C stops it: exit 130."""
     import time
 
-    from ..jit import FIRST_COMPILE_SECONDS, compile_kernels, kernels_cached
+    from .. import api
+    from ..jit import FIRST_COMPILE_SECONDS, kernels_cached
 
     if kernels_cached():
         return
@@ -217,7 +218,7 @@ def compile_first(quiet: bool = False) -> None:
             say(err_console, f"[yellow]compiling[/] the numerical kernels for this machine: once "
                              f"after installing or updating, about "
                              f"{FIRST_COMPILE_SECONDS / 60:.0f} min")
-            compile_kernels()
+            api.compile_kernels()
         else:
             from rich.progress import SpinnerColumn, TextColumn
 
@@ -227,7 +228,7 @@ def compile_first(quiet: bool = False) -> None:
                       CompileClock(FIRST_COMPILE_SECONDS), console=err_console,
                       transient=True) as bars:
                 bars.add_task("compile", total=None)
-                compile_kernels()
+                api.compile_kernels()
     except KeyboardInterrupt:
         say(err_console, "[yellow]interrupted:[/] while compiling the numerical kernels; "
                          "nothing was done")
