@@ -156,29 +156,14 @@ def fail(message: str) -> typer.Exit:
 
 def in_cli_words(exc: ParameterError) -> str:
     """The message of ``exc`` as the command line says it: each parameter the message names
-    that is an option of the running command (``exc.parameters``) by its option, ``res`` as
-    ``--res``; the Python API's words otherwise (a name that is no option of this command, as a
-    preset file's key, stays as it is)."""
+    as an option's (``exc.parameters``: the raiser lists only names that are options where the
+    API is called from the command line) by its option, ``t_end`` as ``--t-end``."""
     message = str(exc)
-    ctx = click_context()
-    if ctx is None:
-        return message
-    options = {param.name: max(param.opts, key=len) for param in ctx.command.params
-               if param.param_type_name == "option"}  # --res, not -r
     for name in getattr(exc, "parameters", ()):
-        if name in options:
-            message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])",
-                             lambda _, option=options[name]: option, message)
+        option = "--" + name.replace("_", "-")
+        message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])",
+                         lambda _, option=option: option, message)
     return message
-
-
-def click_context():
-    """The context of the command running (None outside one)."""
-    try:  # typer 0.28 on carries its own click
-        from typer._click.globals import get_current_context
-    except ImportError:  # a typer that uses click itself
-        from click import get_current_context
-    return get_current_context(silent=True)
 
 
 @contextlib.contextmanager
