@@ -165,6 +165,13 @@ def test_parameters_changed_in_every_copy_are_not_recovered_but_proven_by_a_resu
     # the changed value as parameters: its tiles do not verify under it, so it is refused
     err = one_line_error(coin(path, *ARGS, "--c", "0.4"))
     assert "cannot be recovered" in err and "--overwrite" in err
+    # the same from Python, in the API's words: overwrite, no option of the command line
+    import coincli
+
+    with pytest.raises(coincli.ParameterError) as caught:
+        coincli.verify_basin(path)
+    assert "cannot be recovered" in str(caught.value) and "--" not in str(caught.value)
+    assert "overwrite" in str(caught.value) and caught.value.parameters == ("overwrite",)
     # the parameters the tiles were computed with: they prove them, the metadata is rebuilt
     assert "repaired" in coin_ok(path, *ARGS).output
     assert_identical(path, clean)

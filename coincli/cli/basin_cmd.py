@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.markup import escape
 from rich.table import Table
 from typer.core import TyperGroup
 
@@ -44,6 +45,7 @@ from .common import (
     console,
     err_console,
     fail,
+    in_cli_words,
     print_json,
     user_errors,
     whole_option,
@@ -282,7 +284,7 @@ def sweep_command(
     except api.SweepTooLong as exc:
         raise fail(_too_long(exc.estimate, plan, scheduler)) from None
     except ParameterError as exc:
-        raise fail(str(exc)) from None
+        raise fail(in_cli_words(exc)) from None
     except SchedulerLost as exc:
         fail(interruptions.lost_scheduler(exc, "every finished tile"))
         raise typer.Exit(code=interruptions.SCHEDULER_LOST) from None
@@ -386,9 +388,9 @@ def verify_command(
     if damage is not None:
         exc = damage
         if json_out:
-            print_json({"path": str(path), "intact": False, "error": str(exc)})
+            print_json({"path": str(path), "intact": False, "error": in_cli_words(exc)})
         else:
-            say(err_console, f"[bold red]damaged:[/] {exc}")
+            say(err_console, f"[bold red]damaged:[/] {escape(in_cli_words(exc))}")
         raise typer.Exit(code=1) from None
     total = int(found.done.size)
     unrepaired = [k for k in found.metadata if k not in found.repaired]

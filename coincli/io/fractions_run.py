@@ -367,8 +367,8 @@ def _resume(plan: FractionsPlan, progs, draws, layout, store, filled) -> list[tu
             stored = fstore.read_initial(store, layout, v, index, count)
             if not np.array_equal(drawn[:, 1:], stored):
                 raise ParameterError(f"{store}: the samples drawn here differ from the ones "
-                                     "in the store (numpy or scipy changed?); --overwrite "
-                                     "starts it again")
+                                     "in the store (numpy or scipy changed?); overwrite "
+                                     "starts it again", parameters=("overwrite",))
             checked = True
         for index, lab in labels.items():
             prog.add(index, Tally.of(lab["quarter_turns"], lab["status"], lab["certainty"],

@@ -227,20 +227,22 @@ def _check_stored(path: Path, attrs: dict, layout: Layout) -> None:
         stored = dict(group.attrs)
     except Exception as exc:  # noqa: BLE001 - any failure to parse is damage
         raise ParameterError(f"{path}: its metadata cannot be read ({type(exc).__name__}): the "
-                             "store is damaged; --overwrite starts it again") from None
+                             "store is damaged; overwrite starts it again",
+                             parameters=("overwrite",)) from None
     if MARK not in stored:
         raise ParameterError(f"{path} is a Zarr store but not of coin fractions; "
-                             "--overwrite replaces it")
+                             "overwrite replaces it", parameters=("overwrite",))
     fmt = stored[MARK].get("format") if isinstance(stored[MARK], dict) else None
     if fmt != FORMAT:
         raise ParameterError(f"{path} is a coin fractions store of format {fmt}, this version "
-                             f"writes format {FORMAT}: --overwrite starts it again")
+                             f"writes format {FORMAT}: overwrite starts it again",
+                             parameters=("overwrite",))
     diff = differences(stored, attrs)
     if diff:
         raise ParameterError(f"{path} holds other samples: {'; '.join(diff[:4])}"
                              f"{' ...' if len(diff) > 4 else ''}. Run again with the "
-                             "store's settings to resume it, or --overwrite to "
-                             "replace it")
+                             "store's settings to resume it, or overwrite to "
+                             "replace it", parameters=("overwrite",))
     try:
         names = set(group.array_keys())
         missing = [n for n in ("initial", "filled", *LABELS) if n not in names]
@@ -250,14 +252,15 @@ def _check_stored(path: Path, attrs: dict, layout: Layout) -> None:
             and tuple(group["initial"].chunks[-2:]) == (layout.batch, len(COLUMNS)))
     except Exception as exc:  # noqa: BLE001 - an array's metadata that does not parse
         raise ParameterError(f"{path}: an array's metadata cannot be read "
-                             f"({type(exc).__name__}): the store is damaged; --overwrite "
-                             "starts it again") from None
+                             f"({type(exc).__name__}): the store is damaged; overwrite "
+                             "starts it again", parameters=("overwrite",)) from None
     if missing:
         raise ParameterError(f"{path} is damaged: array '{missing[0]}' is missing; "
-                             "--overwrite starts it again")
+                             "overwrite starts it again", parameters=("overwrite",))
     if not shapes_fit:
         raise ParameterError(f"{path} is damaged: its arrays do not have the shape "
-                             "of its attributes; --overwrite starts it again")
+                             "of its attributes; overwrite starts it again",
+                             parameters=("overwrite",))
 
 
 def open_attrs(path) -> dict:

@@ -599,9 +599,9 @@ def _prove(path: Path, copies: list[_Copy], wanted: dict | None) -> tuple[dict |
                       + " (the metadata were changed after the tiles were computed"
                       + (f": {_disagreement(copies)}" if len(values) > 1 else "") + "). "
                       + "Run the sweep with the parameters of its tiles to resume it, or "
-                      "--overwrite to start again")
+                      "overwrite to start again")
     return None, (f"its parameters cannot be recovered: {_disagreement(copies)}, and no "
-                  "computed tile proves either; --overwrite starts the sweep again")
+                  "computed tile proves either; overwrite starts the sweep again")
 
 
 def _disagreement(copies: list[_Copy]) -> str:
@@ -637,13 +637,14 @@ def open_view(path: str | os.PathLike, grid: Grid | None = None,
     fmt = mark.get("format") if isinstance(mark, dict) else None
     if fmt is not None and fmt != FORMAT:
         raise ParameterError(f"{path} is a coin basin store of format {fmt}, this version "
-                             f"reads format {FORMAT}: recompute it (--overwrite)")
+                             f"reads format {FORMAT}: recompute it (overwrite)",
+                             parameters=("overwrite",))
     if all(c.value is None for c in copies):
         raise StoreDamaged(f"{path}: its metadata cannot be read: the store is damaged; "
-                           "--overwrite starts the sweep again")
+                           "overwrite starts the sweep again", parameters=("overwrite",))
     proven, proof = _prove(p, copies, wanted)
     if proven is None:
-        raise StoreDamaged(f"{path}: {proof}")
+        raise StoreDamaged(f"{path}: {proof}", parameters=("overwrite",))
     problems = []
     for c in copies:
         if c.value is None:
@@ -660,7 +661,8 @@ def open_view(path: str | os.PathLike, grid: Grid | None = None,
             grid = grid_of(full)
         except Exception as exc:  # noqa: BLE001
             raise StoreDamaged(f"{path}: its metadata cannot be read ({_short(exc)}): the "
-                               "store is damaged; --overwrite starts the sweep again") from None
+                               "store is damaged; overwrite starts the sweep again",
+                               parameters=("overwrite",)) from None
     return StoreView(p, full, grid, parameters_digest(proven), problems, proof)
 
 
@@ -879,8 +881,8 @@ def prepare(path: str | os.PathLike, attrs: dict, spec: SweepSpec,
             changed = f" (its metadata were changed after {when}: {view.problems[0]})"
         raise ParameterError(f"{path} holds a different sweep: {'; '.join(diff[:4])}"
                              f"{' ...' if len(diff) > 4 else ''}{changed}. Run again with the "
-                             "store's parameters to resume it, or --overwrite to "
-                             "replace it")
+                             "store's parameters to resume it, or overwrite to "
+                             "replace it", parameters=("overwrite",))
     cost_dir(path).mkdir(exist_ok=True)
     return check(path, repair_with=attrs, view=view)
 
