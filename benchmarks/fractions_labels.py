@@ -1,10 +1,10 @@
 """How far can the labels behind `coin fractions` move its probabilities? Measured on the
-README's five-dimensional box.
+five-dimensional box of docs/fractions.md.
 
 The 95 % interval `coin fractions` prints is a sampling interval: it assumes every counted label
 is the label of the true throw. A label that is certain and wrong biases the estimate instead,
 and no number of samples averages that out; so the interval is only worth its width if such
-labels are rarer still. This recomputes the first N throws of the README's run (the same
+labels are rarer still. This recomputes the first N throws of the run of docs/fractions.md (the same
 scrambled Sobol points: seed 0, batches of 8,192) with the default, verified labels, and again
 with the event method at rtol 1e-11 and at 1e-12 (the reference: both settled, with the same
 count). It counts the certain labels whose count n differs from the reference, and those whose
@@ -38,7 +38,7 @@ REFERENCE_RTOLS = (1e-11, 1e-12)
 
 
 def box_throws(scene, samples: int) -> np.ndarray:
-    """The first ``samples`` initial states of the README's run (whole batches)."""
+    """The first ``samples`` initial states of the run of docs/fractions.md (whole batches)."""
     from coincli.montecarlo.sampling import Draws, initial_states, make_sampling
 
     sampling = make_sampling(scene, sampler="sobol", seed=0, **BOX)

@@ -1,6 +1,6 @@
 """Would quasi-random points or stratification make `coin fractions` cheaper? Measured: no.
 
-P(standing) over the README's five-dimensional box is about 0.27 %, and its 95 % interval of
+P(standing) over the 5-D box of docs/fractions.md is about 0.27 %, and its 95 % interval of
 +-0.005 percentage points takes 4.2 million verified throws with independent draws. Two
 classical ways to need fewer:
 
@@ -17,7 +17,7 @@ classical ways to need fewer:
    two and five of the initial conditions, also weighed by the strata's costs (steps).
 
     python benchmarks/fractions_variance.py --replicates 24 --samples 16384   # ~1 min
-    python benchmarks/fractions_variance.py --store box.zarr   # after the README's box run
+    python benchmarks/fractions_variance.py --store box.zarr   # after docs/fractions.md's box run
 
 Writes benchmarks/fractions-variance.json (the replicates) and prints both studies.
 """

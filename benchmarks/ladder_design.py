@@ -16,11 +16,11 @@ output and reused when the same grid is asked again.
     python benchmarks/ladder_design.py --preset thick --res 32     # about an hour
     python benchmarks/ladder_design.py --preset paper --box 1024   # throws of the 5-D box
 
-``--box N`` replaces the grid by N seeded random throws over the README's five-dimensional box
+``--box N`` replaces the grid by N seeded random throws over the 5-D box of docs/fractions.md
 of ``coin fractions`` (y0 r:5r, phi0 over a full turn, vx within 0.5 m/s, the default vy0 and
 vphi0 ranges): throws no design was chosen on.
 
-Prints the table the README's "Verified labels" section quotes, and writes it to
+Prints the table docs/verified-labels.md quotes, and writes it to
 benchmarks/ladder-<preset>-<res>.json.
 """
 
@@ -51,7 +51,7 @@ DESIGNS = [  # (first rung, floor, change tolerance, settle tolerance in s (inf:
     (1e-6, 1e-12, 1e-3, 1e-3, EVENT, None), (1e-6, 1e-12, np.inf, 1e-3, EVENT, None),
     (1e-6, 1e-12, 1e-3, 1e-2, DOP853, None), (1e-6, 1e-12, 1e-3, 1e-2, DOP853, 1e-8),
     (1e-6, 1e-12, 1e-3, 1e-2, DOP853, 1e-9), (1e-5, 1e-12, 1e-3, 1e-2, DOP853, 1e-8)]
-BOX = {"y0": "r:5r", "phi0": "-pi:pi", "vx": "-0.5:0.5"}  # the README's 5-D fractions box
+BOX = {"y0": "r:5r", "phi0": "-pi:pi", "vx": "-0.5:0.5"}  # the 5-D box of docs/fractions.md
 
 
 def runs(scene, states, rtols=RTOLS):

@@ -1,6 +1,6 @@
 """coin: the plane model of a rigid coin impacting an elastic foundation.
 
-The public API (see :mod:`coincli.api` and the README's "Python API"):
+The public API (see :mod:`coincli.api` and docs/api.md):
 
     import coincli
     base = coincli.load_preset("paper")

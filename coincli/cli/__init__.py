@@ -42,7 +42,7 @@ app = typer.Typer(
     cls=CommandList,
     help="The plane model of a rigid coin impacting an elastic foundation: simulate one throw, "
          "map which throws make the coin lie or stand, and check the numbers. Every command "
-         "has --help; the README has a tour.",
+         "has --help; the documentation (docs/ in the repository) has a tour.",
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     add_completion=True,
@@ -63,7 +63,7 @@ def _options(
                                           is_eager=True, help="Print the version and exit.")]
     = False,
 ) -> None:
-    """The plane model of a rigid coin impacting an elastic foundation: simulate one throw, map which throws make the coin lie or stand, and check the numbers. Every command has --help; the README has a tour."""  # noqa: E501
+    """The plane model of a rigid coin impacting an elastic foundation: simulate one throw, map which throws make the coin lie or stand, and check the numbers. Every command has --help; the documentation (docs/ in the repository) has a tour."""  # noqa: E501
 
 
 def _register() -> None:
