@@ -5,19 +5,26 @@ robust cells of the stored references.
 
     python benchmarks/contact_methods.py [--rounds 5] [--out benchmarks/contact-methods.json]
 
-The method (``exprb32``, Hochbruck, Ostermann and Schweitzer 2009). Within a contact phase the
-mode (the set of corners in contact) is fixed and the right-hand side F(u) is smooth. With
-J = F'(u_n), the Jacobian at the step's start (the frozen-angle linearisation, derived in
-docs/contact-methods.md), one step of size h is
+The methods (exponential Rosenbrock, Hochbruck, Ostermann and Schweitzer 2009). Within a contact
+phase the mode (the set of corners in contact) is fixed and the right-hand side F(u) is smooth.
+With J = F'(u_n), the Jacobian at the step's start (the linearisation about the current angle,
+derived in docs/contact-methods.md) and the remainder D(U) = F(U) - F(u_n) - J (U - u_n), a step
+of size h is, for ``exprb32`` (order 3, two right-hand sides):
 
     U2      = u_n + h phi_1(hJ) F(u_n)                      (exponential Rosenbrock-Euler, order 2)
-    u_{n+1} = U2 + 2 h phi_3(hJ) D,  D = F(U2) - F(u_n) - J (U2 - u_n)        (order 3)
+    u_{n+1} = U2 + 2 h phi_3(hJ) D(U2)                      error estimate: 2 h phi_3(hJ) D(U2)
 
-with phi_k(z) = sum_j z^j / (j + k)!. It is exact when F is affine (a frozen angle, a damped
-linear oscillator plus gravity): only the remainder D, which comes from the rotation of the coin
-during the step, is integrated approximately, and 2 h phi_3(hJ) D is the error estimate. Two
-right-hand sides and one Jacobian a step; phi_k(hJ) v is summed as its Taylor series on the
-vector (a matrix-vector product of a sparse 6x6 costs 15 multiply-adds), with h limited so that
+and for ``exprb43`` (order 4, embedded order 3, three right-hand sides):
+
+    U2      = u_n + (h/2) phi_1(hJ/2) F(u_n)
+    U3      = u_n + h phi_1(hJ) (F(u_n) + D(U2))
+    u_{n+1} = u_n + h phi_1(hJ) F(u_n) + h phi_3(hJ) (16 D2 - 2 D3) + h phi_4(hJ) (12 D3 - 48 D2)
+                                                            error estimate: the phi_4 term
+
+with phi_k(z) = sum_j z^j / (j + k)!. Both are exact when F is affine (a frozen angle: a damped
+linear oscillator plus gravity): only the remainder, which comes from the rotation of the coin
+during the step, is integrated approximately. phi_k(hJ) v is summed as its Taylor series on the
+vector (a product with the sparse 6x6 J is 15 multiply-adds), with h limited so that
 h rho(J) <= RHO_STEP (the series then loses at most a few digits to cancellation).
 
 What is simpler than in coincli's driver (stated, not hidden): contact events are located by

@@ -15,11 +15,11 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
+from coincli import load_preset as load
 from coincli import model
 from coincli.accuracy import vy_vphi_grid
 from coincli.integrators.batch import label_states
 from coincli.params import model_params, run_settings
-from coincli import load_preset as load
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import contact_methods as cm  # noqa: E402
