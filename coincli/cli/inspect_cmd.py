@@ -29,6 +29,7 @@ from .simulate_cmd import (
     ConnectOpt,
     LogEveryOpt,
     SpawnOpt,
+    _check_log_every,
     _check_recording_options,
     _display_available,
     _no_display,
@@ -180,7 +181,8 @@ def inspect_command(
         attrs, stored = read_stored_cell(path, index)
         scene = cell_scene(attrs, index)
         if recording:
-            _check_recording_options(scene, rrd, connect, log_every)
+            _check_log_every(scene, log_every)
+            _check_recording_options(rrd, connect)
         words = simulate_words(scene, swept=tuple(attrs["sweep"]["dims"]))
         compile_first()
         try:
