@@ -140,6 +140,9 @@ class Trajectory:
             "dt": integ.dt,
             "rtol": integ.rtol,
             "t_end": integ.t_end,
+            "horizon": self.scene.horizon(),
+            "horizon_rule": self.scene.horizon_text(),
+            "certainty_reason": self.certainty.message,
             "stop_on_settle": integ.stop_on_settle,
             "steps": self.steps,
             "wall_time": self.wall_time,
@@ -179,7 +182,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     validate(scene)
     method = check_step(scene, force=force)
     integ = scene.integration
-    _check_sample_dt(sample_dt, integ.t_end)
+    _check_sample_dt(sample_dt, scene.horizon())
     try:
         engine = Engine.parse(engine)
     except ValueError:
@@ -190,7 +193,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     ladder = ladder_of(integ)
     state0 = state_array(scene)
     if sample_dt:
-        samples = np.empty((int(integ.t_end / sample_dt) + 3, SAMPLE_COLUMNS))
+        samples = np.empty((int(scene.horizon() / sample_dt) + 3, SAMPLE_COLUMNS))
     else:
         samples = np.empty((0, SAMPLE_COLUMNS))
     events = np.empty((MAX_EVENTS if record_events else 0, EVENT_COLUMNS))
@@ -203,6 +206,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     certainty = Certainty.UNVERIFIED if not ladder.verified else Certainty.UNCERTAIN
     wall = 0.0
     previous = None  # the last rung's RunResult and label
+    decided = True  # both runs of the last comparison settled (else: undecided, not chaotic)
     for k in range(len(ladder)):
         settings = base._replace(method=int(ladder.methods[k]), rtol=ladder.rtols[k],
                                  dt=ladder.dts[k], max_steps=ladder.budget(k, base.max_steps))
@@ -214,13 +218,18 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
                           Status(result.status), float(result.settle_time), int(result.steps),
                           float(result.last_change)))
         if stops_ladder(result):
+            decided = False
             break
+        if previous is not None:
+            decided = previous[0].status == Status.SETTLED and result.status == Status.SETTLED
         if previous is not None and rungs_agree(previous[1], previous[0], label, result,
                                                 ladder.change_tolerance,
                                                 ladder.settle_tolerance):
             certainty = Certainty.CERTAIN
             break
         previous = (result, label)
+    if certainty == Certainty.UNCERTAIN and not decided:
+        certainty = Certainty.UNDECIDED
     return _trajectory(scene, p, state0, final, result, samples, events, sample_dt,
                        record_events, wall, certainty, rungs, settings.max_steps)
 
@@ -271,7 +280,9 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
                      f"but its energy fell below E_crit at t = {settle_time:.4g} s inside the "
                      f"well n = {quarter_turns}, which is the true outcome")
     if status == Status.UNSETTLED:
-        notes.append(f"the energy is still above E_crit at t = {t:g} s: n = {rounded} is "
+        end = ("" if scene.fixed_horizon else
+               f" (the cap of this throw: {scene.horizon_text()})")
+        notes.append(f"the energy is still above E_crit at t = {t:g} s{end}: n = {rounded} is "
                      "round(2 phi / pi) at the end and may still change; raise --t-end")
     if status == Status.NONFINITE and not is_finite_state(*state0):
         notes.append(f"the initial state is beyond what can be integrated (a value of "
@@ -288,7 +299,11 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
                      "this large needs steps too small to finish)")
     if certainty == Certainty.UNCERTAIN and status == Status.SETTLED:
         tried = "; ".join(f"{r.setting}: n = {r.quarter_turns} {r.status.label}" for r in rungs)
-        notes.append(f"the label did not converge: no two successive rungs agreed ({tried})")
+        notes.append(f"the label did not converge: no two successive rungs agreed ({tried}): "
+                     "chaotic at this precision")
+    if certainty == Certainty.UNDECIDED:
+        tried = "; ".join(f"{r.setting}: n = {r.quarter_turns} {r.status.label}" for r in rungs)
+        notes.append(f"the label is undecided: a rung did not settle ({tried})")
     with np.errstate(over="ignore", invalid="ignore"):  # a state past FINITE_BOUND: inf
         e0 = sum(energies(p, state0))
     e1 = sum(energies(p, final)) if status != Status.NONFINITE else math.nan
