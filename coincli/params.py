@@ -403,8 +403,9 @@ def _decay(coin: Coin, k: float, c: float) -> dict:
     if c <= 0 or k <= 0 or coin.mass <= 0:
         return {"bounce_factor": math.inf, "decay_time": math.inf}
     zeta = c / (2.0 * math.sqrt(k * coin.mass))
-    restitution = math.exp(-math.pi * zeta / math.sqrt(1.0 - zeta * zeta)) if zeta < 1 else 0.0
-    return {"bounce_factor": 1.0 / (1.0 - restitution),
+    # 1 - e, exact for a small zeta (then e rounds to 1); 0 where even that underflows
+    loss = -math.expm1(-math.pi * zeta / math.sqrt(1.0 - zeta * zeta)) if zeta < 1 else 1.0
+    return {"bounce_factor": 1.0 / loss if loss > 0 else math.inf,
             "decay_time": (coin.inertia + coin.mass * coin.r ** 2) / (c * coin.r_d ** 2)}
 
 

@@ -49,6 +49,7 @@ from .params import (
 
 MAX_EVENTS = 200_000
 MAX_SAMPLES = 10_000_000  # states a trajectory keeps at most (560 MB)
+CAPPED_SAMPLES = 1_000_000  # ... without a fixed horizon (56 MB; see _sample_rows)
 # Engine.AUTO runs the kernel as Python (no numba to import, no machine code to load: ~0.7 s
 # saved) when the run is adaptive and stops once settled; a typical throw takes under a hundred
 # steps (about 5 ms in Python). One that needs more than PYTHON_STEPS is run again compiled.
@@ -182,7 +183,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     validate(scene)
     method = check_step(scene, force=force)
     integ = scene.integration
-    _check_sample_dt(sample_dt, scene.horizon())
+    _check_sample_dt(sample_dt, integ.t_end)
     try:
         engine = Engine.parse(engine)
     except ValueError:
@@ -193,7 +194,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     ladder = ladder_of(integ)
     state0 = state_array(scene)
     if sample_dt:
-        samples = np.empty((int(scene.horizon() / sample_dt) + 3, SAMPLE_COLUMNS))
+        samples = np.empty((_sample_rows(scene, sample_dt), SAMPLE_COLUMNS))
     else:
         samples = np.empty((0, SAMPLE_COLUMNS))
     events = np.empty((MAX_EVENTS if record_events else 0, EVENT_COLUMNS))
@@ -234,15 +235,26 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
                        record_events, wall, certainty, rungs, settings.max_steps)
 
 
-def _check_sample_dt(sample_dt, t_end: float) -> None:
-    """ParameterError (one line) unless ``sample_dt`` is None, 0 or a usable interval."""
+def _sample_rows(scene: Scene, sample_dt: float) -> int:
+    """Rows of the buffer of kept states: every state to the horizon; without a fixed one, to
+    the throw's cap but at most CAPPED_SAMPLES (a run mostly ends long before its cap; a
+    longer one keeps its first states, and its notes say so)."""
+    span = scene.horizon() / sample_dt
+    if not scene.fixed_horizon:
+        span = min(span, CAPPED_SAMPLES)
+    return int(span) + 3
+
+
+def _check_sample_dt(sample_dt, t_end: float | None) -> None:
+    """ParameterError (one line) unless ``sample_dt`` is None, 0 or a usable interval (over
+    ``t_end``, if the horizon is fixed)."""
     if sample_dt is None or (isinstance(sample_dt, numbers.Real) and sample_dt == 0):
         return  # keep no states
     if isinstance(sample_dt, bool) or not isinstance(sample_dt, numbers.Real) or \
             not math.isfinite(sample_dt) or sample_dt < 0:
         raise ParameterError(f"sample_dt must be a number of seconds > 0 (0 or None: keep "
                              f"none), got {sample_dt!r}")
-    if t_end / sample_dt > MAX_SAMPLES:
+    if t_end is not None and t_end / sample_dt > MAX_SAMPLES:
         raise ParameterError(f"sample_dt = {sample_dt:g} s would keep {t_end / sample_dt:.3g} "
                              f"states over t_end = {t_end:g} s, at most {MAX_SAMPLES:,}: take "
                              f"sample_dt >= {t_end / MAX_SAMPLES:.2g} s")
@@ -297,6 +309,10 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
                      f"t = {t:.4g} s: "
                      "no outcome (raise --max-steps, or check the throw: a spin or a damping "
                      "this large needs steps too small to finish)")
+    if sample_dt and result.n_samples >= samples.shape[0]:
+        notes.append(f"the recording keeps the first {samples.shape[0]:,} states, to "
+                     f"t = {samples[-1, 0]:.4g} s: give --t-end (a fixed horizon) or a longer "
+                     "interval between states to keep them all")
     if certainty == Certainty.UNCERTAIN and status == Status.SETTLED:
         tried = "; ".join(f"{r.setting}: n = {r.quarter_turns} {r.status.label}" for r in rungs)
         notes.append(f"the label did not converge: no two successive rungs agreed ({tried}): "

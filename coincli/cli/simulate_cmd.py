@@ -182,10 +182,10 @@ def _check_recording_options(scene, rrd_path, connect, log_every) -> None:
     """Fail in one line, before the run, on an unusable path, URL or display rate."""
     if isinstance(log_every, bool) or not math.isfinite(log_every) or log_every <= 0:
         raise fail(f"--log-every must be a positive number of seconds, got {log_every}")
-    frames = scene.horizon() / log_every
-    if frames > MAX_FRAMES:
-        raise fail(f"--log-every {log_every:g} s makes {frames:.3g} frames over "
-                   f"{scene.horizon():g} s (at most {MAX_FRAMES:,}); raise it")
+    frames = scene.integration.t_end / log_every if scene.fixed_horizon else 0.0
+    if frames > MAX_FRAMES:  # without a fixed horizon the run keeps its first states only
+        raise fail(f"--log-every {log_every:g} s makes {frames:.3g} frames for t_end = "
+                   f"{scene.integration.t_end:g} s (at most {MAX_FRAMES:,}); raise it")
     from ..io.paths import check_rrd_path, probe_viewer
 
     if rrd_path is not None:
