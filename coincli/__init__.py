@@ -17,11 +17,11 @@ from .version import __version__
 _API = ("Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan", "FractionsProgress",
         "Method", "Outcome", "ParameterError", "Scene", "Status", "StopReason", "SweepEstimate",
         "SweepPlan", "SweepProgress", "SweepReport", "SweepStart", "SweepTooLong", "Trajectory",
-        "analyze", "basin", "basin_stats", "cell_scene", "classify", "estimate_fractions",
-        "estimate_sweep",
+        "analyze", "basin", "basin_attrs", "basin_stats", "cell_scene", "classify",
+        "estimate_fractions", "estimate_sweep", "export_basin",
         "fractions", "fractions_over", "load_preset", "open_basin", "open_fractions",
-        "plan_fractions", "plan_sweep", "render_analysis", "render_basin", "render_fractions",
-        "run_fractions", "simulate", "stability", "sweep",
+        "plan_fractions", "plan_sweep", "record", "render_analysis", "render_basin",
+        "render_fractions", "run_fractions", "simulate", "stability", "sweep",
         "verify_basin")  # = coincli.api.__all__ (tested)
 
 __all__ = ["__version__", *_API]

@@ -92,26 +92,30 @@ class AnalysisOptions:
         """ParameterError (one line) for settings that cannot apply to a map of ``shape``."""
         rows = shape[0] // self.box if self.box >= 1 else 0
         if self.box < 1 or self.box > min(shape):
-            raise ParameterError(f"--box must be between 1 and {min(shape)} cells (the map is "
-                                 f"{shape[0]} x {shape[1]}), got {self.box}")
+            raise ParameterError(f"box must be between 1 and {min(shape)} cells (the map is "
+                                 f"{shape[0]} x {shape[1]}), got {self.box}", parameters=("box",))
         if not 1 <= self.bands <= rows:
-            raise ParameterError(f"--bands must be between 1 and {rows} (the rows of boxes of "
-                                 f"{self.box} cells), got {self.bands}")
+            raise ParameterError(f"bands must be between 1 and {rows} (the rows of boxes of "
+                                 f"{self.box} cells), got {self.bands}", parameters=("bands",))
         if self.points < 0:
-            raise ParameterError(f"--points must be at least 0 (0 skips the perturbation "
-                                 f"method), got {self.points}")
+            raise ParameterError(f"points must be at least 0 (0 skips the perturbation "
+                                 f"method), got {self.points}", parameters=("points",))
         eps = np.asarray(self.eps, dtype=float)
         if eps.size < 2 or not np.all(np.isfinite(eps)) or np.any(eps <= 0) or np.any(eps >= 0.1):
             raise ParameterError("eps must be at least 2 values between 0 and 0.1 (relative to "
                                  f"each axis's range), got {list(self.eps)}")
         if self.threads < 1:
-            raise ParameterError(f"--threads must be at least 1, got {self.threads}")
+            raise ParameterError(f"threads must be at least 1, got {self.threads}",
+                                 parameters=("threads",))
         if not 1 <= self.radius or not math.isfinite(self.radius):
-            raise ParameterError(f"--radius must be at least 1 cell, got {self.radius}")
+            raise ParameterError(f"radius must be at least 1 cell, got {self.radius}",
+                                 parameters=("radius",))
         if self.balls < 100:
-            raise ParameterError(f"--balls must be at least 100, got {self.balls}")
+            raise ParameterError(f"balls must be at least 100, got {self.balls}",
+                                 parameters=("balls",))
         if self.max_dilation < 1:
-            raise ParameterError(f"--max-dilation must be at least 1, got {self.max_dilation}")
+            raise ParameterError(f"max_dilation must be at least 1, got {self.max_dilation}",
+                                 parameters=("max_dilation",))
         if not (isinstance(self.confidence, int | float) and 0.0 < self.confidence < 1.0):
             raise ParameterError(f"confidence must be between 0 and 1 (e.g. 0.95), got "
                                  f"{self.confidence!r}")
@@ -527,9 +531,10 @@ def analyze_basin(quarter_turns, status, certainty, attrs: dict, *,
 def eps_values(lo: float, hi: float, count: int) -> tuple[float, ...]:
     """``count`` log-spaced perturbation sizes from lo to hi (relative to the axes' ranges)."""
     if not (math.isfinite(lo) and math.isfinite(hi) and 0 < lo < hi):
-        raise ParameterError(f"--eps {lo:g}:{hi:g}: need 0 < LO < HI")
+        raise ParameterError(f"eps {lo:g}:{hi:g}: need 0 < LO < HI", parameters=("eps",))
     if count < 2:
-        raise ParameterError(f"--eps-values must be at least 2, got {count}")
+        raise ParameterError(f"eps_values must be at least 2, got {count}",
+                             parameters=("eps_values",))
     return tuple(np.logspace(math.log10(lo), math.log10(hi), int(count)).tolist())
 
 

@@ -40,6 +40,7 @@ from .grid import (
 )
 from .integrators import check_step, warm_up
 from .integrators.batch import verified_labels
+from .io.rrd import record
 from .io.runner import check_where
 from .montecarlo import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, Fractions, FractionsOver
 from .montecarlo.plan import FractionsPlan, FractionsProgress, plan_fractions
@@ -487,14 +488,69 @@ def _load_kernels(spec: SweepSpec) -> None:
 
 
 def open_basin(store: str | os.PathLike):
-    """A basin store as an xarray Dataset (in memory; every tile checked: cells of unfinished
-    or damaged tiles read as not computed, status NOT_COMPUTED and quarter_turns -32768, so
-    take ``ds.where(ds.status != coincli.Status.NOT_COMPUTED)`` before averaging a partial
-    map; the damaged tiles are listed in the attribute ``damaged_tiles``)."""
+    """A basin store (or a NetCDF file of :func:`export_basin`) as an xarray Dataset, in
+    memory; every tile of a store checked: cells of unfinished or damaged tiles read as not
+    computed (the damaged tiles are listed in the attribute ``damaged_tiles``).
+
+    The variables are on the two swept axes, first swept axis first (``ds.dims``); ``done``
+    and ``tile_cpu_seconds`` per tile. Missing labels, on every route (this function,
+    :func:`basin`, ``xarray.open_zarr`` of a store, ``xarray.open_dataset`` of an export):
+    ``quarter_turns`` is float32, NaN where a cell has no label (not computed or non-finite),
+    and ``status`` says why (``coincli.Status.NOT_COMPUTED``...); on disk it is int16 with
+    ``missing_value`` -32768, which ``mask_and_scale=False`` shows. ``settle_time`` is NaN and
+    ``steps`` and ``rung`` -1 where not computed.
+
+    Attributes that are not strings or numbers (parameters, sweep, method, runs,
+    damaged_tiles...) are JSON text, so that ``ds.to_netcdf("m.nc")`` works;
+    :func:`basin_attrs` gives them decoded (``basin_attrs(ds)["parameters"]["coin"]``).
+
+    Plotting: :func:`render_basin` draws the first swept axis horizontally (as the paper);
+    xarray's ``ds.quarter_turns.plot()`` puts the first dimension on the vertical axis, so
+    ``ds.quarter_turns.plot(x=ds.quarter_turns.dims[0])`` (``x="vy"``) draws it as render
+    does."""
     from .io.dataset import to_dataset
+
+    return to_dataset(_read_basin(store))
+
+
+def _read_basin(path):
+    """The Basin of a store, or of a NetCDF export (a file)."""
+    from .io.export import read_export
     from .io.store import read_basin
 
-    return to_dataset(read_basin(store))
+    if Path(path).is_file():
+        return read_export(path)
+    return read_basin(path)
+
+
+def export_basin(basin, path: str | os.PathLike) -> Path:
+    """Write a basin (Dataset or store path) to ``path``: NetCDF-4 (``.nc``: every variable
+    and attribute, as :func:`open_basin` gives them; ``xarray.open_dataset`` or
+    :func:`open_basin` reads it back) or CSV (``.csv``: one row per cell, the two swept
+    coordinates, n, pose, status, certainty, settle_time, steps, rung, header names with
+    units, empty fields where a value is missing). An existing file is replaced; the file is
+    complete or absent. Returns the path."""
+    from .io.export import check_export_path
+    from .io.export import export_basin as export
+
+    path = check_export_path(path)
+    return export(_as_basin(basin), path)
+
+
+def basin_attrs(basin) -> dict:
+    """The attributes of a basin (Dataset, store path or NetCDF export) as plain nested
+    values: parameters, sweep, method, version, coin_basin and, of a Dataset, runs,
+    damaged_tiles, store. A Dataset holds the nested ones as JSON text (NetCDF has no nested
+    attributes); this decodes them, whichever route the Dataset came by."""
+    from .io.dataset import decoded_attrs
+    from .io.export import open_export
+    from .io.store import open_view
+
+    if isinstance(basin, str | os.PathLike):
+        if Path(basin).is_file():
+            return decoded_attrs(open_export(basin))
+        return dict(open_view(basin).attrs)
+    return decoded_attrs(basin)
 
 
 def cell_scene(basin, *, cell=None, **values) -> Scene:
@@ -523,14 +579,13 @@ def verify_basin(store: str | os.PathLike):
 
 
 def _as_basin(basin):
-    """A Basin view of a Dataset, of a store path, or of a Basin."""
+    """A Basin view of a Dataset, of a store path (or NetCDF export), or of a Basin."""
     from .io.dataset import Basin, from_dataset
-    from .io.store import read_basin
 
     if isinstance(basin, Basin):
         return basin
     if isinstance(basin, str | os.PathLike):
-        return read_basin(basin)
+        return _read_basin(basin)
     return from_dataset(basin)
 
 
@@ -616,18 +671,22 @@ def _stats_warnings(stats: dict) -> list[str]:
     return out
 
 
-def render_basin(basin, out: str | os.PathLike, *, field: str = "n", title: str | None = None,
-                 dpi: int = 150, n_max: int | None = None, marks=()) -> Path:
-    """Draw a basin (Dataset or store path) to a PNG, SVG or PDF (by the extension): the count
-    n in the paper's colours (``field="n"``; colour scale fixed to |n| <= ``n_max``, 24 by
-    default) or the time each outcome was decided (``field="settle_time"``). ``marks``: throws
-    to mark on the map, (value of the first swept axis, value of the second) pairs, each a
-    white circle with a black edge (:func:`cell_scene` gives the Scene of one)."""
+def render_basin(basin, out: str | os.PathLike | None = None, *, ax=None, field: str = "n",
+                 title: str | None = None, dpi: int = 150, n_max: int | None = None, marks=()):
+    """Draw a basin (Dataset or store path) and return the matplotlib Figure: the count n in
+    the paper's colours (``field="n"``; colour scale fixed to |n| <= ``n_max``, 24 by
+    default) or the time each outcome was decided (``field="settle_time"``), the first swept
+    axis horizontal. ``ax``: a matplotlib Axes to draw into (its colour bar takes room from
+    it alone: ``fig, (a, b) = plt.subplots(1, 2, layout="constrained")`` then one map into
+    each); without it, a new Figure. ``out``: also write the figure to a PNG, SVG or PDF (by
+    the extension). ``marks``: throws to mark on the map, (value of the first swept axis,
+    value of the second) pairs, each a white circle with a black edge (:func:`cell_scene`
+    gives the Scene of one)."""
     from .io.basin_render import render_map
 
     try:
         return render_map(_as_basin(basin), out, title=title, dpi=dpi, n_max=n_max,
-                          field=field, marks=marks)
+                          field=field, marks=marks, ax=ax)
     except ValueError as exc:
         raise ParameterError(str(exc)) from None
 
@@ -668,13 +727,21 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
                          options=opts, progress=progress, stop=stop)
 
 
-def render_analysis(analysis, out: str | os.PathLike, *, title: str | None = None,
-                    dpi: int = 150) -> Path:
-    """Draw an analysis (of :func:`analyze`): f(eps) on log-log axes with the fits, and S_b,
-    S_bb and alpha by band; PNG, SVG or PDF by the file's extension."""
+def render_analysis(analysis, out: str | os.PathLike | None = None, *, ax=None,
+                    panels=("fractions", "entropy", "alpha"), title: str | None = None,
+                    dpi: int = 150):
+    """Draw an analysis (of :func:`analyze`) and return the matplotlib Figure: the panels
+    "fractions" (f(eps) on log-log axes with the fits), "entropy" (S_b and S_bb by band) and
+    "alpha" (alpha by band), side by side in a new Figure, or into ``ax`` (one Axes a panel:
+    ``render_analysis(a, ax=ax, panels=["alpha"])``). ``out``: also write it to a PNG, SVG
+    or PDF (by the extension)."""
     from .io.analysis_charts import plot_analysis
 
-    return plot_analysis(analysis, Path(out), title=title, dpi=dpi)
+    try:
+        return plot_analysis(analysis, None if out is None else Path(out), title=title,
+                             dpi=dpi, ax=ax, panels=panels)
+    except ValueError as exc:
+        raise ParameterError(str(exc)) from None
 
 
 # -- outcome probabilities (coin fractions) -----------------------------------------------------
@@ -798,24 +865,32 @@ def open_fractions(store: str | os.PathLike):
     return open_store(store)
 
 
-def render_fractions(result: FractionsOver, out: str | os.PathLike, *,
-                     title: str | None = None, dpi: int = 150) -> Path:
-    """Plot P(outcome) against the parameter of a continuation, with 95 % interval bands (PNG
-    SVG or PDF by the file's suffix)."""
+def render_fractions(result: FractionsOver, out: str | os.PathLike | None = None, *, ax=None,
+                     panels=("standing", "outcomes"), title: str | None = None,
+                     dpi: int = 150):
+    """Plot P(outcome) against the parameter of a continuation, with 95 % interval bands, and
+    return the matplotlib Figure: the panels "standing" (P(standing) and the uncertain
+    fraction) and "outcomes" (P(n) of the most probable n), stacked in a new Figure, or into
+    ``ax`` (one Axes a panel). ``out``: also write it to a PNG, SVG or PDF (by the
+    extension)."""
     from .io.fractions_plot import plot_over
 
     if not isinstance(result, FractionsOver):
         raise TypeError(f"render_fractions draws a continuation (coincli.fractions_over), got "
                         f"{type(result).__name__}")
-    return plot_over(result, out, title=title, dpi=dpi)
+    try:
+        return plot_over(result, out, title=title, dpi=dpi, ax=ax, panels=panels)
+    except ValueError as exc:
+        raise ParameterError(str(exc)) from None
 
 
 __all__ = ["Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
            "FractionsProgress", "Method", "Outcome", "ParameterError", "Scene", "Status",
            "StopReason", "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport",
-           "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin", "basin_stats",
-           "cell_scene", "classify", "estimate_fractions", "estimate_sweep", "fractions",
+           "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin", "basin_attrs",
+           "basin_stats", "cell_scene", "classify", "estimate_fractions", "estimate_sweep",
+           "export_basin", "fractions",
            "fractions_over",
            "load_preset", "open_basin", "open_fractions", "plan_fractions", "plan_sweep",
-           "render_analysis", "render_basin", "render_fractions", "run_fractions", "simulate",
-           "stability", "sweep", "verify_basin"]
+           "record", "render_analysis", "render_basin", "render_fractions", "run_fractions",
+           "simulate", "stability", "sweep", "verify_basin"]

@@ -73,18 +73,19 @@ def _parse_float(name: str, text) -> float:
     """A finite number from option text (:func:`coincli.params.parse_number`: ASCII only) or
     a Python number."""
     if isinstance(text, bool) or not isinstance(text, str | int | float):
-        raise ParameterError(f"--{name}: {shown(text)} is not a number or a LO:HI range")
+        raise ParameterError(f"{name}: {shown(text)} is not a number or a LO:HI range",
+                             parameters=(name,))
     if isinstance(text, str):
         try:
             return parse_number(text)
         except ParameterError as exc:
-            raise ParameterError(f"--{name}: {exc}") from None
+            raise ParameterError(f"{name}: {exc}", parameters=(name,)) from None
     try:
         value = float(text)
     except OverflowError:  # an int past 1.8e308
         value = math.inf
     if not math.isfinite(value):
-        raise ParameterError(f"--{name} must be finite, got {shown(text)}")
+        raise ParameterError(f"{name} must be finite, got {shown(text)}", parameters=(name,))
     return value
 
 
@@ -97,7 +98,8 @@ def parse_range(name: str, value) -> float | tuple[float, float]:
     value."""
     if isinstance(value, tuple | list):
         if len(value) != 2:
-            raise ParameterError(f"--{name}: a range is (LO, HI), got {shown(value)}")
+            raise ParameterError(f"{name}: a range is (LO, HI), got {shown(value)}",
+                                 parameters=(name,))
         lo, hi = (_parse_float(name, v) for v in value)
         text = f"{lo!r}:{hi!r}"
     elif isinstance(value, str):
@@ -106,15 +108,18 @@ def parse_range(name: str, value) -> float | tuple[float, float]:
             return _parse_float(name, text)
         parts = text.split(":")
         if len(parts) != 2 or not parts[0].strip() or not parts[1].strip():
-            raise ParameterError(f"--{name}: '{shown(text)}' is not a LO:HI range")
+            raise ParameterError(f"{name}: '{shown(text)}' is not a LO:HI range",
+                                 parameters=(name,))
         lo, hi = (_parse_float(name, part) for part in parts)
     else:
         return _parse_float(name, value)
     if not lo < hi:
-        raise ParameterError(f"--{name} {shown(text)}: empty range (LO must be below HI)")
+        raise ParameterError(f"{name} {shown(text)}: empty range (LO must be below HI)",
+                             parameters=(name,))
     if not math.isfinite(hi - lo):  # its cell centres would be NaN
-        raise ParameterError(f"--{name} {shown(text)}: the range is too wide to divide into "
-                             "cells (HI - LO is past the largest float, 1.8e308); narrow it")
+        raise ParameterError(f"{name} {shown(text)}: the range is too wide to divide into "
+                             "cells (HI - LO is past the largest float, 1.8e308); narrow it",
+                             parameters=(name,))
     return lo, hi
 
 
@@ -127,18 +132,20 @@ def parse_pair(option: str, text, minimum: int = 1) -> tuple[int, int]:
     try:
         values = [parse_whole(part) for part in parts]
     except ParameterError:
-        raise ParameterError(f"--{option}: '{shown(text)}' is not N or NxM (whole numbers in "
-                             "ASCII digits)") from None
+        raise ParameterError(f"{option}: '{shown(text)}' is not N or NxM (whole numbers in "
+                             "ASCII digits)", parameters=(option,)) from None
     if len(values) == 1:
         values *= 2
     if len(values) != 2:
-        raise ParameterError(f"--{option}: '{shown(text)}' is not N or NxM")
+        raise ParameterError(f"{option}: '{shown(text)}' is not N or NxM",
+                             parameters=(option,))
     for v in values:
         if v < minimum:
-            raise ParameterError(f"--{option} must be at least {minimum}, got '{shown(text)}'")
+            raise ParameterError(f"{option} must be at least {minimum}, got '{shown(text)}'",
+                                 parameters=(option,))
         if v > MAX_CELLS_PER_AXIS:
-            raise ParameterError(f"--{option} must be at most {MAX_CELLS_PER_AXIS}, got "
-                                 f"'{shown(text)}'")
+            raise ParameterError(f"{option} must be at most {MAX_CELLS_PER_AXIS}, got "
+                                 f"'{shown(text)}'", parameters=(option,))
     return values[0], values[1]
 
 
@@ -331,11 +338,12 @@ def make_grid(scene: Scene, ranges: dict[str, tuple[float, float]], res: tuple[i
         listed = ", ".join(names) or "none"
         raise ParameterError(
             f"exactly two initial conditions must be swept (LO:HI), got {len(names)} ({listed}); "
-            "vy and vphi sweep by default: fix one with a plain value (e.g. --vy 1.0) to sweep "
-            "another")
+            "vy and vphi sweep by default: fix one with a plain value (e.g. vy=1.0) to sweep "
+            "another", parameters=("vy", "vphi"))
     for n in res:
         if n < 2:
-            raise ParameterError(f"--res must give at least 2 cells per axis, got {n}")
+            raise ParameterError(f"res must give at least 2 cells per axis, got {n}",
+                                 parameters=("res",))
     axes = tuple(Axis(name, float(ranges[name][0]), float(ranges[name][1]), int(n))
                  for name, n in zip(names, res, strict=True))
     chunk = tuple(min(int(c), n) for c, n in zip(chunk, res, strict=True))

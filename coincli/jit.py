@@ -121,8 +121,29 @@ def python(fn):
     return getattr(fn, "py_func", fn)
 
 
-FIRST_COMPILE_SECONDS = 120  # about how long the first compilation takes on 2 cores (98 s measured,
-# its two drivers compiling at once: coincli.integrators.batch.warm_up)
+# About how long the first compilation takes on 2 cores, its two drivers compiling at once
+# (coincli.integrators.batch.warm_up): 84 s measured on idle cores, 142 s beside other work (load
+# 3 to 5; numba 0.60, a cold cache). The one figure every notice and document gives.
+FIRST_COMPILE_SECONDS = 120
+
+
+def compile_kernels() -> bool:
+    """Compile every kernel for this machine now, unless this version is compiled here already
+    (:func:`kernels_cached`): what the first run of any of them would do, in about
+    FIRST_COMPILE_SECONDS. Whatever the scene, the kernels take the same argument types, so the
+    default scene's compile serves every later one. True if it compiled. Silent: a caller that
+    wants to show the wait does (``coin compile``, :func:`coincli.cli.common.compile_first`)."""
+    if kernels_cached():
+        return False
+    import numpy as np
+
+    from .integrators.batch import warm_up
+    from .params import Scene, model_params, run_settings
+
+    scene = Scene()
+    warm_up(model_params(scene), run_settings(scene.integration),
+            np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+    return True
 
 
 def _marker() -> Path:
@@ -356,6 +377,6 @@ def _install_locator(numba) -> None:
     locators.insert(0, CoincliCacheLocator)
 
 
-__all__ = ["FIRST_COMPILE_SECONDS", "LOADS_WITHOUT_REFRESH", "cache_dir", "compiled", "derive",
-           "is_active", "kernel", "kernels_cached", "loads_without_refresh", "mark_cached",
-           "prune_cache", "python", "sources_digest"]
+__all__ = ["FIRST_COMPILE_SECONDS", "LOADS_WITHOUT_REFRESH", "cache_dir", "compile_kernels",
+           "compiled", "derive", "is_active", "kernel", "kernels_cached", "loads_without_refresh",
+           "mark_cached", "prune_cache", "python", "sources_digest"]

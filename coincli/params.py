@@ -21,7 +21,15 @@ STATE_NAMES = ("x", "y", "phi", "vx", "vy", "vphi")
 
 
 class ParameterError(ValueError):
-    """A parameter value that makes no physical or numerical sense (reported in one line)."""
+    """A parameter value that makes no physical or numerical sense (reported in one line).
+
+    The message names parameters as the Python API does (``res must be at least 2``);
+    ``parameters`` lists those of its names that a command line gives as options, for the CLI
+    to say ``--res`` instead (:func:`coincli.cli.common.in_cli_words`)."""
+
+    def __init__(self, message: str = "", *, parameters: tuple[str, ...] = ()):
+        super().__init__(message)
+        self.parameters = tuple(parameters)
 
 
 SHOWN_CHARS = 40  # an error message quotes at most this much of a value
@@ -346,12 +354,13 @@ def validate(scene: Scene) -> Scene:
         _check_number("t_end", i.t_end, positive=True)
     elif f.c == 0:
         raise ParameterError("an undamped foundation (c = 0) never decides a throw: give t_end, "
-                             "a fixed horizon")
+                             "a fixed horizon", parameters=("c", "t_end"))
     if not 1e-14 <= i.rtol < 1e-1:
         # below ~1e-14 the steps shrink into rounding noise and the run cannot proceed
         raise ParameterError(f"rtol must be between 1e-14 and 0.1, got {i.rtol:g}")
     if i.t_end is not None and i.t_end / i.dt > 1e12:
-        raise ParameterError(f"--t-end / --dt is {i.t_end / i.dt:.3g} steps; at most 1e12")
+        raise ParameterError(f"t_end / dt is {i.t_end / i.dt:.3g} steps; at most 1e12",
+                             parameters=("t_end", "dt"))
     if i.max_steps is not None and (isinstance(i.max_steps, bool)
                                     or not isinstance(i.max_steps, int) or i.max_steps < 1):
         raise ParameterError(f"max_steps must be a whole number of at least 1, got "

@@ -51,6 +51,18 @@ class StabilityReport:
     k_stand_exact: float  # N/m, the stiffness where that depth vanishes (k_cr / 2)
     k_rock: float  # N/m, below it a standing coin is no minimum at all: m g r_d / (2 r_t^2)
 
+    def __repr__(self) -> str:  # a small table in mJ, as `coin stability` prints it
+        rows = [("(energies in mJ)", "rigid", "elastic"), *energy_rows(self)]
+        wide = [max(len(row[i]) for row in rows) for i in range(3)]
+        lines = ["StabilityReport"]
+        lines += [f"  {a:<{wide[0]}}  {b:>{wide[1]}}  {c:>{wide[2]}}" for a, b, c in rows]
+        critical = critical_rows(self)
+        name_width = max(len(name) for name, _, _ in critical)
+        lines += [f"  {name:<{name_width}}  {value}" for name, value, _ in critical]
+        states = "lying" + (", standing" if self.standing_static else "")
+        lines.append(f"  static states: {states}")
+        return "\n".join(lines)
+
     def to_dict(self) -> dict:
         out = asdict(self)
         for name in ("rigid", "elastic"):
@@ -59,6 +71,44 @@ class StabilityReport:
                              to_destabilise_standing=levels.to_destabilise_standing,
                              ratio=levels.ratio)
         return out
+
+
+MJ = 1e3  # joules -> millijoules, the unit the report is read in
+ENERGY_ROWS = (  # (label, EnergyLevels attribute)
+    ("V_max  (on a corner, phi_cr)", "v_max"),
+    ("V_min1 (lying, phi = 0)", "v_min1"),
+    ("V_min2 (standing, phi = pi/2)", "v_min2"),
+    ("to tip a lying coin  V_max - V_min1", "to_destabilise_lying"),
+    ("to tip a standing coin  V_max - V_min2", "to_destabilise_standing"),
+)
+
+
+def energy_rows(report: StabilityReport) -> list[tuple[str, str, str]]:
+    """The static energy table as text, in mJ: (label, rigid, elastic) rows, the ratio last."""
+    rows = [(label, f"{getattr(report.rigid, attr) * MJ:.6g}",
+             f"{getattr(report.elastic, attr) * MJ:.6g}") for label, attr in ENERGY_ROWS]
+    elastic = report.elastic.ratio
+    rows.append(("ratio (eqs. 9, 12)", f"{report.rigid.ratio:.1f}",
+                 f"{elastic:.1f}" if math.isfinite(elastic) and elastic > 0
+                 else "none (k <= k_cr)"))
+    return rows
+
+
+def critical_rows(report: StabilityReport) -> list[tuple[str, str, str]]:
+    """The critical values as text: (name, value with its unit, meaning) rows."""
+    return [
+        ("phi_cr", f"{math.degrees(report.phi_cr):.3f} deg",
+         "the diagonal is vertical: the coin balances on a corner"),
+        ("k", f"{report.k:.6g} N/m", "this foundation"),
+        ("k_min (eq. 11)", f"{report.k_min:.1f} N/m",
+         "above it a coin on phi_cr rests on one corner only"),
+        ("k_cr (eq. 13)", f"{report.k_cr:.2f} N/m", "above it a standing coin can be at rest"),
+        ("E_crit", f"{report.e_crit * MJ:.6g} mJ",
+         "m g (r - m g / 2k): below it the count of quarter turns is final"),
+        ("standing well", f"{report.standing_well_depth * MJ:.4g} mJ",
+         "E_crit minus a standing coin's resting energy, springs counted "
+         "(exact; > 0 for k > k_cr/2)"),
+    ]
 
 
 def analyse(scene: Scene) -> StabilityReport:

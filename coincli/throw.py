@@ -31,6 +31,8 @@ from .integrators.common import (
     ANGLE_BOUND,
     EVENT_COLUMNS,
     FINITE_BOUND,
+    LIFTOFF,
+    ONSET,
     SAMPLE_COLUMNS,
     is_finite_state,
 )
@@ -47,6 +49,29 @@ from .params import (
     validate,
 )
 
+# The columns of ``Trajectory.samples`` and ``Trajectory.events``, named once: every table,
+# Dataset, CSV header and recording of a throw takes its names from here, its units and
+# descriptions from QUANTITIES.
+SAMPLE_NAMES = ("t", *STATE_NAMES)
+EVENT_NAMES = ("t", "corner", "kind", *STATE_NAMES)
+EVENT_KINDS = {ONSET: "onset", LIFTOFF: "lift-off"}  # the ``kind`` column's values
+QUANTITIES = {  # name: (units, long name)
+    "t": ("s", "time"),
+    "x": ("m", "horizontal position of the centroid"),
+    "y": ("m", "height of the centroid"),
+    "phi": ("rad", "angle of the coin"),
+    "vx": ("m/s", "horizontal velocity of the centroid"),
+    "vy": ("m/s", "vertical velocity of the centroid"),
+    "vphi": ("rad/s", "angular velocity"),
+    "corner": ("1", "corner of the coin (0-3)"),
+    "kind": ("1", "contact onset (+1) or lift-off (-1)"),
+    "kinetic": ("J", "kinetic energy"),
+    "gravitational": ("J", "gravitational energy m g y"),
+    "elastic": ("J", "elastic energy stored in the foundation"),
+    "energy": ("J", "total energy"),
+}
+assert len(SAMPLE_NAMES) == SAMPLE_COLUMNS and len(EVENT_NAMES) == EVENT_COLUMNS
+
 MAX_EVENTS = 200_000
 MAX_SAMPLES = 10_000_000  # states a trajectory keeps at most (560 MB)
 CAPPED_SAMPLES = 1_000_000  # ... without a fixed horizon (56 MB; see _sample_rows)
@@ -54,6 +79,20 @@ CAPPED_SAMPLES = 1_000_000  # ... without a fixed horizon (56 MB; see _sample_ro
 # saved) when the run is adaptive and stops once settled; a typical throw takes under a hundred
 # steps (about 5 ms in Python). One that needs more than PYTHON_STEPS is run again compiled.
 PYTHON_STEPS = 3000
+
+
+class State(NamedTuple):
+    """A state of the coin by name (SI units): ``run.final.phi``."""
+
+    x: float
+    y: float
+    phi: float
+    vx: float
+    vy: float
+    vphi: float
+
+
+assert State._fields == STATE_NAMES
 
 
 class Rung(NamedTuple):
@@ -87,15 +126,57 @@ class Trajectory:
     energy_final: float
     e_crit: float
     wall_time: float
-    samples: np.ndarray | None = None  # rows: t, x, y, phi, vx, vy, vphi
-    events: np.ndarray | None = None  # rows: t, corner, kind (+1 onset, -1 lift-off), state
+    samples: np.ndarray | None = None  # columns: SAMPLE_NAMES
+    events: np.ndarray | None = None  # columns: EVENT_NAMES
     notes: list[str] = field(default_factory=list)
     certainty: Certainty = Certainty.UNVERIFIED
     rungs: list[Rung] = field(default_factory=list)
+    sample_dt: float | None = None  # s between samples (None: none kept)
 
     @property
     def settled(self) -> bool:
         return self.status == Status.SETTLED
+
+    @property
+    def final(self) -> State:
+        """The final state by name (``final_state`` is the same as an array)."""
+        return State(*map(float, self.final_state))
+
+    # The views below draw on the io layer, above this one: imported when called, so that a
+    # throw computed without them costs none of their libraries (the layering test allows
+    # exactly these imports, inside functions only).
+    def to_dataset(self):
+        """The samples as an ``xarray.Dataset``: time ``t`` as the coordinate, the state and
+        the energies as variables with ``units`` and ``long_name``, the outcome and the scene's
+        parameters as flat attributes (``ds.to_netcdf()`` works). Needs ``sample_dt``."""
+        from .io.timeseries import trajectory_dataset
+
+        return trajectory_dataset(self)
+
+    def events_table(self):
+        """Every contact onset and lift-off as a ``pandas.DataFrame``, one row per event, columns
+        EVENT_NAMES (``kind`` as "onset" or "lift-off"); units in ``.attrs["units"]``. Needs
+        ``record_events=True``."""
+        from .io.timeseries import events_table
+
+        return events_table(self)
+
+    def show(self, *, width: int | None = None, height: int | None = None):
+        """Show the throw in the notebook's cell now, in Rerun's viewer (``width`` and
+        ``height`` in pixels; needs the extra ``coincli[notebook]``). Outside a notebook a
+        one-line RuntimeError says what to do instead (:func:`coincli.record`). A throw that
+        kept no samples or events is simulated again keeping them (every DEFAULT_LOG_EVERY s);
+        ``coincli.record(run, notebook=True)`` also gives the viewer object."""
+        from .io.rrd import show_inline
+
+        return show_inline(self, width=width, height=height)
+
+    def animate(self, path, *, fps: int | None = None, seconds: float | None = None):
+        """Write an animation of the throw (``.gif``; ``.mp4`` with ffmpeg) drawn with
+        matplotlib; returns its path. See :func:`coincli.io.animation.animate`."""
+        from .io.animation import animate
+
+        return animate(self, path, fps=fps, seconds=seconds)
 
     def __repr__(self) -> str:  # one line in a notebook; everything: summary()
         n = "no count" if self.quarter_turns is None else \
@@ -330,7 +411,7 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
         energy_final=float(e1), e_crit=scene.e_crit, wall_time=wall,
         samples=samples[:result.n_samples].copy() if sample_dt else None,
         events=events[:result.n_events].copy() if record_events else None, notes=notes,
-        certainty=certainty, rungs=rungs)
+        certainty=certainty, rungs=rungs, sample_dt=float(sample_dt) if sample_dt else None)
 
 
 def classify(scene: Scene, *, force: bool = False) -> Outcome:

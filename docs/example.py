@@ -53,5 +53,5 @@ print(ds["quarter_turns"].sel(vy=1.2, vphi=3.5, method="nearest").item())
 # The picture, in the paper's colours.
 
 # %%
-path = coincli.render_basin(ds, "example-basin.png")
-print(f"wrote {path}")
+fig = coincli.render_basin(ds, "example-basin.png")  # the Figure, also written to the file
+print("wrote example-basin.png")

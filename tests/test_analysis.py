@@ -96,9 +96,9 @@ def coincli_jsonable(value):
 
 def test_classifier_gives_the_verified_labels_on_any_thread_count(store):
     ds = coincli.open_basin(store)
-    scene = scene_of(ds.attrs)
+    scene = scene_of(coincli.basin_attrs(ds))
     p, s, lad = model_params(scene), run_settings(scene.integration), ladder_of(scene.integration)
-    base = base_state_of(ds.attrs)
+    base = base_state_of(coincli.basin_attrs(ds))
     assert base[0] == 0.0 and base[2] == 0.0 and base[1] == pytest.approx(scene.coin.r)
     # the store's own cells: the classifier at cell centres reproduces the stored labels
     vy, vphi = ds["vy"].values, ds["vphi"].values
@@ -166,9 +166,9 @@ def test_unverified_store_uses_settled_labels():
 
 
 def test_options_are_checked():
-    with pytest.raises(ParameterError, match="--bands"):
+    with pytest.raises(ParameterError, match="^bands must be between"):
         AnalysisOptions(box=5, bands=20).check((40, 40))
-    with pytest.raises(ParameterError, match="--box"):
+    with pytest.raises(ParameterError, match="^box must be between"):
         AnalysisOptions(box=50).check((40, 40))
     with pytest.raises(ParameterError, match="eps"):
         AnalysisOptions(eps=(1e-3,)).check((40, 40))

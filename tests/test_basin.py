@@ -456,8 +456,9 @@ def test_a_mirrored_map_is_the_full_map(ranges):
     scene = Scene()
     half = coincli.basin(scene, res=8, chunk=2, threads=1, **ranges)
     full = coincli.basin(scene, res=8, chunk=2, threads=1, mirror=False, **ranges)
-    assert half.attrs["sweep"]["mirror"] == [d for d in ("vx", "vphi") if d in ranges]
-    assert full.attrs["sweep"]["mirror"] is None
+    assert coincli.basin_attrs(half)["sweep"]["mirror"] == [d for d in ("vx", "vphi")
+                                                           if d in ranges]
+    assert coincli.basin_attrs(full)["sweep"]["mirror"] is None
     for name in ("quarter_turns", "status", "certainty", "rung"):
         np.testing.assert_array_equal(half[name].values, full[name].values, err_msg=name)
     turns = half["quarter_turns"].values

@@ -4,8 +4,11 @@ no traceback) for every kind of bad input."""
 from __future__ import annotations
 
 import json
+import re
+import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -24,8 +27,8 @@ def in_tmp(tmp_path, monkeypatch):
     return tmp_path
 
 
-def run(*args):
-    return runner.invoke(app, [str(a) for a in args])
+def run(*args, env=None):
+    return runner.invoke(app, [str(a) for a in args], env=env)
 
 
 def assert_one_line_error(result, *fragments):
@@ -286,3 +289,164 @@ def test_an_empty_preset_file_is_refused(in_tmp):
     Path("empty.toml").write_text("")
     result = CliRunner().invoke(app, ["simulate", "--preset", "empty.toml", "--no-rrd"])
     assert result.exit_code == 2 and "is empty" in result.output
+
+
+# -- coin --help, and the first compilation -----------------------------------------------------
+
+def test_help_lists_the_main_commands_first_each_with_an_example():
+    from coincli.cli import MAIN_COMMANDS
+
+    result = runner.invoke(app, ["--help"], env={"COLUMNS": "100"})
+    assert result.exit_code == 0, result.stdout
+    listed = re.findall(r"^│ ([a-z]+) {2,}", result.stdout, re.MULTILINE)
+    assert listed[:4] == ["simulate", "basin", "fractions", "stability"], listed
+    assert {"accuracy", "bench", "compile", "methods", "presets"} <= set(listed[4:]), listed
+    for example in MAIN_COMMANDS.values():
+        assert f"e.g. {example}" in result.stdout, (example, result.stdout)
+
+
+@pytest.mark.parametrize("args", [["--help"], ["basin", "sweep", "--help"],
+                                  ["fractions", "--help"], ["compile", "--help"]])
+def test_flags_show_no_value_in_the_option_tables(args):
+    """typer 0.29 shows '<bool>' after every flag (--help, --install-completion, --quiet)."""
+    result = runner.invoke(app, args, env={"COLUMNS": "120"})
+    assert result.exit_code == 0, result.stdout
+    assert "--help" in result.stdout and "<bool>" not in result.stdout, result.stdout
+
+
+def plain(out) -> str:
+    """What a terminal shows of ``out`` (a StringIO), without its control codes."""
+    return re.sub(r"\x1b\[[0-9;?]*[A-Za-z]", "", out.getvalue())
+
+
+@pytest.fixture
+def uncompiled(monkeypatch):
+    """coincli.cli.common.compile_first on a machine that has not compiled the kernels: the
+    compilation is a fake that sleeps (or raises what the test gives it), its output a string."""
+    import io
+
+    from rich.console import Console
+
+    import coincli.cli.common as common
+    import coincli.jit as jit
+
+    calls = []
+
+    def setup(terminal: bool, compile_kernels=lambda: time.sleep(0.4)):
+        out = io.StringIO()
+        monkeypatch.setattr(common, "err_console",
+                            Console(file=out, force_terminal=terminal, width=80))
+        monkeypatch.setattr(jit, "kernels_cached", lambda: False)
+        monkeypatch.setattr(jit, "compile_kernels",
+                            lambda: (calls.append(1), compile_kernels())[1])
+        return out
+
+    setup.calls = calls
+    return setup
+
+
+def test_the_first_compilation_shows_a_live_clock_against_the_expected_time(uncompiled):
+    from coincli.cli.common import compile_first
+    from coincli.jit import FIRST_COMPILE_SECONDS
+
+    out = uncompiled(terminal=True, compile_kernels=lambda: time.sleep(1.3))
+    compile_first()
+    text = plain(out)
+    expected = f"{FIRST_COMPILE_SECONDS // 60}:{FIRST_COMPILE_SECONDS % 60:02d}"
+    for clock in ("0:00", "0:01"):  # the line counts the seconds as they pass
+        assert f"compiling the numerical kernels {clock} of about {expected}" in text, text
+    assert text.rstrip().endswith("compiled the numerical kernels in 1 s; later runs load them "
+                                  "in a second"), text
+    assert uncompiled.calls == [1]
+
+
+@pytest.mark.parametrize("terminal,quiet", [(False, False), (True, True)])
+def test_the_first_compilation_off_a_terminal_or_quiet_is_two_lines(uncompiled, terminal,
+                                                                     quiet):
+    from coincli.cli.common import compile_first
+    from coincli.jit import FIRST_COMPILE_SECONDS
+
+    out = uncompiled(terminal=terminal)
+    compile_first(quiet=quiet)
+    lines = plain(out).strip().splitlines()
+    assert len(lines) == 3, lines  # the first one is broken at 80 columns
+    assert lines[0].startswith("compiling the numerical kernels for this machine"), lines
+    assert f"about {FIRST_COMPILE_SECONDS / 60:.0f} min" in lines[1], lines
+    assert lines[2].startswith("compiled the numerical kernels in 0 s"), lines
+
+
+def test_ctrl_c_during_the_first_compilation_is_one_line_and_exit_130(uncompiled):
+    import typer
+
+    from coincli.cli.common import compile_first
+
+    def interrupted():
+        raise KeyboardInterrupt
+
+    out = uncompiled(terminal=True, compile_kernels=interrupted)
+    with pytest.raises(typer.Exit) as stop:
+        compile_first()
+    assert stop.value.exit_code == 130
+    assert plain(out).endswith("interrupted: while compiling the numerical kernels; nothing was "
+                               "done\n"), plain(out)
+
+
+def test_compiled_kernels_are_not_compiled_again(monkeypatch):
+    import coincli.jit as jit
+    from coincli.cli.common import compile_first
+
+    monkeypatch.setattr(jit, "kernels_cached", lambda: True)
+    monkeypatch.setattr(jit, "compile_kernels", lambda: pytest.fail("compiled again"))
+    compile_first()
+    result = run("compile")
+    assert result.exit_code == 0, result.stderr
+    assert "compiled already" in result.stdout and result.stderr == ""
+
+
+# -- outcome tables: the ten most frequent n, every n with --all or in JSON ---------------------
+
+def outcome_rows(stdout: str) -> list[int]:
+    """The n of each row of an outcome table."""
+    return [int(m) for m in re.findall(r"^│\s+(-?\d+) │", stdout, re.MULTILINE)]
+
+
+def test_basin_stats_lists_the_ten_most_frequent_n_unless_all(in_tmp):
+    assert run("basin", "s.zarr", "--res", "48", "-q").exit_code == 0
+    every = json.loads(run("basin", "stats", "s.zarr", "--json").stdout)["outcomes"]
+    assert len(every) > 10  # the JSON lists every n
+    top = run("basin", "stats", "s.zarr", env={"COLUMNS": "100"})
+    shown = outcome_rows(top.stdout)
+    ranked = sorted(every, key=lambda row: -row["count"])
+    assert sorted(shown) == shown and len(shown) == 10, shown  # by n, as --all
+    assert {row["n"] for row in ranked[:10]} == set(shown)
+    rest = sum(row["fraction"] for row in ranked[10:])
+    assert f"... {len(every) - 10} more n, " in top.stdout and \
+        "of the labelled cells together (--all lists every n)" in top.stdout, top.stdout
+    assert f"{100 * rest:.3g} %" in top.stdout, (rest, top.stdout)
+    full = run("basin", "stats", "s.zarr", "--all", env={"COLUMNS": "100"})
+    assert outcome_rows(full.stdout) == [row["n"] for row in every]
+    assert "more n" not in full.stdout
+
+
+def test_fractions_lists_the_ten_most_frequent_n_unless_all(in_tmp):
+    args = ["fractions", "--samples", "1024", "--batch", "512", "--phi0", "-pi:pi", "-q"]
+    every = json.loads(run(*args, "--json").stdout)["outcomes"]
+    assert len(every) > 10
+    top = run(*args, env={"COLUMNS": "100"})
+    ranked = sorted(every, key=lambda row: -row["count"])
+    assert set(outcome_rows(top.stdout)) == {row["n"] for row in ranked[:10]}, top.stdout
+    assert f"... {len(every) - 10} more n, " in top.stdout and "of the certain labels" in \
+        top.stdout, top.stdout
+    full = run(*args, "--all", env={"COLUMNS": "100"})
+    assert outcome_rows(full.stdout) == [row["n"] for row in every], full.stdout
+
+
+@pytest.mark.skipif(shutil.which("make") is None, reason="no make")
+def test_make_demo_compiles_the_kernels_as_a_step_before_the_demo():
+    plan = subprocess.run(["make", "-n", "demo"], cwd=REPO, capture_output=True, text=True,
+                          timeout=60)
+    assert plan.returncode == 0, plan.stderr
+    commands = [line.split()[1] for line in plan.stdout.splitlines()
+                if line.split()[:1] and line.split()[0].endswith("/coin")]
+    assert commands[0] == "compile" and "simulate" in commands and "basin" in commands, \
+        plan.stdout

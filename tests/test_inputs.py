@@ -294,3 +294,78 @@ def test_a_recording_that_fails_after_the_run_comes_after_the_outcome(monkeypatc
     assert code == 2 and "n = 6" in out, (code, out, err)
     lines = err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: could not write the recording")
+
+
+# -- API errors in API words, the same errors on the command line in option names --------------
+
+PAPER_SCENE = load("paper").scene
+API_AND_CLI_WORDS = [
+    # (the API call, what its message says, the command line, what the CLI's says)
+    (lambda api: api.plan_sweep(PAPER_SCENE, res=1), "res must be at least 2",
+     ["basin", "s.zarr", "--res", "1"], "--res must be at least 2"),
+    (lambda api: api.plan_sweep(PAPER_SCENE, chunk="2x"), "chunk: '2x' is not N or NxM",
+     ["basin", "s.zarr", "--chunk", "2x"], "--chunk: '2x' is not N or NxM"),
+    (lambda api: api.plan_sweep(PAPER_SCENE, vy="2:1"), "vy 2:1: empty range",
+     ["basin", "s.zarr", "--vy", "2:1"], "--vy 2:1: empty range"),
+    (lambda api: api.plan_sweep(PAPER_SCENE, vy=1.0, vphi=2.0),
+     "vy and vphi sweep by default: fix one with a plain value (e.g. vy=1.0)",
+     ["basin", "s.zarr", "--vy", "1", "--vphi", "2"],
+     "--vy and --vphi sweep by default: fix one with a plain value (e.g. --vy=1.0)"),
+    (lambda api: api.plan_fractions(PAPER_SCENE, seed=-1), "seed must be a whole number >= 0",
+     ["fractions", "--seed", "-1"], "--seed must be a whole number >= 0"),
+    (lambda api: api.plan_fractions(PAPER_SCENE, samples=100, precision=0.01),
+     "give samples (a fixed count) or precision (stop",
+     ["fractions", "--samples", "100", "--precision", "0.01"],
+     "give --samples (a fixed count) or --precision (stop"),
+    (lambda api: api.plan_fractions(PAPER_SCENE, max_samples=0),
+     "max_samples must be a whole number of at least 1",
+     ["fractions", "--max-samples", "0"], "--max-samples must be a whole number of at least 1"),
+    (lambda api: api.plan_fractions(PAPER_SCENE, of="most"), "of must be all or standing",
+     ["fractions", "--of", "most"], "--of must be all or standing"),
+    (lambda api: api.plan_fractions(PAPER_SCENE, over="colour=1:2:3"),
+     "over colour: not a physical parameter",
+     ["fractions", "--over", "colour=1:2:3"], "--over colour: not a physical parameter"),
+    (lambda api: api.plan_fractions(PAPER_SCENE, phi0="2r"), "multiples of r are for y0 only",
+     ["fractions", "--phi0", "2r"], "--phi0: '2r': multiples of r are for --y0 only"),
+    (lambda api: api.fractions(PAPER_SCENE, samples=100, threads=0),
+     "threads must be a whole number >= 1", ["fractions", "--samples", "100", "--threads", "0"],
+     "--threads must be a whole number >= 1"),
+    (lambda api: api.fractions(PAPER_SCENE, samples=100, workers=2, scheduler="tcp://h:1"),
+     "give workers (a local cluster) or scheduler (an existing one)",
+     ["fractions", "--samples", "100", "--workers", "2", "--scheduler", "tcp://h:1"],
+     "give --workers (a local cluster) or --scheduler (an existing one)"),
+    (lambda api: api.simulate(PAPER_SCENE.with_overrides(method="rk4", t_end=1e9, dt=1e-9)),
+     "t_end / dt is 1e+18 steps", ["simulate", "--method", "rk4", "--t-end", "1e9", "--dt",
+                                   "1e-9", "--no-rrd"], "--t-end / --dt is 1e+18 steps"),
+]
+
+
+@pytest.mark.parametrize("call,api_words,args,cli_words", API_AND_CLI_WORDS,
+                         ids=[case[3].split()[0] for case in API_AND_CLI_WORDS])
+def test_api_errors_name_parameters_and_the_cli_names_options(call, api_words, args,
+                                                              cli_words, tmp_path,
+                                                              monkeypatch):
+    import coincli
+
+    with pytest.raises(ParameterError) as caught:
+        call(coincli)
+    message = str(caught.value)
+    assert api_words in message, message
+    assert "--" not in message, message  # no option of the command line in the API's words
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, (result.stdout, result.stderr)
+    assert result.stderr.startswith("error: ") and cli_words in result.stderr, result.stderr
+
+
+def test_a_parameter_named_in_a_preset_file_stays_a_parameter(tmp_path, monkeypatch):
+    """The CLI names an option only for what the message says is one of the command's: a preset
+    file's bad value keeps its key's name."""
+    preset = tmp_path / "bad.toml"
+    preset.write_text('[integration]\nt_end = 1e9\ndt = 1e-9\nmethod = "rk4"\n')
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(app, ["simulate", "--preset", str(preset), "--no-rrd"])
+    assert result.exit_code == 2, (result.stdout, result.stderr)
+    # simulate has --t-end and --dt, but the file said t_end and dt
+    assert result.stderr.startswith("error: preset file"), result.stderr
+    assert "t_end / dt is" in result.stderr and "--" not in result.stderr, result.stderr

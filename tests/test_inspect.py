@@ -66,7 +66,7 @@ def test_inspect_json_replays_twenty_certain_cells_to_their_stored_label(stores,
         # the exact initial state of the cell: the coordinates, bit for bit
         for d in ds.quarter_turns.dims:
             k = (i, j)[ds.quarter_turns.dims.index(d)]
-            if mirror_source(dict(ds.attrs), (i, j)) is None:
+            if mirror_source(coincli.basin_attrs(ds), (i, j)) is None:
                 assert out["values"][d] == float(ds[d].values[k])
 
 
@@ -165,12 +165,12 @@ def test_cell_scene_from_a_dataset_and_from_a_path(stores):
     scene = coincli.cell_scene(ds, phi0=0.5, vy=1.0)
     i = int(np.argmin(np.abs(ds.phi0.values - 0.5)))
     j = int(np.argmin(np.abs(ds.vy.values - 1.0)))
-    assert np.array_equal(state_array(scene), cell_state(dict(ds.attrs), (i, j)))
+    assert np.array_equal(state_array(scene), cell_state(coincli.basin_attrs(ds), (i, j)))
     assert scene == coincli.cell_scene(path, cell=(i, j))
     run = coincli.simulate(scene, engine="numba")
     assert run.quarter_turns == int(ds.quarter_turns.values[i, j])
     # a cell computed itself starts exactly at its coordinates
-    k = next(c for c in range(RES) if mirror_source(dict(ds.attrs), (c, j)) is None)
+    k = next(c for c in range(RES) if mirror_source(coincli.basin_attrs(ds), (c, j)) is None)
     assert coincli.cell_scene(ds, cell=(k, j)).initial.phi0 == float(ds.phi0.values[k])
     with pytest.raises(ParameterError, match="vphi is not swept"):
         coincli.cell_scene(ds, vphi=1.0, vy=1.0)
@@ -200,5 +200,6 @@ def test_render_mark_draws_a_circle_where_the_throw_is(stores, tmp_path):
         result = coin("render", path, "-o", tmp_path / "x.png", *bad)
         assert result.exit_code == 2 and message in result.output
     # the API: marks=
-    out = coincli.render_basin(ds, tmp_path / "api.png", marks=[(1.0, -10.0)])
+    out = tmp_path / "api.png"
+    coincli.render_basin(ds, out, marks=[(1.0, -10.0)])
     assert np.array_equal(np.asarray(Image.open(out).convert("RGB"), dtype=int), b)

@@ -5,16 +5,25 @@ the store and the printed result; --spawn without a display."""
 from __future__ import annotations
 
 import json
+import os
+import signal
+import subprocess
+import sys
+import time
 from collections import defaultdict
+from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
 import pytest
+from conftest import reset_sigint
 from typer.testing import CliRunner
 
 from coincli.cli import app
 from coincli.enums import Certainty, Status
 from coincli.integrators import NO_LABEL
+from coincli.io import live
+from coincli.io.basin_render import _ramp_colours, n_range
 from coincli.io.store import read_basin
 
 rr = pytest.importorskip("rerun")
@@ -26,6 +35,12 @@ SMALL = ["--res", "16", "--chunk", "8", "-q", "--threads", "1"]
 
 
 pytestmark = pytest.mark.usefixtures("strict_rerun")  # conftest.py
+
+
+@pytest.fixture(autouse=True)
+def strict_recording_process(monkeypatch):
+    """A sweep's recording process is as strict as this one (Rerun reads RERUN_STRICT)."""
+    monkeypatch.setenv("RERUN_STRICT", "1")
 
 
 def rows(path) -> dict:
@@ -201,3 +216,72 @@ def test_an_unwritable_recording_is_refused_before_any_work(tmp_path):
     assert result.exit_code == 2
     assert result.stderr.count("\n") == 1 and "does not exist" in result.stderr
     assert not store.exists()
+
+
+def test_the_written_out_colours_are_those_of_coin_basin_render():
+    assert live.RAMP == {n: live._rgb(colour)
+                         for n, colour in _ramp_colours(n_range(None)).items()}
+
+
+def test_a_recording_process_that_dies_is_said_and_the_sweep_goes_on(tmp_path, monkeypatch):
+    """The recording process killed (here at once, by itself): the sweep is done and its
+    result printed, then one error line and exit 2 (as coin simulate's); no recording file,
+    complete or not."""
+    monkeypatch.setattr(live, "RECORDER", "import os, signal; os.kill(os.getpid(), "
+                                          "signal.SIGKILL)")
+    store, rrd = tmp_path / "s.zarr", tmp_path / "s.rrd"
+    result = runner.invoke(app, ["basin", str(store), *SMALL, "--rrd", str(rrd)],
+                           env={"COLUMNS": "400"})
+    assert result.exit_code == 2, result.output
+    assert "4/4 tiles done" in result.stdout
+    assert result.stderr.strip() == ("error: could not write the recording: the recording "
+                                     "process ended before it was done (killed by SIGKILL)")
+    assert read_basin(store).done.all()
+    assert list(tmp_path.glob("*.rrd")) == []
+
+
+def _gone(pid: int) -> bool:
+    import psutil  # a dependency of Rerun's
+
+    try:
+        return psutil.Process(pid).status() == psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return True
+
+
+@pytest.mark.parametrize("how, code", [("Ctrl-C", 130), ("SIGTERM", 143), ("SIGKILL", -9)])
+def test_a_sweep_ended_by_a_signal_leaves_the_recording_of_its_store(tmp_path, how, code):
+    """Ctrl-C at the terminal (SIGINT to the whole process group), SIGTERM, even SIGKILL to
+    the sweep: the recording process ends the recording with the map of what the store holds
+    (it has a session of its own: the Ctrl-C is the sweep's alone), and ends too."""
+    import psutil
+
+    store, rrd = tmp_path / "s.zarr", tmp_path / "s.rrd"
+    sweep = subprocess.Popen([sys.executable, "-m", "coincli", "basin", str(store), "--res",
+                              "512", "--chunk", "16", "--threads", "1", "-q", "--rrd", str(rrd)],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                             start_new_session=True, preexec_fn=reset_sigint,
+                             cwd=Path(__file__).parent.parent)
+    try:
+        deadline = time.monotonic() + 60
+        while not any(f.is_file() and f.suffix != ".partial"
+                      for f in (store / "done" / "c").rglob("*")):  # a tile done
+            assert sweep.poll() is None, sweep.stderr.read()
+            assert time.monotonic() < deadline, "no tile was written in time"
+            time.sleep(0.005)
+        recorder, = psutil.Process(sweep.pid).children()
+        if how == "Ctrl-C":
+            os.killpg(sweep.pid, signal.SIGINT)
+        else:
+            sweep.send_signal(getattr(signal, how))
+        assert sweep.wait(timeout=60) == code, sweep.stderr.read()
+    finally:
+        if sweep.poll() is None:
+            sweep.kill()
+    deadline = time.monotonic() + 30
+    while not _gone(recorder.pid):
+        assert time.monotonic() < deadline, "the recording process is still running"
+        time.sleep(0.01)
+    basin = read_basin(store)
+    assert 0 < basin.done.sum() < basin.done.size  # stopped on the way
+    check_map(rows(rrd), basin, static=False)

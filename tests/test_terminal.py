@@ -70,6 +70,40 @@ def test_basin_run_and_stats_fit_the_terminal(width, tmp_path):
     check_output(out, width, ["256 of 256 = 100 %", "0 not computed"])
 
 
+@pytest.mark.parametrize("width", WIDTHS)
+def test_basin_analyze_fits_the_terminal(width, tmp_path):
+    run(["basin", "s.zarr", "--res", "32", "--quiet"], width, cwd=tmp_path)
+    out = run(["basin", "analyze", "s.zarr", "--points", "400", "--quiet"], width, cwd=tmp_path)
+    check_output(out, width, ["D = 2 - alpha", "S_bb > 0.693", "(Daza et al. 2016)",
+                              "whole map"])
+    assert "local alpha" in out and "ball test" in out  # both tables, every column
+
+
+OVER = ["fractions", "--y0", "r:5r", "--phi0", "-pi:pi", "--vx", "-0.5:0.5", "--over",
+        "thickness=0.0011:0.02:3", "--max-samples", "1024", "--batch", "512", "--precision",
+        "0.001", "--yes"]  # stops at its budget (exit 1): every column of the table and the bar
+
+
+@pytest.mark.parametrize("width", WIDTHS)
+def test_fractions_over_and_its_progress_fit_the_terminal(width, tmp_path):
+    """The table of a continuation, and its progress bars on stderr as a terminal shows them
+    (FORCE_COLOR: rich draws them as on a terminal; what a refresh overwrites is on the last
+    lines too)."""
+    env = {**os.environ, "COLUMNS": str(width), "FORCE_COLOR": "1", "NO_COLOR": "1"}
+    done = subprocess.run([sys.executable, "-m", "coincli", *OVER], capture_output=True,
+                          text=True, env=env, timeout=300, cwd=tmp_path)
+    assert done.returncode == 1, done.stderr  # the budget, spent before the precision
+    ansi = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
+    out = ansi.sub("", done.stdout)
+    check_output(out, width, ["95 % interval", "uncertain", "stopped: budget (every value)"])
+    shown = [ansi.sub("", line) for line in re.split(r"[\r\n]", done.stderr)]
+    assert not any("…" in line for line in shown), done.stderr
+    assert all(len(line) <= width for line in shown), [line for line in shown
+                                                       if len(line) > width]
+    bars = [line for line in shown if line.startswith("thickness = ")]
+    assert bars and all("1,024/1,024" in line and ":00" in line for line in bars[-3:]), bars
+
+
 def test_keep_whole_breaks_only_between_phrases():
     text = ("final  t = 0.362181 s  x = 0.00978893 m  y = 0.00276037 m  phi = 9.60943 rad "
             "(550.58 deg) after eq. 13 and a [bold red]marked up[/] phrase over 512 x 512 cells")

@@ -3,13 +3,64 @@
 The command modules do without ``from __future__ import annotations``: with it, typer has to
 evaluate every option's annotation string, twice, on each start."""
 
+import inspect
 import sys
 from typing import Annotated
 
 import typer
+from typer.core import TyperGroup, TyperOption
+
+# The commands `coin --help` lists first, each with an example; the others follow in the order
+# their modules register them.
+MAIN_COMMANDS = {
+    "simulate": "coin simulate --vy 1.197 --vphi 3.508",
+    "basin": "coin basin out.zarr --res 128",
+    "fractions": "coin fractions --phi0 -pi:pi --vx -0.5:0.5 --samples 64k",
+    "stability": "coin stability --k 250",
+}
+
+
+class CommandList(TyperGroup):
+    """The `coin` group: lists MAIN_COMMANDS first (typer lists a group such as `basin` after
+    every plain command), each with its example under its summary."""
+
+    def list_commands(self, ctx) -> list[str]:
+        names = super().list_commands(ctx)
+        return ([name for name in MAIN_COMMANDS if name in names]
+                + [name for name in names if name not in MAIN_COMMANDS])
+
+    def get_command(self, ctx, name: str):
+        command = super().get_command(ctx, name)
+        if command is not None and name in MAIN_COMMANDS and command.short_help is None:
+            summary = inspect.cleandoc(command.help or "").split("\n\n")[0]
+            command.short_help = f"{summary}\n[dim]e.g.[/dim] {MAIN_COMMANDS[name]}"
+        return command
+
+
+def _flags_show_no_type() -> None:
+    """typer 0.29 shows '<bool>' as the value of every flag in the option tables (--help,
+    --install-completion, --quiet), as if it took one (0.28 showed none, and has no
+    display_type_rich): a flag shows no value. Our own flags say so with metavar=""; the ones
+    typer adds (--help and the completion options) are built by typer, hence this one change
+    of its option class."""
+    shown = getattr(TyperOption, "display_type_rich", None)
+    if shown is None or getattr(shown, "flag_aware", False):
+        return
+
+    def display_type_rich(self, ctx):
+        if getattr(self, "is_flag", False) and self.metavar is None:
+            return None
+        return shown(self, ctx)
+
+    display_type_rich.flag_aware = True
+    TyperOption.display_type_rich = display_type_rich
+
+
+_flags_show_no_type()
 
 app = typer.Typer(
     name="coin",
+    cls=CommandList,
     help="The plane model of a rigid coin impacting an elastic foundation: simulate one throw, "
          "map which throws make the coin lie or stand, and check the numbers. Every command "
          "has --help; the README has a tour.",
@@ -37,17 +88,20 @@ def _options(
 
 
 def _register() -> None:
-    # Each module adds its command(s) to `app`; imported here so `coin --help` lists them all.
-    import importlib
-
-    from . import methods_cmd, presets_cmd, simulate_cmd, stability_cmd  # noqa: F401
-
-    for optional in ("basin_cmd", "inspect_cmd", "accuracy_cmd", "bench_cmd", "fractions_cmd"):
-        try:
-            importlib.import_module(f"{__name__}.{optional}")
-        except ModuleNotFoundError as exc:
-            if exc.name != f"{__name__}.{optional}":
-                raise
+    # Each module adds its command(s) to `app`; imported here so `coin --help` lists them all,
+    # in this order after MAIN_COMMANDS.
+    from . import (  # noqa: F401
+        accuracy_cmd,
+        basin_cmd,
+        bench_cmd,
+        compile_cmd,
+        fractions_cmd,
+        inspect_cmd,
+        methods_cmd,
+        presets_cmd,
+        simulate_cmd,
+        stability_cmd,
+    )
 
 
 _register()

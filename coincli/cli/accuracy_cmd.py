@@ -20,8 +20,8 @@ from .common import (
     MassOpt,
     PresetOpt,
     ThicknessOpt,
-    announce_compilation,
     build_scene,
+    compile_first,
     console,
     err_console,
     fail,
@@ -115,7 +115,7 @@ def accuracy_command(
     if quick:
         settings = [s for s in settings
                     if s.knob in (acc.LADDERS[s.method][1], acc.LADDERS[s.method][-2])]
-    announce_compilation()
+    compile_first()
     with console.status("") as status:
         study = acc.run_study(scene, grid, settings, threads,
                               progress=lambda text: status.update(f"accuracy: {text}"))
@@ -183,6 +183,7 @@ def run_stability(scene, json_out: bool) -> None:
     from ..integrators import METHODS
 
     rows = []
+    compile_first()  # the bisection runs the compiled kernels
     with console.status("bisecting the failing step of each fixed-step method"):
         for method in METHODS.values():
             if method.adaptive:

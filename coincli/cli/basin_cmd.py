@@ -39,8 +39,8 @@ from .common import (
     StopOpt,
     TEndOpt,
     ThicknessOpt,
-    announce_compilation,
     build_scene,
+    compile_first,
     console,
     err_console,
     fail,
@@ -49,7 +49,19 @@ from .common import (
     whole_option,
 )
 from .recording import LiveConnectOpt, LiveRrdOpt, LiveSpawnOpt
-from .text import TURN, command, counted, percent, print_rows, say, share
+from .text import (
+    TOP_OUTCOMES,
+    TURN,
+    command,
+    counted,
+    left_out,
+    most_frequent,
+    percent,
+    print_rows,
+    print_table,
+    say,
+    share,
+)
 
 SWEEP = "Sweep"
 RUN = "Where it runs"
@@ -247,8 +259,8 @@ def sweep_command(
             progress.start()
 
     # before the sweep: its pilot estimate is the first run of the kernels (a store that is
-    # already complete on a fresh install is the one case that is told so without need)
-    announce_compilation()
+    # already complete on a fresh install is the one case compiled for without need)
+    compile_first(quiet)
     recorder = None
     if where_to is not None:
         from ..io.live import SweepRecorder  # Rerun's code only when a recording is asked for
@@ -550,6 +562,9 @@ def stats_command(
     json_out: JsonOpt = False,
     csv_out: Annotated[Path | None, typer.Option("--csv", metavar="FILE", help="Also write the "
                                                  "outcome table to this CSV file.")] = None,
+    every_n: Annotated[bool, typer.Option("--all", metavar="", help="List every n (by default "
+                                          f"the {TOP_OUTCOMES} most frequent; --json and --csv "
+                                          "always list every n).")] = False,
 ) -> None:
     """Outcome probabilities (95 % Wilson intervals), certain and uncertain cells, and cost.
 
@@ -593,7 +608,9 @@ def stats_command(
         table.add_column("certain", justify="right", no_wrap=True)
         table.add_column("of certain", justify="right", no_wrap=True)
         certain_rows = {r["n"]: r for r in stats["outcomes_certain"]}
-    for row in stats["outcomes"]:
+    shown, hidden = ((stats["outcomes"], []) if every_n
+                     else most_frequent(stats["outcomes"]))
+    for row in shown:
         style = "bold magenta" if row["pose"] == "standing" else None
         cells = [str(row["n"]), row["pose"], TURN[row["direction"]], f"{row['count']:,}",
                  percent(row["fraction"])]
@@ -602,6 +619,8 @@ def stats_command(
             cells += [f"{r['count']:,}", percent(r["fraction"])] if r else ["0", "-"]
         table.add_row(*cells, style=style)
     console.print(table)
+    if hidden:
+        say(console, left_out(hidden, sum(row["fraction"] for row in hidden), "labelled cells"))
     summary = []
     summary.append(("cells", f"{stats['cells']:,}: {stats['computed']:,} computed "
                              f"({stats['tiles_done']}/{stats['tiles_total']} tiles), "
@@ -770,7 +789,7 @@ def analyze_command(
 
     n_points = DEFAULT_POINTS if points is None else points
     if n_points:
-        announce_compilation()
+        compile_first(quiet)
     try:  # Ctrl-C: the simulator's threads stop within a chunk of points, nothing is written
         with user_errors(), progress:
             result = api.analyze(basin, box=box, bands=bands, points=n_points, eps=eps_list,
@@ -799,15 +818,15 @@ def _print_analysis(path: Path, result, data: dict) -> None:
     opts = result.options
     w = result.whole
     console.print(f"[bold]coin basin analyze[/] {path}", highlight=False)
-    console.print(f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
-                  f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells; "
-                  f"evidence: {'certain' if result.verified else 'settled (unverified)'} "
-                  f"labels, {percent(1 - w.uncertain_cells)} of the cells", highlight=False)
+    say(console, f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
+                 f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells; "
+                 f"evidence: {'certain' if result.verified else 'settled (unverified)'} "
+                 f"labels, {percent(1 - w.uncertain_cells)} of the cells")
     regions = [w, *result.bands]
     head = f"{ax0['name']} ({ax0['units']})"
 
-    ent = Table(title=f"Basin entropy (boxes of {opts.box} x {opts.box} cells) and fractal "
-                      "tests", title_justify="left")
+    # the tables fit 80 columns without their outer edges (rich would cut a cell short)
+    ent = Table(show_edge=False, pad_edge=False)
     for col in (head, "S_b", "S_bb", "S_bb>log2", "balls S_bb", "ball test"):
         ent.add_column(col, justify="left" if col in (head, "ball test") else "right",
                        no_wrap=True)
@@ -818,22 +837,21 @@ def _print_analysis(path: Path, result, data: dict) -> None:
                     "-" if ft is None or not ft.balls
                     else f"{_num(ft.boundary_basin_entropy, '.3f')}±{_num(ft.stderr, '.3f')}",
                     "-" if ft is None else ft.verdict, style="bold" if r is w else None)
-    console.print(ent)
+    print_table(console, ent, f"Basin entropy (boxes of {opts.box} x {opts.box} cells) and "
+                              "fractal tests")
     ft = w.fractal_test
-    console.print(f"S_bb>log2: the log-2 criterion (Daza et al. 2016), S_bb > {LOG2:.3f}: "
-                  "sufficient for a fractal boundary, not necessary. ball test: Puy et al. "
-                  f"(2021), S_bb in {opts.balls:,} random balls of radius {opts.radius:g} cells; "
-                  f"smooth when within {_num(ft.low if ft else math.nan)} to "
-                  f"{_num(ft.high if ft else math.nan)} (a smooth boundary gives "
-                  f"{_num(ft.smooth_value if ft else math.nan)}), fractal outside it, above or "
-                  "below (their rule, as in Attractors.jl).", highlight=False,
-                  style="dim")
+    say(console, f"[dim]S_bb>log2: the log-2 criterion (Daza et al. 2016), S_bb > {LOG2:.3f}: "
+                 "sufficient for a fractal boundary, not necessary. ball test: Puy et al. "
+                 f"(2021), S_bb in {opts.balls:,} random balls of radius {opts.radius:g} cells; "
+                 f"smooth when within {_num(ft.low if ft else math.nan)} to "
+                 f"{_num(ft.high if ft else math.nan)} (a smooth boundary gives "
+                 f"{_num(ft.smooth_value if ft else math.nan)}), fractal outside it, above or "
+                 "below (their rule, as in Attractors.jl).[/dim]")
 
     p = w.perturbation
     if p is not None:
         conf = int(round(100 * opts.confidence))
-        exp = Table(title=f"Uncertainty exponent: perturbation method, {p.n_points:,} points, "
-                          f"eps {p.eps[0]:.0e} to {p.eps[-1]:.0e}", title_justify="left")
+        exp = Table(show_edge=False, pad_edge=False)
         for col in (head, "alpha", f"{conf} % interval", "D", "local alpha", "left out",
                     "grid"):
             exp.add_column(col, justify="left" if col == head else "right", no_wrap=True)
@@ -857,24 +875,28 @@ def _print_analysis(path: Path, result, data: dict) -> None:
                                else []),
                         percent(r.uncertain_fraction), grid_alpha(r),
                         style="bold" if r is w else None)
-        console.print(exp)
-        console.print("alpha: slope of log f(eps) against log eps, f the fraction of points "
-                      "whose certain label changes under a perturbation eps (relative to each "
-                      f"axis's range; the grid spacing is {1 / (ax0['n'] - 1):.1e}); "
-                      "D = 2 - alpha. local alpha: the slope between the two smallest and "
-                      "between the two largest eps at which some label changes. left out: "
-                      "points whose label (or a perturbed one) was not certain. grid: alpha by "
-                      "box counting on the map (Attractors.jl's estimator), for comparison"
-                      + ("; * outside 0 to 2: no dimension follows, the map does not resolve "
-                         "the scaling there" if impossible else "") + ".", style="dim",
-                      highlight=False)
+        print_table(console, exp, f"Uncertainty exponent: perturbation method, "
+                                  f"{p.n_points:,} points, eps {p.eps[0]:.0e} to "
+                                  f"{p.eps[-1]:.0e}")
+        say(console, "[dim]alpha: slope of log f(eps) against log eps, f the fraction of "
+                     "points whose certain label changes under a perturbation eps (relative to "
+                     f"each axis's range; the grid spacing is {1 / (ax0['n'] - 1):.1e}); "
+                     "D = 2 - alpha. local alpha: the slope between the two smallest and "
+                     "between the two largest eps at which some label changes. left out: "
+                     "points whose label (or a perturbed one) was not certain. grid: alpha by "
+                     "box counting on the map (Attractors.jl's estimator), for comparison"
+                     + ("; * outside 0 to 2: no dimension follows, the map does not resolve "
+                        "the scaling there" if impossible else "") + ".[/dim]")
     wada = "; ".join(f"{'whole map' if r is w else _span(r)}: "
                      f"{'yes' if r.wada.is_wada else 'no'}" for r in regions)
-    console.print(f"Wada (merging method, up to {opts.max_dilation} cells; {w.wada.n_classes} "
-                  f"classes on the whole map): {wada}", highlight=False)
+    say(console, f"Wada (merging method, up to {opts.max_dilation} cells; {w.wada.n_classes} "
+                 f"classes on the whole map): {wada}")
     s, c = result.seconds, result.cpu_seconds
     sim = (f", perturbation method {s['perturbation']:.1f} s ({result.trajectories:,} labels "
            f"on {opts.threads} thread{'s' if opts.threads != 1 else ''})" if p is not None
-           else " (no perturbation method: --points 0)")
-    console.print(f"took {s['total']:.1f} s wall, {c['total']:.1f} CPU s: map measures "
-                  f"{s['map']:.1f} s{sim}", highlight=False)
+           else f" (no perturbation method: {command('--points', 0)})")
+    say(console, f"took {s['total']:.1f} s wall, {c['total']:.1f} CPU s: map measures "
+                 f"{s['map']:.1f} s{sim}")
+
+
+from . import export_cmd  # noqa: E402, F401 - registers `coin basin export` (needs basin_app)

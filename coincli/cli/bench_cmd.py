@@ -20,8 +20,8 @@ from .accuracy_cmd import parse_range, parse_res
 from .common import (
     JsonOpt,
     PresetOpt,
-    announce_compilation,
     build_scene,
+    compile_first,
     console,
     print_json,
     user_errors,
@@ -68,7 +68,7 @@ def bench_command(
         vy, vphi = parse_range(vy_range, "--vy"), parse_range(vphi_range, "--vphi")
         cost_grid = vy_vphi_grid(scene, vy, vphi, parse_res(cost_res))
         label_grid = vy_vphi_grid(scene, vy, vphi, parse_res(label_res))
-    announce_compilation()
+    compile_first()
     with console.status("") as status:
         def report(text):
             status.update(f"bench: {text}")

@@ -12,7 +12,7 @@ from rich.markup import escape
 
 from ..params import ParameterError, Scene, parse_number, parse_whole, shown, validate
 from ..presets import load
-from .text import NBSP, keep_whole
+from .text import NBSP, keep_whole, say
 
 
 def number_option(value) -> float:
@@ -157,13 +157,40 @@ def fail(message: str) -> typer.Exit:
     return typer.Exit(code=2)
 
 
+def in_cli_words(exc: ParameterError) -> str:
+    """The message of ``exc`` as the command line says it: each parameter the message names
+    that is an option of the running command (``exc.parameters``) by its option, ``res`` as
+    ``--res``; the Python API's words otherwise (a name that is no option of this command, as a
+    preset file's key, stays as it is)."""
+    message = str(exc)
+    ctx = click_context()
+    if ctx is None:
+        return message
+    options = {param.name: max(param.opts, key=len) for param in ctx.command.params
+               if param.param_type_name == "option"}  # --res, not -r
+    for name in getattr(exc, "parameters", ()):
+        if name in options:
+            message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])",
+                             lambda _, option=options[name]: option, message)
+    return message
+
+
+def click_context():
+    """The context of the command running (None outside one)."""
+    try:  # typer 0.28 on carries its own click
+        from typer._click.globals import get_current_context
+    except ImportError:  # a typer that uses click itself
+        from click import get_current_context
+    return get_current_context(silent=True)
+
+
 @contextlib.contextmanager
 def user_errors():
     """Turn the errors a user can cause into one line and exit code 2, never a traceback."""
     try:
         yield
     except ParameterError as exc:
-        raise fail(str(exc)) from None
+        raise fail(in_cli_words(exc)) from None
     except OSError as exc:  # a read-only or full disk, a missing folder, no permission
         from ..io.paths import describe
 
@@ -176,14 +203,40 @@ def build_scene(preset: str, **overrides) -> Scene:
     return validate(scene)
 
 
-def announce_compilation() -> None:
-    """Say it once, before the first run on this machine compiles the kernels."""
-    from ..jit import FIRST_COMPILE_SECONDS, kernels_cached
+def compile_first(quiet: bool = False) -> None:
+    """Before a command first runs the kernels on this machine (once after installing or
+    updating), compile them, saying so (the library compiles in silence): on a terminal a live
+    line counts the minutes against the expected FIRST_COMPILE_SECONDS; with ``quiet`` or when
+    stderr is no terminal, one line before and one after. Ctrl-C stops it: exit 130."""
+    import time
 
-    if not kernels_cached():
-        err_console.print(f"[yellow]compiling[/] the numerical kernels for this machine: once "
-                          f"after installing or updating, about {FIRST_COMPILE_SECONDS} s; "
-                          "later runs load them in a second", highlight=False)
+    from ..jit import FIRST_COMPILE_SECONDS, compile_kernels, kernels_cached
+
+    if kernels_cached():
+        return
+    start = time.monotonic()
+    try:
+        if quiet or not err_console.is_terminal:
+            say(err_console, f"[yellow]compiling[/] the numerical kernels for this machine: once "
+                             f"after installing or updating, about "
+                             f"{FIRST_COMPILE_SECONDS / 60:.0f} min")
+            compile_kernels()
+        else:
+            from rich.progress import SpinnerColumn, TextColumn
+
+            from .progress import Bars, CompileClock
+
+            with Bars(SpinnerColumn(), TextColumn("[yellow]compiling[/] the numerical kernels"),
+                      CompileClock(FIRST_COMPILE_SECONDS), console=err_console,
+                      transient=True) as bars:
+                bars.add_task("compile", total=None)
+                compile_kernels()
+    except KeyboardInterrupt:
+        say(err_console, "[yellow]interrupted:[/] while compiling the numerical kernels; "
+                         "nothing was done")
+        raise typer.Exit(code=130) from None
+    say(err_console, f"compiled the numerical kernels in {time.monotonic() - start:.0f} s; "
+                     "later runs load them in a second")
 
 
 def print_json(data) -> None:

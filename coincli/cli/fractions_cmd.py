@@ -36,8 +36,8 @@ from .common import (
     StopOpt,
     TEndOpt,
     ThicknessOpt,
-    announce_compilation,
     build_scene,
+    compile_first,
     console,
     err_console,
     fail,
@@ -46,7 +46,20 @@ from .common import (
     whole_option,
 )
 from .recording import LiveConnectOpt, LiveRrdOpt, LiveSpawnOpt
-from .text import TURN, counted, interval, percent, print_rows, resolving, say, share
+from .text import (
+    TOP_OUTCOMES,
+    TURN,
+    counted,
+    interval,
+    left_out,
+    most_frequent,
+    percent,
+    print_rows,
+    print_table,
+    resolving,
+    say,
+    share,
+)
 
 SAMPLING = "Sampling and stopping"
 OVER = "Continuation along a parameter"
@@ -142,6 +155,9 @@ def fractions_command(
     yes: Annotated[bool, typer.Option("--yes", "-y", help="Start a run estimated to take "
                                       "more than 12 hours, or to spend its budget before "
                                       "--precision, anyway.", rich_help_panel=RUN)] = False,
+    every_n: Annotated[bool, typer.Option("--all", metavar="", help="List every n (by default "
+                                          f"the {TOP_OUTCOMES} most frequent; --json always "
+                                          "lists every n).")] = False,
     json_out: JsonOpt = False,
     rrd: LiveRrdOpt = None, spawn: LiveSpawnOpt = False, connect: LiveConnectOpt = None,
     preset: PresetOpt = "paper",
@@ -177,8 +193,8 @@ def fractions_command(
                      if given is not None)
         plan = api.plan_fractions(
             scene, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi,
-            samples=parse_count("--samples", samples), precision=parse_precision(precision),
-            of=of, max_samples=parse_count("--max-samples", max_samples), seed=seed,
+            samples=parse_count("samples", samples), precision=parse_precision(precision),
+            of=of, max_samples=parse_count("max_samples", max_samples), seed=seed,
             sampler=sampler, batch=batch, over=over, keep=keep, force=force)
         api.check_where(threads, workers, scheduler)
     where_to, no_viewer = recording.destination(rrd, spawn, connect)
@@ -189,15 +205,16 @@ def fractions_command(
     from .progress import Bars, RateColumn
 
     wide = err_console.width >= 100  # at 80 columns the rate goes: the estimate matters more
+    bar_width = 20 if wide else 8
     progress = Bars(
-        TextColumn("{task.fields[value]}"), BarColumn(bar_width=20 if wide else 8),
-        TextColumn("{task.completed:,.0f}/{task.total:,.0f}"),
-        TextColumn("P(standing) {task.fields[estimate]}"),
-        TextColumn("{task.fields[width]}"), *([RateColumn("traj")] if wide else []),
+        TextColumn("{task.fields[value]}"), BarColumn(bar_width=bar_width),
+        TextColumn("{task.fields[detail]}"), *([RateColumn("traj")] if wide else []),
         TimeElapsedColumn(), console=err_console, disable=quiet, transient=False)
     tasks: dict[int, int] = {}
+    label_width = 0
 
     def show(update) -> None:
+        nonlocal label_width
         v = update.value
         p, lo, hi = update.standing
         estimate = "-" if math.isnan(p) else \
@@ -206,16 +223,20 @@ def fractions_command(
             f"±{100 * update.widest:.2g}→{100 * update.precision:.2g} pp"
         label = "" if update.values == 1 else \
             f"{plan.parameter} = {plan.values[v]:g} ({v + 1}/{update.values})"
+        label_width = max(label_width, len(label))
+        total = max(update.expected, update.samples, 1)
+        # what fits beside the label, the bar, the rate and the clock (rich cuts a line short)
+        room = (err_console.width - label_width - bar_width - len("0:00:00")
+                - (len("99,999 traj/s") + 1 if wide else 0) - 4)
+        detail = fit(room, f"{update.samples:,}/{total:,}", f"P(standing) {estimate}", width,
+                     short=f"P {estimate}")
         if v not in tasks:
-            tasks[v] = progress.add_task("fractions", total=max(update.expected, 1),
-                                         value=label, estimate=estimate, width=width)
-        progress.update(tasks[v], completed=update.samples, total=max(update.expected,
-                                                                      update.samples, 1),
-                        estimate=estimate, width=width)
+            tasks[v] = progress.add_task("fractions", total=total, value=label, detail=detail)
+        progress.update(tasks[v], completed=update.samples, total=total, detail=detail)
         if recorder is not None:
             recorder.progress(update)
 
-    announce_compilation()
+    compile_first(quiet)
     with user_errors():
         if store is not None:
             from ..io.store import check_store_writable
@@ -253,7 +274,7 @@ def fractions_command(
     if json_out:
         print_json({"version": __version__, **result.to_dict()})
     elif plan.parameter is None:
-        _print_result(plan, result)
+        _print_result(plan, result, every_n)
     else:
         _print_over(plan, result)
     if plot is not None and not json_out:
@@ -340,22 +361,37 @@ def _stopped(result) -> str:
     return "interrupted"
 
 
-def _print_result(plan, r) -> None:
+def fit(room: int, count: str, estimate: str, width: str, short: str) -> str:
+    """A progress line's detail in at most ``room`` characters: the count, the estimate and the
+    interval's width; else the estimate named shorter (``short``); else without the width; else
+    the count alone."""
+    for parts in ((count, estimate, width), (count, short, width), (count, short), (count,)):
+        text = " ".join(part for part in parts if part)
+        if len(text) <= room:
+            return text
+    return count
+
+
+def _print_result(plan, r, every_n: bool = False) -> None:
     scene = plan.scene
     say(console, f"[bold]coin fractions[/]  {_header(plan, r.samples)}; stopped: "
                  f"{_stopped(r)}")
     say(console, f"drawn: {plan.sampling.describe(scene)}")
     basis = "certain labels" if r.verified else "settled runs (single pass: unverified)"
-    table = Table(title=f"Outcomes: probabilities over the {r.counted:,} {basis}, 95 % "
-                        "Wilson intervals", title_justify="left")
+    title = f"Outcomes: probabilities over the {r.counted:,} {basis}, 95 % Wilson intervals"
+    table = Table()
     for col, just in (("n", "right"), ("pose", "left"), ("turn", "left"), ("count", "right"),
                       ("P", "right"), ("95 % interval", "right")):
         table.add_column(col, justify=just, no_wrap=True)
-    for row in r.outcomes:
+    shown, hidden = (r.outcomes, []) if every_n else most_frequent(r.outcomes)
+    for row in shown:
         style = "bold magenta" if row["pose"] == "standing" else None
         table.add_row(str(row["n"]), row["pose"], TURN[row["direction"]], f"{row['count']:,}",
                       percent(row["probability"], resolving(row)), interval(row), style=style)
-    console.print(table)
+    print_table(console, table, title)
+    if hidden:
+        say(console, left_out(hidden, sum(row["probability"] for row in hidden),
+                              "certain labels" if r.verified else "settled runs"))
     summary = []
     summary.append(("standing", share(r.standing)))
     summary.append(("lying", share(r.lying)))
@@ -392,6 +428,19 @@ def _print_result(plan, r) -> None:
     print_rows(console, summary)
 
 
+def _stopped_over(res) -> str:
+    """Why the values of a continuation stopped: 'samples (every value)', or each reason with
+    its values ('precision at 0.001, 0.0019; budget at 0.02')."""
+    reasons: dict = {}
+    for value, r in zip(res.values, res.results, strict=True):
+        reasons.setdefault(str(r.stopped), []).append(value)
+    if len(reasons) == 1:
+        return f"{next(iter(reasons))} (every value)"
+    return "; ".join(f"{reason} at " + (", ".join(f"{v:.4g}" for v in values)
+                                        if len(values) <= 6 else counted(len(values), "value"))
+                     for reason, values in reasons.items())
+
+
 def _print_over(plan, res) -> None:
     first = res.results[0]
     say(console, f"[bold]coin fractions[/] over {res.parameter} ({len(res.values)} values), "
@@ -404,16 +453,15 @@ def _print_over(plan, res) -> None:
     if res.note:
         say(console, f"note: {res.note}")
     basis = "certain labels" if first.verified else "settled runs"
-    reasons = {r.stopped for r in res.results}
-    one_reason = len(reasons) == 1  # then said once, under the table: it fits 80 columns
-    table = Table(title=f"P(standing) over the {basis}, 95 % Wilson intervals",
-                  title_justify="left", show_edge=False)
+    # at 80 columns: P(standing) named once, in the title, and why each value stopped said
+    # under the table, not in a column
+    table = Table(show_edge=False, pad_edge=False)
     unit = PARAMETER_UNITS[res.parameter]
     cols = [(f"{res.parameter} ({unit})", "right")]
     if res.parameter in ("thickness", "diameter"):
         cols.append(("t/d", "right"))
-    cols += [("samples", "right"), ("P(standing)", "right"), ("95 % interval", "right"),
-             ("uncertain", "right")] + ([] if one_reason else [("stopped", "left")])
+    cols += [("samples", "right"), ("P", "right"), ("95 % interval", "right"),
+             ("uncertain", "right")]
     for col, just in cols:
         table.add_column(col, justify=just, no_wrap=True)
     for value, r in zip(res.values, res.results, strict=True):
@@ -421,11 +469,10 @@ def _print_over(plan, res) -> None:
         if res.parameter in ("thickness", "diameter"):
             row.append(f"{r.scene['coin']['thickness'] / r.scene['coin']['diameter']:.3g}")
         row += [f"{r.samples:,}", percent(r.standing["probability"]), interval(r.standing),
-                percent(r.uncertain["probability"], 3)] + ([] if one_reason else [r.stopped])
+                percent(r.uncertain["probability"], 3)]
         table.add_row(*row)
-    console.print(table)
-    if one_reason:
-        say(console, f"stopped: {res.results[0].stopped} (every value)")
+    print_table(console, table, f"P(standing) over the {basis}, 95 % Wilson intervals")
+    say(console, f"stopped: {_stopped_over(res)}")
     cost = res.cost
     if cost.get("computed"):
         say(console, f"cost: {cost['computed']:,} trajectories in {cost['wall_seconds']:.1f} s "

@@ -15,7 +15,7 @@ from ..enums import Certainty
 from ..version import __version__
 from .basin_cmd import basin_app
 from .common import (
-    announce_compilation,
+    compile_first,
     console,
     err_console,
     fail,
@@ -74,6 +74,10 @@ def _words(scene, preset, force: bool, always=()) -> list[str] | None:
     for name in (*PHYSICAL, *IC_NAMES, *INTEGRATION):
         if want[name] != have[name] or name in always:
             value = want[name]
+            if value is None:  # t_end: no horizon, which no option sets against a preset's
+                if have[name] is None:
+                    continue
+                return None
             text = value if isinstance(value, str) else repr(float(value))
             words += [f"--{name.replace('_', '-')}", text]
             overrides[name] = text if isinstance(value, str) else float(text)
@@ -182,7 +186,7 @@ def inspect_command(
         if recording:
             _check_recording_options(scene, rrd, connect, log_every)
         words = simulate_words(scene, swept=tuple(attrs["sweep"]["dims"]))
-        announce_compilation()
+        compile_first()
         try:
             run = replay(scene, sample_dt=log_every if recording else None,
                          record_events=recording)

@@ -35,8 +35,8 @@ from .common import (
     VyOpt,
     X0Opt,
     Y0Opt,
-    announce_compilation,
     build_scene,
+    compile_first,
     console,
     err_console,
     fail,
@@ -65,9 +65,19 @@ ConnectOpt = Annotated[str | None, typer.Option("--connect", metavar="URL", help
                                                 "rerun+http://127.0.0.1:9876/proxy.",
                                                 rich_help_panel=REC)]
 LogEveryOpt = Annotated[float, typer.Option("--log-every", metavar="SECONDS", help="Simulated "
-                                            "time between frames of the recording (contact "
-                                            "onsets and lift-offs are added at their exact "
-                                            "times).", rich_help_panel=REC, parser=number_option)]
+                                            "time between frames of the recording and rows of "
+                                            "--csv (contact onsets and lift-offs are added to "
+                                            "the recording at their exact times).",
+                                            rich_help_panel=REC, parser=number_option)]
+EXPORTS = "Exports"
+CsvOpt = Annotated[Path | None, typer.Option("--csv", metavar="FILE", help="Write the sampled "
+                                             "time series (state and energies, every "
+                                             "--log-every s) as CSV, names and units in its "
+                                             "header line.", rich_help_panel=EXPORTS)]
+GifOpt = Annotated[Path | None, typer.Option("--gif", metavar="FILE", help="Write an animation "
+                                             "of the throw: FILE.gif, or FILE.mp4 with ffmpeg on "
+                                             "PATH (about 4 s, the throw slowed down to fit).",
+                                             rich_help_panel=EXPORTS)]
 
 
 @app.command("simulate")
@@ -81,11 +91,12 @@ def simulate_command(
     stop_on_settle: StopOpt = None, force: ForceOpt = False, single_pass: SinglePassOpt = False,
     max_steps: MaxStepsOpt = None, json_out: JsonOpt = False,
     rrd: RrdOpt = Path("coin.rrd"), no_rrd: NoRrdOpt = False, spawn: SpawnOpt = False,
-    connect: ConnectOpt = None, log_every: LogEveryOpt = DEFAULT_LOG_EVERY,
+    connect: ConnectOpt = None, log_every: LogEveryOpt = DEFAULT_LOG_EVERY, csv: CsvOpt = None,
+    gif: GifOpt = None,
 ) -> None:
     """Run one throw and print its outcome: n quarter turns, lying or standing, and whether that label is certain.
 
-    The throw is verified on a ladder of tighter settings (--single-pass: once), and recorded for the Rerun viewer (coin.rrd unless --rrd or --no-rrd).
+    The throw is verified on a ladder of tighter settings (--single-pass: once), and recorded for the Rerun viewer (coin.rrd unless --rrd or --no-rrd); --csv and --gif export its time series and an animation.
 
     Example, the throw of the paper's fig. 2 (lying after six quarter turns here; from vy0 = 1.1974 m/s on it stands after seven, as the paper says):
 
@@ -100,36 +111,55 @@ def simulate_command(
         err_console.print(f"[yellow]warning[/]: --spawn: {escape(_no_display(rrd_path))}",
                           highlight=False, soft_wrap=True)
     recording = rrd_path is not None or spawn or connect is not None
+    sampled = recording or csv is not None or gif is not None  # what needs the time series
     with user_errors():
         scene = build_scene(preset, x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi,
                             diameter=diameter, thickness=thickness, mass=mass, inertia=inertia,
                             k=k, c=c, g=g, method=method, dt=dt, rtol=rtol, t_end=t_end,
                             stop_on_settle=stop_on_settle, max_steps=max_steps,
                             verify=False if single_pass else None)
+        if sampled:
+            _check_log_every(scene, log_every)
         if recording:
-            _check_recording_options(scene, rrd_path, connect, log_every)
+            _check_recording_options(rrd_path, connect)
+        _check_exports(csv, gif)
         _announce(scene)
         try:
-            trajectory = simulate(scene, sample_dt=log_every if recording else None,
-                                  record_events=recording, force=force)
+            trajectory = simulate(scene, sample_dt=log_every if sampled else None,
+                                  record_events=recording or gif is not None, force=force)
         except KeyboardInterrupt:
             err_console.print("[yellow]interrupted[/]: no outcome, nothing written")
             raise typer.Exit(code=130) from None
     info = None
-    not_written = None  # why the recording asked for was not written
-    if recording:
-        info, not_written = record_throw(trajectory, rrd=rrd_path, spawn=spawn,
-                                         connect=connect, log_every=log_every)
+    not_written = []  # (what, why) of each output asked for and not written
+    try:
+        if recording:
+            info, why = record_throw(trajectory, rrd=rrd_path, spawn=spawn, connect=connect,
+                                     log_every=log_every)
+            if why is not None:
+                not_written.append(("the recording", why))
+        written = _write_exports(trajectory, csv, gif, not_written)
+    except KeyboardInterrupt:  # the outcome is known: printed; each output complete or absent
+        if not json_out:
+            print_summary(trajectory)
+        err_console.print("[yellow]interrupted[/] while writing the outputs: those not "
+                          "finished are absent", highlight=False, soft_wrap=True)
+        raise typer.Exit(code=130) from None
     if json_out:
         print_json({**trajectory.summary(), "version": __version__,
                     "parameters": scene.to_dict(),
-                    "rrd": str(info.rrd) if info is not None and info.rrd is not None else None})
+                    "rrd": str(info.rrd) if info is not None and info.rrd is not None else None,
+                    **{name: str(path) for name, path in written.items()}})
     else:
         print_summary(trajectory)
         if info is not None:
             print_recording(info)
-    if not_written is not None:  # after the outcome, which is printed whatever else failed
-        raise fail(f"could not write the recording: {not_written}")
+        print_exports(trajectory, written)
+    for what, why in not_written:  # after the outcome, which is printed whatever else failed
+        if what != not_written[-1][0]:
+            say(err_console, f"[bold red]error:[/] could not write {what}: {escape(why)}")
+            continue
+        raise fail(f"could not write {what}: {why}")
     if trajectory.status not in (Status.SETTLED, Status.UNSETTLED) or no_viewer:
         raise SystemExit(1)  # no outcome (non-finite, out of budget), or no viewer to open
 
@@ -162,7 +192,7 @@ def _announce(scene) -> None:
 
     integ = scene.integration
     if not (info(integ.method).adaptive and integ.stop_on_settle):
-        announce_compilation()  # not a short run: the compiled kernels do it
+        compile_first()  # not a short run: the compiled kernels do it
     if info(integ.method).adaptive:
         return
     ladder = ladder_of(integ)
@@ -178,14 +208,69 @@ def _announce(scene) -> None:
                           highlight=False)
 
 
-def _check_recording_options(scene, rrd_path, connect, log_every) -> None:
-    """Fail in one line, before the run, on an unusable path, URL or display rate."""
+def _check_log_every(scene, log_every) -> None:
+    """Fail in one line, before the run, on an unusable display rate."""
     if isinstance(log_every, bool) or not math.isfinite(log_every) or log_every <= 0:
         raise fail(f"--log-every must be a positive number of seconds, got {log_every}")
     frames = scene.integration.t_end / log_every if scene.fixed_horizon else 0.0
     if frames > MAX_FRAMES:  # without a fixed horizon the run keeps its first states only
         raise fail(f"--log-every {log_every:g} s makes {frames:.3g} frames for t_end = "
                    f"{scene.integration.t_end:g} s (at most {MAX_FRAMES:,}); raise it")
+
+
+def _check_exports(csv, gif) -> None:
+    """Fail in one line, before the run, on a path --csv or --gif cannot write."""
+    from ..io.animation import check_animation_path
+    from ..io.paths import check_writable
+    from ..params import ParameterError
+
+    if csv is not None:
+        check_writable(csv, what="--csv file")
+    if gif is not None:
+        try:
+            check_animation_path(gif)
+        except ParameterError as exc:
+            raise fail(f"--gif {gif}: {exc}") from None
+
+
+def _write_exports(trajectory, csv, gif, not_written: list) -> dict:
+    """Write the CSV and the animation asked for: {"csv": path, "animation": path} of those
+    written; (what, why) of the others appended to ``not_written``."""
+    from ..io.animation import animate
+    from ..io.paths import describe
+    from ..io.timeseries import write_csv
+    from ..params import ParameterError
+
+    written = {}
+    for name, path, write in (("csv", csv, write_csv), ("animation", gif, animate)):
+        if path is None:
+            continue
+        if trajectory.samples is None or not len(trajectory.samples):
+            not_written.append((str(path), "the run kept no samples"))
+            continue
+        try:
+            written[name] = write(trajectory, path)
+        except OSError as exc:
+            not_written.append((str(path), describe(exc)))
+        except (ParameterError, RuntimeError, ValueError) as exc:
+            not_written.append((str(path), str(exc)))
+    return written
+
+
+def print_exports(trajectory, written: dict) -> None:
+    from ..io.animation import DEFAULT_FPS, DEFAULT_SECONDS
+
+    rows = []
+    if "csv" in written:
+        rows.append(("csv", f"{escape(str(written['csv']))}: {len(trajectory.samples):,} rows"))
+    if "animation" in written:
+        rows.append(("animation", f"{escape(str(written['animation']))}: {DEFAULT_SECONDS:g} s at "
+                                  f"{DEFAULT_FPS} frames a second"))
+    print_rows(console, rows, LABEL_WIDTH)
+
+
+def _check_recording_options(rrd_path, connect) -> None:
+    """Fail in one line, before the run, on an unusable path or URL."""
     from ..io.paths import check_rrd_path, probe_viewer
 
     if rrd_path is not None:

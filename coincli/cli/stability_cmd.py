@@ -1,6 +1,5 @@
 """`coin stability`: the static energy table and the critical stiffnesses (paper, section 3)."""
 
-import math
 
 from rich.table import Table
 
@@ -40,41 +39,22 @@ def stability_command(
     if json_out:
         print_json({"version": __version__, "parameters": scene.to_dict(), **report.to_dict()})
         return
-    mj = 1e3
+    from ..statics import MJ as mj
+    from ..statics import critical_rows, energy_rows
+
     table = Table(title="Static states (energies in mJ)", title_justify="left")
     table.add_column("")
     table.add_column("rigid (eq. 8)", justify="right")
     table.add_column("elastic (eq. 10)", justify="right")
-    rows = [
-        ("V_max  (on a corner, phi_cr)", "v_max"),
-        ("V_min1 (lying, phi = 0)", "v_min1"),
-        ("V_min2 (standing, phi = pi/2)", "v_min2"),
-        ("to tip a lying coin  V_max - V_min1", "to_destabilise_lying"),
-        ("to tip a standing coin  V_max - V_min2", "to_destabilise_standing"),
-    ]
-    for label, attr in rows:
-        table.add_row(label, f"{getattr(report.rigid, attr) * mj:.6g}",
-                      f"{getattr(report.elastic, attr) * mj:.6g}")
-    table.add_row("ratio (eqs. 9, 12)", f"{report.rigid.ratio:.1f}",
-                  f"{report.elastic.ratio:.1f}" if math.isfinite(report.elastic.ratio)
-                  and report.elastic.ratio > 0 else "none (k <= k_cr)")
+    for row in energy_rows(report):
+        table.add_row(*row)
     console.print(table)
     crit = Table(title="Critical values", title_justify="left")
     crit.add_column("")
     crit.add_column("value", justify="right")
     crit.add_column("meaning")
-    crit.add_row("phi_cr", f"{math.degrees(report.phi_cr):.3f} deg",
-                 "the diagonal is vertical: the coin balances on a corner")
-    crit.add_row("k", f"{report.k:.6g} N/m", "this foundation")
-    crit.add_row("k_min (eq. 11)", f"{report.k_min:.1f} N/m",
-                 "above it a coin on phi_cr rests on one corner only")
-    crit.add_row("k_cr (eq. 13)", f"{report.k_cr:.2f} N/m",
-                 "above it a standing coin can be at rest")
-    crit.add_row("E_crit", f"{report.e_crit * mj:.6g} mJ",
-                 "m g (r - m g / 2k): below it the count of quarter turns is final")
-    crit.add_row("standing well", f"{report.standing_well_depth * mj:.4g} mJ",
-                 "E_crit minus a standing coin's resting energy, springs counted "
-                 "(exact; > 0 for k > k_cr/2)")
+    for row in critical_rows(report):
+        crit.add_row(*row)
     console.print(crit)
     states = ["lying (phi = 0): static"]
     if report.standing_static:

@@ -66,6 +66,12 @@ def keep_whole(text: str, width: int, indent: int = 0) -> str:
     return "\n".join(lines).replace(NBSP, " ")
 
 
+def clock(seconds: float) -> str:
+    """84.3 -> '1:24' (minutes and seconds, as a progress bar's clock shows them)."""
+    minutes, secs = divmod(round(seconds), 60)
+    return f"{minutes}:{secs:02d}"
+
+
 def counted(count: int, noun: str, plural: str | None = None) -> str:
     """'1 tile', '2 tiles', '1,024 cells'."""
     return f"{count:,} {noun if count == 1 else plural or noun + 's'}"
@@ -90,6 +96,32 @@ def print_rows(console, rows, label_width: int | None = None) -> None:
         console.print(f"[bold]{label:<{label_width}}[/]"
                       f"{keep_whole(value, width, indent=label_width)}",
                       highlight=False, soft_wrap=True)
+
+
+def print_table(console, table, title: str) -> None:
+    """A table under its title, the title broken between phrases (as a table's own title,
+    rich would break '95 %' after the number)."""
+    say(console, f"[italic]{title}[/italic]")
+    console.print(table)
+
+
+TOP_OUTCOMES = 10  # the outcomes an outcome table lists without --all
+
+
+def most_frequent(rows: list, most: int = TOP_OUTCOMES) -> tuple[list, list]:
+    """The ``most`` rows of the highest ``count`` (ties: the earlier row) in their own order
+    (by n), and the rows left out."""
+    ranked = sorted(range(len(rows)), key=lambda i: (-rows[i]["count"], i))
+    kept = set(ranked[:most])
+    return ([row for i, row in enumerate(rows) if i in kept],
+            [row for i, row in enumerate(rows) if i not in kept])
+
+
+def left_out(rows: list, share: float, of: str) -> str:
+    """The line under an outcome table that lists only the most frequent: '... 72 more n,
+    0.8 % of the labelled cells together (--all lists every n)'."""
+    return (f"... {len(rows)} more n, {percent(share)} of the {of} together (--all lists "
+            "every n)")
 
 
 # -- numbers as the tables print them -----------------------------------------------------------

@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from ..boundary import LOG2
-from .paths import check_figure_path, save_figure
+from .charts import PANELS_HINT, figure_axes, write_figure
+from .paths import check_figure_path
 
 WHOLE_COLOUR = "black"
 
@@ -96,7 +97,8 @@ def _plot_fractions(ax, analysis) -> None:
     ax.set_title(f"Perturbation method: {n_points:,} points, lines: fits "
                  r"$f \propto \varepsilon^{\alpha}$", fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
-    ax.legend(loc="lower right", fontsize=7, framealpha=0.9)
+    if ax.get_legend_handles_labels()[0]:  # nothing to name without the perturbation method
+        ax.legend(loc="lower right", fontsize=7, framealpha=0.9)
 
 
 def _band_x(analysis):
@@ -174,25 +176,38 @@ def _plot_alpha(ax, analysis) -> None:
     ax.legend(loc="upper right", bbox_to_anchor=(1.0, 0.93), fontsize=7, framealpha=0.9)
 
 
-def plot_analysis(analysis, path: Path, title: str | None = None, dpi: int = 150) -> Path:
-    """Write the analysis figure to ``path`` (.png or .svg)."""
-    check_figure_path(path)
-    import matplotlib
+PANELS = ("fractions", "entropy", "alpha")  # f(eps) with the fits; S_b and S_bb; alpha
+WIDTHS = {"fractions": 1.35, "entropy": 1.0, "alpha": 1.0}  # a new figure's panel widths
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    fig = plt.figure(figsize=(17, 5.6), layout="constrained")
-    grid = fig.add_gridspec(1, 3, width_ratios=[1.35, 1, 1])
-    _plot_fractions(fig.add_subplot(grid[0]), analysis)
-    _plot_entropy(fig.add_subplot(grid[1]), analysis)
-    _plot_alpha(fig.add_subplot(grid[2]), analysis)
+def plot_analysis(analysis, path: Path | None = None, title: str | None = None,
+                  dpi: int = 150, ax=None, panels=PANELS):
+    """Draw the analysis figure and return it: the ``panels`` (of :data:`PANELS`, in that
+    order) into ``ax`` (one Axes a panel) or a new Figure; written to ``path`` (.png, .svg,
+    .pdf) unless it is None. The title is the figure's: drawn on a new one, or when given."""
+    if path is not None:
+        check_figure_path(path)
+    panels = tuple(panels)
+    unknown = [p for p in panels if p not in PANELS]
+    if unknown or not panels:
+        raise ValueError(f"unknown panel {unknown[0] if unknown else '(none)'!r}; panels are "
+                         f"{', '.join(PANELS)}")
+    draw = {"fractions": _plot_fractions, "entropy": _plot_entropy, "alpha": _plot_alpha}
+    fig, axes, own = figure_axes(ax, len(panels), (17 * sum(WIDTHS[p] for p in panels) / 3.35,
+                                                   5.6),
+                                 hint=PANELS_HINT, ncols=len(panels),
+                                 gridspec_kw={"width_ratios": [WIDTHS[p] for p in panels]})
+    for name, one in zip(panels, axes, strict=True):
+        draw[name](one, analysis)
     a0, a1 = analysis.axes
-    fig.suptitle(title or f"How fractal are the basin boundaries: {a0['name']} "
-                          f"{a0['lo']:g}:{a0['hi']:g} {a0['units']} x {a1['name']} "
-                          f"{a1['lo']:g}:{a1['hi']:g} {a1['units']}, "
-                          f"{a0['n']} x {a1['n']} cells", fontsize=11)
-    return save_figure(fig, path, dpi)
+    if own or title:
+        fig.suptitle(title or f"How fractal are the basin boundaries: {a0['name']} "
+                              f"{a0['lo']:g}:{a0['hi']:g} {a0['units']} x {a1['name']} "
+                              f"{a1['lo']:g}:{a1['hi']:g} {a1['units']}, "
+                              f"{a0['n']} x {a1['n']} cells", fontsize=11)
+    if path is not None:
+        write_figure(fig, path, dpi)
+    return fig
 
 
-__all__ = ["plot_analysis"]
+__all__ = ["PANELS", "plot_analysis"]

@@ -14,15 +14,16 @@ from __future__ import annotations
 
 import math
 import os
-from pathlib import Path
+import textwrap
 
 import numpy as np
 
 from ..enums import Certainty, Status
 from ..grid import AXIS_INFO
 from ..integrators import NO_LABEL
+from .charts import figure_axes, write_figure
 from .dataset import Basin
-from .paths import check_figure_path, save_figure
+from .paths import check_figure_path
 
 WHITE = (1.0, 1.0, 1.0, 1.0)
 STANDING = (0.0, 0.0, 0.0, 1.0)
@@ -122,24 +123,25 @@ def _fixed_text(basin: Basin) -> str:
 FIELDS = ("n", "settle_time")
 
 
-def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
+def render_map(basin: Basin, out: str | os.PathLike | None = None, title: str | None = None,
                dpi: int = 150, size: tuple[float, float] = (8.6, 6.8),
-               n_max: int | None = None, field: str = "n", marks=()) -> Path:
-    """Draw the map to a PNG, SVG or PDF file (by its extension); returns its path.
-    ``field``: "n", the outcome in the paper's colours, or "settle_time", when each throw's
-    outcome was decided (its energy fell below E_crit). ``marks``: points (value of the first
-    swept axis, value of the second) drawn as white circles with a black edge."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+               n_max: int | None = None, field: str = "n", marks=(), ax=None):
+    """Draw the map into ``ax`` (a matplotlib Axes; its colour bar takes room from that Axes
+    alone, so maps side by side keep their own) or into a new Figure of ``size`` inches, and
+    write the figure to ``out`` (PNG, SVG or PDF by its extension) unless it is None; returns
+    the Figure. ``field``: "n", the outcome in the paper's colours, or "settle_time", when
+    each throw's outcome was decided (its energy fell below E_crit). ``marks``: points (value
+    of the first swept axis, value of the second) drawn as white circles with a black
+    edge."""
     from matplotlib.patches import Patch
+    from matplotlib.transforms import offset_copy
 
-    out = check_figure_path(out, "picture")
+    if out is not None:
+        out = check_figure_path(out, "picture")
+        if out.parent and not out.parent.exists():
+            raise FileNotFoundError(f"directory {out.parent} does not exist")
     if field not in FIELDS:
         raise ValueError(f"unknown field {field!r}; one of {', '.join(FIELDS)}")
-    if out.parent and not out.parent.exists():
-        raise FileNotFoundError(f"directory {out.parent} does not exist")
     ax0, ax1 = basin.axes
     x, y = basin.coords
     dx = (x[-1] - x[0]) / (x.size - 1)
@@ -147,7 +149,7 @@ def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
     extent = (x[0] - dx / 2, x[-1] + dx / 2, y[0] - dy / 2, y[-1] + dy / 2)
     marks = check_marks(basin, marks)
 
-    fig, ax = plt.subplots(figsize=size, layout="constrained")
+    fig, (ax,), own = figure_axes(ax, 1, size)
     ax.set_facecolor(NOT_COMPUTED_BG)
     ax.patch.set_hatch(NOT_COMPUTED_HATCH)
     ax.patch.set_edgecolor("#b0b0b0")
@@ -157,7 +159,8 @@ def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
                   interpolation="nearest")
         # cells a pixel or two wide vanish in the image: mark standing and uncertain cells
         # as squares at least MIN_MARK_PX wide (the same look at any resolution)
-        cell_px = size[0] * dpi * 0.75 / x.size
+        width = size[0] * 0.75 if own else _axes_width(ax)  # inches
+        cell_px = width * dpi / x.size
         if cell_px < 3 * MIN_MARK_PX:
             side = max(cell_px, MIN_MARK_PX) * 72.0 / dpi  # points
             for name, colour in (("uncertain", UNCERTAIN), ("undecided", UNDECIDED),
@@ -167,7 +170,7 @@ def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
                     i, j = np.nonzero(mask)
                     ax.scatter(x[i], y[j], s=side ** 2, marker="s", color=colour,
                                linewidths=0, zorder=3)
-        _n_colour_bar(fig, ax, plt, n_range(basin, n_max))
+        _n_colour_bar(fig, ax, n_range(basin, n_max), short=not own)
         handles = _class_handles(basin, classes, Patch)
     else:
         handles = _settle_time_image(basin, ax, fig, extent, Patch)
@@ -179,8 +182,12 @@ def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
     ax.set_ylim(extent[2], extent[3])
     ax.set_xlabel(_axis_label(ax0))
     ax.set_ylabel(_axis_label(ax1))
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.09), ncols=3,
-              fontsize=8, frameon=False)
+    # a panel of the caller's figure: one column, so that the legend is no wider than the map
+    # (the layout would narrow the map to make room for a wider one)
+    # below the tick labels and the axis label, whatever the map's height
+    below = offset_copy(ax.transAxes, fig=fig, y=-LEGEND_DROP_PT, units="points")
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, 0.0),
+              bbox_transform=below, ncols=3 if own else 1, fontsize=8, frameon=False)
 
     attrs = basin.attrs
     method = attrs["method"]
@@ -196,16 +203,29 @@ def render_map(basin: Basin, out: str | os.PathLike, title: str | None = None,
                  + (f" (partial: {done} of {total} tiles" if done < total else "")
                  + (f", {len(basin.damaged)} damaged" if basin.damaged else "")
                  + (")" if done < total else ""))
-    fig.suptitle(title, fontsize=11)
     params = attrs["parameters"]
-    ax.set_title(f"{_fixed_text(basin)}; k = {params['foundation']['k']:g} N/m, "
-                 f"c = {params['foundation']['c']:g} N s/m; {method['name']} {setting}, "
-                 + (f"$t_{{end}}$ = {method['t_end']:g} s" if method["t_end"] is not None
-                    else "until decided"), fontsize=8, color="#444444")
-    save_figure(fig, out, dpi)
-    return out
+    setting_text = (f"{_fixed_text(basin)}; k = {params['foundation']['k']:g} N/m, "
+                    f"c = {params['foundation']['c']:g} N s/m; {method['name']} {setting}, "
+                    + (f"$t_{{end}}$ = {method['t_end']:g} s" if method["t_end"] is not None
+                       else "until decided"))
+    if own:
+        fig.suptitle(title, fontsize=11)
+        ax.set_title(setting_text, fontsize=8, color="#444444")
+    else:  # the figure's title is the caller's: each map says what it is over itself, its
+        # settings wrapped to the map's width
+        chars = max(30, int(_axes_width(ax) * 72 / (0.5 * 8)))
+        ax.set_title(f"{title}\n{textwrap.fill(setting_text, chars)}", fontsize=8)
+    if out is not None:
+        write_figure(fig, out, dpi)
+    return fig
 
 
+def _axes_width(ax) -> float:
+    """The width of ``ax`` in inches (as placed before the layout adjusts it)."""
+    return ax.get_position().width * ax.figure.get_size_inches()[0]
+
+
+LEGEND_DROP_PT = 30.0  # from the map's lower edge to the legend's top: under the axis label
 MARK_SIZE = 64.0  # points^2: a circle about 3 mm wide at any resolution
 
 
@@ -229,21 +249,23 @@ def check_marks(basin: Basin, marks) -> list[tuple[float, float]]:
     return out
 
 
-def _n_colour_bar(fig, ax, plt, n_max: int) -> None:
+def _n_colour_bar(fig, ax, n_max: int, short: bool = False) -> None:
+    from matplotlib.cm import ScalarMappable
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
     colours = _ramp_colours(n_max)
     evens = list(range(-n_max, n_max + 1, 2))
     cmap = ListedColormap([colours[n] for n in evens])
     norm = BoundaryNorm([n - 1 for n in evens] + [n_max + 1], cmap.N)
-    mappable = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
+    mappable = ScalarMappable(norm=norm, cmap=cmap)
     cbar = fig.colorbar(mappable, ax=ax, pad=0.02, fraction=0.05)
     tick_step = 2 * max(1, math.ceil(len(evens) / 18))
     ticks = [n for n in evens if n % tick_step == 0]
     cbar.set_ticks(ticks)
     cbar.set_ticklabels([f"≤ {n}" if n == -n_max else f"≥ {n}" if n == n_max else str(n)
                          for n in ticks])
-    cbar.set_label("n lying (even): < 0 clockwise, > 0 counter-clockwise")
+    cbar.set_label("n (even: lying)" if short else
+                   "n lying (even): < 0 clockwise, > 0 counter-clockwise")
     cbar.ax.tick_params(labelsize=8)
 
 

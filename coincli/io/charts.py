@@ -1,8 +1,12 @@
-"""The work-precision chart (matplotlib, loaded lazily) and its table."""
+"""The work-precision chart (matplotlib, loaded lazily) and its table; and what every chart
+shares: a new Figure or the caller's Axes (:func:`figure_axes`), writing a figure
+(:func:`write_figure`)."""
 
 from __future__ import annotations
 
 import csv
+import functools
+import io
 import json
 import math
 from pathlib import Path
@@ -13,6 +17,66 @@ from .paths import atomic_output, save_figure
 
 COLOURS = {Method.SYMPLECTIC_EULER: "#d62728", Method.VERLET: "#ff7f0e", Method.RK4: "#2ca02c",
            Method.DOPRI5: "#1f77b4", Method.EVENT: "#9467bd", Method.EVENT_DOP853: "#8c564b"}
+
+
+PANELS_HINT = " (panels= says which to draw)"  # for the charts of several panels
+
+
+def figure_axes(ax, count: int, size: tuple[float, float], hint: str = "", **subplots):
+    """``(figure, axes, own)`` for a chart of ``count`` panels: the caller's ``ax`` (an Axes
+    for one panel, a sequence of ``count`` Axes for more; own = False), or a new Figure of
+    ``size`` inches with ``count`` Axes laid out by ``subplots`` (``Figure.subplots``
+    arguments; own = True). ``hint`` ends the message of a count that differs. A new Figure is
+    made without pyplot: no backend is switched (a notebook's stays inline), and a figure
+    nobody keeps is freed like any object."""
+    if ax is None:
+        fig = _shown_figure()(figsize=size, layout="constrained")
+        axes = fig.subplots(squeeze=False, **subplots).ravel().tolist()
+        return fig, axes, True
+    if _is_axes(ax) or isinstance(ax, str) or not hasattr(ax, "__iter__"):
+        axes = [ax]
+    else:  # a list, or the array of Axes that subplots gives
+        import numpy as np
+
+        axes = list(np.asarray(ax, dtype=object).ravel())
+    for one in axes:
+        if not _is_axes(one):
+            raise TypeError(f"ax must be a matplotlib Axes"
+                            f"{'' if count == 1 else f' or a sequence of {count}'}, got "
+                            f"{type(one).__name__}")
+    if len(axes) != count:
+        raise ValueError(f"ax: {count} panel{'s' * (count != 1)} to draw, got {len(axes)} "
+                         f"Axes{hint}")
+    return axes[0].figure, axes, False
+
+
+@functools.cache
+def _shown_figure():
+    """A matplotlib Figure that shows itself in a notebook (as a PNG): a Figure made without
+    pyplot has no display of its own until pyplot has loaded a notebook's inline backend."""
+    from matplotlib.figure import Figure
+
+    class ShownFigure(Figure):
+        def _repr_png_(self) -> bytes:
+            buffer = io.BytesIO()
+            self.savefig(buffer, format="png", bbox_inches="tight")
+            return buffer.getvalue()
+
+    return ShownFigure
+
+
+def _is_axes(ax) -> bool:
+    from matplotlib.axes import Axes
+
+    return isinstance(ax, Axes)
+
+
+def write_figure(fig, out: str | Path, dpi: int):
+    """Write ``fig`` to ``out`` in the format of its extension (.png, .svg, .pdf), through
+    :func:`.paths.atomic_output` (complete or absent); returns the figure."""
+    with atomic_output(out) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=Path(out).suffix.lstrip(".").lower())
+    return fig
 
 
 def study_rows(study) -> list[dict]:

@@ -1,16 +1,34 @@
 """A basin in memory (:class:`Basin`: numpy arrays and the attributes of the schema) and its
 xarray form, the Dataset the public API returns. Rendering and statistics work on a Basin;
-:func:`from_dataset` takes a Dataset back (ours, or ``xarray.open_zarr`` of a store)."""
+:func:`from_dataset` takes a Dataset back (ours, a NetCDF export of it opened by xarray, or
+``xarray.open_zarr`` of a store).
+
+Two conventions make a Dataset the same on every route (``coincli.basin``,
+``coincli.open_basin``, ``xarray.open_zarr`` of a store, ``xarray.open_dataset`` of an export):
+
+- Missing labels: ``quarter_turns`` is float32 with NaN where a cell has no label (not
+  computed, or non-finite), as xarray decodes the store's int16 with its ``missing_value``
+  -32768; written out (``to_netcdf``) it is int16 with that ``missing_value`` again, and any
+  route opened with ``mask_and_scale=False`` gives the raw int16.
+- Attributes: NetCDF holds no nested attributes, so every Dataset attribute that is not a
+  string or a number is JSON text, and the attribute ``json_attributes`` names them;
+  :func:`decoded_attrs` gives them back (a store opened by ``xarray.open_zarr`` has them
+  nested already, and is taken as it is).
+"""
 
 from __future__ import annotations
 
+import json
+import numbers
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..params import ParameterError
-from .schema import FILLS, VARIABLES
+from .schema import FILLS, MARK, VARIABLES
 
+JSON_ATTRS = "json_attributes"  # the Dataset attribute naming those held as JSON text
+MASKED = "quarter_turns"  # the variable whose missing labels are NaN in a Dataset
 DONE_VAR_ATTRS = {"long_name": "1 = tile complete (its data checked against its digest)"}
 
 
@@ -69,6 +87,8 @@ def to_dataset(basin: Basin):
     d0, d1 = basin.dims
     data_vars = {name: ((d0, d1), arr, dict(VARIABLES[name][2]))
                  for name, arr in basin.arrays.items()}
+    if MASKED in data_vars:
+        data_vars[MASKED] = ((d0, d1), *_masked(basin.arrays[MASKED], data_vars[MASKED][2]))
     tdims = (f"tile_{d0}", f"tile_{d1}")
     data_vars["done"] = (tdims, basin.done.astype(np.uint8), dict(DONE_VAR_ATTRS))
     data_vars["tile_cpu_seconds"] = (tdims, basin.tile_seconds,
@@ -81,17 +101,64 @@ def to_dataset(basin: Basin):
              "damaged_tiles": [list(map(int, t)) for t in basin.damaged]}
     if basin.path is not None:
         attrs["store"] = basin.path
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    ds = xr.Dataset(data_vars, coords=coords, attrs=encode_attrs(attrs))
+    if MASKED in ds:  # written out as the store holds it: int16, -32768 where no label
+        ds[MASKED].encoding = {"dtype": VARIABLES[MASKED][0],
+                               "missing_value": np.int16(FILLS[MASKED])}
+    return ds
+
+
+def _masked(values: np.ndarray, attrs: dict) -> tuple[np.ndarray, dict]:
+    """``quarter_turns`` as xarray decodes it from a store: float32, NaN where no label (its
+    ``missing_value`` moves to the encoding, as xarray's decoding moves it)."""
+    attrs = {k: v for k, v in attrs.items() if k != "missing_value"}
+    attrs["description"] = attrs["description"].replace("-32768", "NaN (-32768 when written)")
+    floats = np.where(values == FILLS[MASKED], np.nan, values).astype(np.float32)
+    return floats, attrs
+
+
+def encode_attrs(attrs: dict) -> dict:
+    """Attributes NetCDF can hold: every value that is not a string or a number as JSON text,
+    named in the attribute ``json_attributes``."""
+    out, encoded = {}, []
+    for key, value in attrs.items():
+        if key == JSON_ATTRS:
+            continue
+        if isinstance(value, str) or (isinstance(value, numbers.Number)
+                                      and not isinstance(value, bool)):
+            out[key] = value
+        else:
+            out[key] = json.dumps(value, allow_nan=True)
+            encoded.append(key)
+    if encoded:
+        out[JSON_ATTRS] = " ".join(encoded)
+    return out
+
+
+def decoded_attrs(ds) -> dict:
+    """A basin Dataset's attributes with the values :func:`encode_attrs` wrote as JSON text
+    decoded (nested attributes, as a store's ``xarray.open_zarr`` has them, are taken as they
+    are): the one way every reader of a Dataset's attributes gets them."""
+    if not hasattr(ds, "attrs") or not hasattr(ds, "data_vars"):
+        raise TypeError(f"a basin must be an xarray Dataset (coincli.basin, coincli.open_basin) "
+                        f"or a store's path, got {type(ds).__name__}")
+    if MARK not in ds.attrs:
+        raise ParameterError(f"not a coin basin dataset (no {MARK} attribute)")
+    attrs = dict(ds.attrs)
+    for key in str(attrs.pop(JSON_ATTRS, "")).split():
+        if isinstance(attrs.get(key), str):
+            try:
+                attrs[key] = json.loads(attrs[key])
+            except ValueError:
+                raise ParameterError(f"attribute {key!r} of the basin Dataset is not the JSON "
+                                     "text its json_attributes says") from None
+    return attrs
 
 
 def from_dataset(ds) -> Basin:
     """A Basin from a Dataset of :func:`to_dataset`, or from ``xarray.open_zarr`` of a store
     (whose masked float ``quarter_turns`` is turned back into int16 with its fill)."""
-    if not hasattr(ds, "attrs") or not hasattr(ds, "data_vars"):
-        raise TypeError(f"a basin must be an xarray Dataset (coincli.basin, coincli.open_basin) "
-                        f"or a store's path, got {type(ds).__name__}")
-    if "coin_basin" not in ds.attrs:
-        raise ParameterError("not a coin basin dataset (no coin_basin attribute)")
+    ds_attrs = decoded_attrs(ds)
     arrays = {}
     for name in VARIABLES:
         if name in ds.data_vars:
@@ -105,12 +172,13 @@ def from_dataset(ds) -> Basin:
         seconds = np.asarray(ds["tile_cpu_seconds"].values, dtype=float)
     else:
         seconds = np.full(done.shape, np.nan)
-    attrs = {k: v for k, v in ds.attrs.items() if k not in ("runs", "store", "damaged_tiles")}
+    attrs = {k: v for k, v in ds_attrs.items() if k not in ("runs", "store", "damaged_tiles")}
     basin = Basin(attrs=attrs, arrays=arrays, done=done, tile_seconds=seconds,
-                  runs=list(ds.attrs.get("runs", [])), path=ds.attrs.get("store"),
-                  damaged=[tuple(t) for t in ds.attrs.get("damaged_tiles", [])])
+                  runs=list(ds_attrs.get("runs", [])), path=ds_attrs.get("store"),
+                  damaged=[tuple(t) for t in ds_attrs.get("damaged_tiles", [])])
     basin.mask_not_done()
     return basin
 
 
-__all__ = ["Basin", "from_dataset", "to_dataset"]
+__all__ = ["JSON_ATTRS", "Basin", "decoded_attrs", "encode_attrs", "from_dataset",
+           "to_dataset"]

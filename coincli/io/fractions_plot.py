@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from ..montecarlo import PARAMETER_UNITS, FractionsOver, pender_uhrin
-from .paths import check_figure_path, save_figure
+from .charts import PANELS_HINT, figure_axes, write_figure
+from .paths import check_figure_path
 
 
 def _band(ax, x, rows, label, colour, marker="o"):
@@ -21,22 +22,45 @@ def _band(ax, x, rows, label, colour, marker="o"):
     return p, lo, hi
 
 
-def plot_over(result: FractionsOver, out, *, title: str | None = None, dpi: int = 150) -> Path:
-    """Two panels: P(standing) (log scale when it spans more than two decades) with the
-    uncertain fraction and, for thickness or diameter, the planar-die formula of Pender and
-    Uhrin; and P(n) of the most probable outcomes."""
-    out = Path(out)
-    check_figure_path(out, "plot")
-    import matplotlib
+PANELS = ("standing", "outcomes")  # P(standing) and the uncertain fraction; P(n)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
+def plot_over(result: FractionsOver, out=None, *, title: str | None = None, dpi: int = 150,
+              ax=None, panels=PANELS):
+    """The ``panels`` (of :data:`PANELS`, in that order), stacked in a new Figure or drawn into
+    ``ax`` (one Axes a panel), returned; written to ``out`` (.png, .svg, .pdf) unless None.
+    "standing": P(standing) (log scale when it spans more than two decades) with the uncertain
+    fraction and, for thickness or diameter, the planar-die formula of Pender and Uhrin;
+    "outcomes": P(n) of the most probable outcomes. The title is the figure's: drawn on a new
+    one, or when given."""
+    if out is not None:
+        out = check_figure_path(Path(out), "plot")
+    panels = tuple(panels)
+    unknown = [p for p in panels if p not in PANELS]
+    if unknown or not panels:
+        raise ValueError(f"unknown panel {unknown[0] if unknown else '(none)'!r}; panels are "
+                         f"{', '.join(PANELS)}")
+    fig, axes, own = figure_axes(ax, len(panels), (7.5, 3.75 * len(panels)),
+                                 hint=PANELS_HINT, nrows=len(panels), sharex=True)
     x = np.asarray(result.values, dtype=float)
+    draw = {"standing": _plot_standing, "outcomes": _plot_outcomes}
+    for name, one in zip(panels, axes, strict=True):
+        draw[name](one, result, x)
+        if one is axes[-1] or not own:  # stacked in a new figure, the bottom one says x
+            one.set_xlabel(f"{result.parameter} ({PARAMETER_UNITS[result.parameter]})")
+    samples = sorted({r.samples for r in result.results})
+    count = f"{samples[0]:,}" if len(samples) == 1 else f"{samples[0]:,}-{samples[-1]:,}"
+    if own or title:
+        fig.suptitle(title or f"Outcome probabilities against {result.parameter}: {count} "
+                     "samples a value,\nthe same points at every value; bands: 95 % Wilson "
+                     "intervals", fontsize=9)
+    if out is not None:
+        write_figure(fig, out, dpi)
+    return fig
+
+
+def _plot_standing(top, result: FractionsOver, x: np.ndarray) -> None:
     name = result.parameter
-    unit = PARAMETER_UNITS[name]
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 7.5), sharex=True,
-                                      constrained_layout=True)
     p, lo, _ = _band(top, x, [r.standing for r in result.results], "P(standing), certain labels",
                      "#000000")
     _band(top, x, [r.all_labelled["standing"] for r in result.results],
@@ -70,27 +94,26 @@ def plot_over(result: FractionsOver, out, *, title: str | None = None, dpi: int 
     top.set_ylabel("probability")
     top.legend(fontsize=8, loc="best")
     top.grid(True, which="both", alpha=0.3)
-    # the most probable outcomes n, by their largest probability over the values
+
+
+def _plot_outcomes(bottom, result: FractionsOver, x: np.ndarray) -> None:
+    """P(n) of the most probable outcomes n, by their largest probability over the values."""
+    from matplotlib import colormaps
+
     best: dict[int, float] = {}
     for r in result.results:
         for row in r.outcomes:
             if math.isfinite(row["probability"]):
                 best[row["n"]] = max(best.get(row["n"], 0.0), row["probability"])
     shown = sorted(sorted(best, key=lambda n: -best[n])[:8])
-    colours = plt.get_cmap("tab10")
+    colours = colormaps["tab10"]
     for i, n in enumerate(shown):
         rows = [r.probability(n) for r in result.results]
         _band(bottom, x, rows, f"n = {n} ({'standing' if n % 2 else 'lying'})", colours(i % 10),
               marker="o" if n % 2 == 0 else "s")
     bottom.set_ylabel("P(n), certain labels")
-    bottom.set_xlabel(f"{name} ({unit})")
     bottom.legend(fontsize=8, ncol=2, loc="best")
     bottom.grid(True, alpha=0.3)
-    samples = sorted({r.samples for r in result.results})
-    count = f"{samples[0]:,}" if len(samples) == 1 else f"{samples[0]:,}-{samples[-1]:,}"
-    fig.suptitle(title or f"Outcome probabilities against {name}: {count} samples a value,\n"
-                 "the same points at every value; bands: 95 % Wilson intervals", fontsize=9)
-    return save_figure(fig, out, dpi)
 
 
-__all__ = ["plot_over"]
+__all__ = ["PANELS", "plot_over"]

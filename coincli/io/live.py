@@ -11,12 +11,14 @@ second vertical (growing upwards), as in `coin basin render`.
 A sweep sends the whole map again after the tiles written (at most every ``min_interval``
 seconds, and always at the end, read back from the store: the recording's last map is the
 store's), with the cells done and the rate as time series on the ``sweep_time`` timeline; one
-call per layer, never one per cell. Rerun is imported lazily (as in :mod:`coincli.io.rrd`).
+call per layer, never one per cell. A sweep's recording is made by a process of its own
+(:class:`SweepRecorder`), so that Rerun's start-up costs the sweep next to nothing. Rerun is
+imported lazily (as in :mod:`coincli.io.rrd`).
 """
 
 from __future__ import annotations
 
-import functools
+import contextlib
 import math
 import time
 from dataclasses import dataclass
@@ -27,15 +29,7 @@ import numpy as np
 from ..enums import Certainty, Status
 from ..grid import AXIS_INFO
 from ..integrators import NO_LABEL
-from .basin_render import (
-    NONFINITE,
-    STANDING,
-    UNCERTAIN,
-    UNDECIDED,
-    UNSETTLED,
-    _ramp_colours,
-    n_range,
-)
+from .basin_render import NONFINITE, STANDING, UNCERTAIN, UNDECIDED, UNSETTLED, n_range
 from .dataset import Basin
 from .rrd import open_stream
 
@@ -84,16 +78,25 @@ def certainty_class_ids(status: np.ndarray, certainty: np.ndarray | None) -> np.
     return ids
 
 
-@functools.cache
-def _ramp() -> dict:
-    return {n: _rgb(colour) for n, colour in _ramp_colours(n_range(None)).items()}
+# The even n's colours of `coin basin render` (basin_render._ramp_colours(n_range(None)) as
+# 8-bit RGB), written out because computing them imports matplotlib: 0.2 s of CPU, a tenth of
+# the default sweep, in every recording (tests/test_live.py checks they are still the same).
+RAMP = {
+    -24: (138, 0, 38), -22: (153, 0, 38), -20: (168, 0, 38), -18: (185, 0, 38),
+    -16: (199, 7, 35), -14: (211, 15, 32), -12: (224, 24, 29), -10: (235, 43, 33),
+    -8: (246, 66, 39), -6: (252, 95, 47), -4: (253, 138, 59), -2: (254, 202, 102),
+    0: (255, 255, 255),
+    2: (142, 211, 186), 4: (53, 170, 195), 6: (31, 147, 192), 8: (31, 123, 182),
+    10: (33, 102, 172), 12: (35, 85, 164), 14: (36, 72, 157), 16: (37, 59, 151),
+    18: (33, 49, 141), 20: (26, 43, 126), 22: (19, 38, 111), 24: (13, 33, 97),
+}
 
 
 def n_classes(rr, ns) -> list:
     """One class per n in ``ns``, in the colours of `coin basin render` (even n beyond its
     colour bar take its end colours)."""
     top = n_range(None)
-    ramp = _ramp()
+    ramp = RAMP
     out = [rr.ClassDescription(info=(NO_N, "no n (not computed or no outcome)",
                                      (0, 0, 0, 0)))]
     for n in sorted(int(n) for n in ns):
@@ -184,7 +187,8 @@ class BasinStream:
         self.shape = tuple(shape)
         self.n_ids = np.zeros(self.shape[::-1], dtype=np.uint16)  # image: rows x columns
         self.certainty_ids = np.full(self.shape[::-1], NOT_COMPUTED_ID, dtype=np.uint8)
-        self.known: set[int] = set()
+        self.known: set[int] = set()  # class ids of the n on the map
+        self.classes_sent: set[int] = set()  # ... and of those in the context sent
         self.min_interval = min_interval
         self.points: list[tuple[float, int]] = []  # (s, cells done) not sent yet
         self.last_sent = -math.inf
@@ -209,22 +213,21 @@ class BasinStream:
         rows = slice(self.shape[1] - s1.stop, self.shape[1] - s1.start)
         self.n_ids[rows, s0] = _image(n_ids)
         self.certainty_ids[rows, s0] = _image(certainty_class_ids(st, arrays.get("certainty")))
-        new = set(np.unique(n_ids).tolist()) - {NO_N} - self.known
-        if new:  # one class per n present: the context grows as new outcomes come in
-            self.known |= {int(i) for i in new}
-            self.rec.log(BASIN_N, self.rr.AnnotationContext(
-                n_classes(self.rr, [i - N_BIAS for i in self.known])), static=True)
+        # one class per n present: the context grows as new outcomes come in (sent with the
+        # map, once for all the tiles since the last)
+        self.known |= set(np.unique(n_ids).tolist()) - {NO_N}
 
-    def update(self, tiles: dict, grid, progress=None) -> None:
-        """Tiles written (``{tile: arrays}``); the map is sent if ``min_interval`` has passed
-        since it last was. ``progress``: the sweep's SweepProgress, for the time series."""
+    def update(self, tiles: dict, grid, points=(), send: bool = True) -> None:
+        """Tiles written (``{tile: arrays}``) and the sweep's progress at some moments
+        (``points``: (elapsed seconds, cells done) each, for the time series); the map is sent
+        if ``min_interval`` has passed since it last was (and ``send``)."""
         for tile, arrays in tiles.items():
             self._put(*grid.tile_slices(tile), arrays)
         self.pending = self.pending or bool(tiles)
-        if progress is not None and self.live:
-            self.points.append((progress.elapsed, progress.cells_done))
-        if time.perf_counter() - self.last_sent >= self.min_interval:
-            self.send(None if progress is None else progress.elapsed)
+        if self.live:
+            self.points += points
+        if send and time.perf_counter() - self.last_sent >= self.min_interval:
+            self.send(points[-1][0] if points else None)
 
     def series(self, points) -> None:
         """The cells done and the rate at each (elapsed seconds, cells done) of ``points``."""
@@ -257,6 +260,10 @@ class BasinStream:
             self.points = []
         if self.live:
             self._time(time.perf_counter() - self.start if elapsed is None else elapsed)
+        if self.known != self.classes_sent:
+            self.rec.log(BASIN_N, rr.AnnotationContext(
+                n_classes(rr, [i - N_BIAS for i in self.known])), static=True)
+            self.classes_sent = set(self.known)
         if self.pending or static:
             self.rec.log(BASIN_N, rr.SegmentationImage(self.n_ids, draw_order=1.0),
                          static=static)
@@ -288,95 +295,209 @@ def show_basin(basin: Basin, where: Destination) -> None:
         stream.whole(basin)
 
 
+class RecordingFailed(RuntimeError):
+    """A live recording that could not be made or finished (why, in one line)."""
+
+
+# The recording process of a sweep: this Python, running recording_process.
+RECORDER = "from coincli.io.live import recording_process; recording_process()"
+
+
 class SweepRecorder:
     """The live recording of a sweep into the store at ``path``: a context manager whose
-    :meth:`progress` takes the sweep's SweepProgress (in the thread that runs the sweep) and
-    reads the tiles just written back from the store; on leaving, the whole store is read
-    back and sent, so that the recording's last map is the store's, tiles of other processes
-    included.
+    :meth:`progress` takes the sweep's SweepProgress (in the thread that runs the sweep).
 
-    The stream is opened in a thread of its own (importing Rerun takes about half a second,
-    a tenth of a short sweep): until it is ready the tiles are only counted, and the first
-    update after that sends the store as it is then. A recording that cannot be made (no
-    viewer, no file) leaves ``error`` set and the sweep alone."""
+    The recording is made by a process of its own (:func:`record_sweep`), started on entering:
+    importing Rerun and making its first objects costs about half a second of CPU, which in
+    this process would be taken from the sweep (one interpreter lock), while another process
+    has the core that the sweep's own start-up (one thread loading the kernels) leaves idle.
+    This process only tells it, a line each update, which tiles were written; it reads them
+    from the store. On leaving, that line is closed: it reads any tile done that it has not
+    drawn (those of other processes too), sends the last map, the store's, closes the
+    recording and says how it went; this waits for it. A recording that cannot be made (no
+    viewer, no file) leaves ``error`` set and the sweep alone.
+
+    The process has a session of its own: a Ctrl-C at the terminal, or a signal to this
+    process's group, reaches only the sweep, which ends and closes the line; if this process
+    is killed, the line closes all the same. Either way the recording ends with the store's
+    map, and the process with it."""
 
     def __init__(self, path, attrs: dict, grid, where: Destination, *, verified: bool,
                  min_interval: float = 0.5):
         self.path, self.attrs, self.grid, self.where = Path(path), attrs, grid, where
         self.verified, self.min_interval = verified, min_interval
-        self.view = None
-        self.stream = None
         self.error: Exception | None = None  # why the recording failed (the sweep goes on)
-        self._context = None
-        self._opening = None
-        self._behind = True  # tiles were written that the stream has not been sent
-        self._backlog: list[tuple[float, int]] = []  # progress before the stream was ready
-
-    def _open(self) -> None:
-        try:
-            self._context = open_stream(f"coin basin {self.path}", rrd=self.where.rrd,
-                                        spawn=self.where.spawn, connect=self.where.connect)
-            rec = self._context.__enter__()
-            self.stream = BasinStream(rec, self.attrs, self.grid.shape, path=self.path,
-                                      verified=self.verified, live=True,
-                                      min_interval=self.min_interval)
-        except (OSError, RuntimeError, ValueError) as exc:  # no viewer, no file: no recording
-            self.error, self.stream, self._context = exc, None, None
+        self._process = None
+        self._started: float | None = None  # the sweep's start, on this process's clock
 
     def __enter__(self):
-        import threading
+        import subprocess
+        import sys
 
-        self._opening = threading.Thread(target=self._open, name="coin-rerun", daemon=True)
-        self._opening.start()
+        try:
+            self._process = subprocess.Popen(
+                [sys.executable, "-c", RECORDER], stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE, text=True, start_new_session=True)
+        except OSError as exc:
+            self.error = exc
+            return self
+        self._tell({"path": str(self.path), "attrs": self.attrs, "verified": self.verified,
+                    "rrd": None if self.where.rrd is None else str(self.where.rrd),
+                    "spawn": self.where.spawn, "connect": self.where.connect,
+                    "min_interval": self.min_interval})
         return self
 
-    def _ready(self, wait: bool = False) -> bool:
-        if self._opening is not None:
-            if self._opening.is_alive() and not wait:
-                return False
-            self._opening.join()
-            self._opening = None
-        return self.stream is not None
+    def _tell(self, message: dict) -> None:
+        """One line to the recording process (if it is gone, its answer says why)."""
+        import json
+
+        line = self._process.stdin
+        if line.closed:
+            return
+        try:
+            line.write(json.dumps(message) + "\n")
+            line.flush()
+        except OSError:  # it ended early (it could not record): no more lines
+            with contextlib.suppress(OSError):
+                line.close()
 
     def progress(self, update) -> None:
-        from .store import Tile, open_view, read_basin, scan
-
-        if not self._ready():
-            self._backlog.append((update.elapsed, update.cells_done))
+        if self._process is None:
             return
-        self.stream.points += self._backlog
-        self._backlog = []
-        if self._behind:  # what the store holds (tiles done before, tiles written meanwhile)
-            self.stream.whole(read_basin(self.path), update.elapsed)
-            self._behind = False
-        if self.view is None:
-            self.view = open_view(self.path, self.grid)
-        tiles = {}
-        if update.written:
-            for tile, state, data, _ in scan(self.view, with_data=True, tiles=update.written):
-                if state is Tile.DONE:
-                    tiles[tile] = data
-        self.stream.update(tiles, self.grid, update)
+        self._started = time.perf_counter() - update.elapsed
+        self._tell({"elapsed": update.elapsed, "cells_done": update.cells_done,
+                    "written": [list(tile) for tile in update.written]})
 
     def __exit__(self, *exc):
-        from .store import read_basin
+        import json
+        import signal
 
-        if not self._ready(wait=True):
+        if self._process is None:
             return False
+        if self._started is not None:  # the time of the last map
+            self._tell({"elapsed": time.perf_counter() - self._started})
+        with contextlib.suppress(OSError):
+            self._process.stdin.close()
+        answer = self._process.stdout.read().strip().splitlines()
+        self._process.stdout.close()
+        code = self._process.wait()
         try:
-            self.stream.points += self._backlog
-            try:
-                basin = read_basin(self.path)
-            except Exception:  # noqa: BLE001 - no store (the sweep failed first): no map
-                basin = None
-            if basin is not None:
-                self.stream.whole(basin)
-        finally:
-            try:  # the sweep ended (whatever happened to it): keep the recording of it
-                self._context.__exit__(None, None, None)
-            except (OSError, RuntimeError) as error:
-                self.error = error
+            why = json.loads(answer[-1])["error"]
+        except (IndexError, ValueError, KeyError, TypeError):
+            how = (f"killed by {signal.Signals(-code).name}" if -code in signal.valid_signals()
+                   else f"exit code {code}")
+            why = f"the recording process ended before it was done ({how})"
+        if why is not None:
+            self.error = RecordingFailed(why)
         return False
+
+
+def record_sweep(lines=None, out=None) -> None:
+    """The recording of :class:`SweepRecorder`'s process, reading ``lines`` (default stdin):
+    the first (JSON, as all) says what to record and where, each further one what the sweep
+    did (elapsed seconds, cells done, the tiles written), the last one the time of the last
+    map; their end, that the sweep ended. Writes one JSON line to ``out`` (default stdout)
+    when done: ``{"error": null}``, or why the recording failed."""
+    import json
+    import queue
+    import sys
+    import threading
+
+    from .paths import describe
+
+    lines = sys.stdin if lines is None else lines
+    out = sys.stdout if out is None else out
+    inbox: queue.SimpleQueue = queue.SimpleQueue()
+
+    def read() -> None:  # at once, whatever the recording is doing: the sweep never waits
+        try:
+            for line in lines:
+                inbox.put(json.loads(line))
+        except ValueError:  # a line cut off: the sweep's process was killed as it wrote it
+            pass
+        finally:
+            inbox.put(None)
+
+    threading.Thread(target=read, name="coin-sweep-lines", daemon=True).start()
+    try:
+        setup = inbox.get()
+        if setup is None:  # the sweep's process ended before it said what to record
+            return
+        _record_sweep(setup, inbox)
+        why = None
+    except Exception as exc:  # noqa: BLE001 - any failure is said in one line, not a traceback
+        why = describe(exc) if isinstance(exc, OSError) else (str(exc) or type(exc).__name__)
+    out.write(json.dumps({"error": why}) + "\n")
+    out.flush()
+
+
+def recording_process() -> None:
+    """The recording process's body: :func:`record_sweep` on stdin and stdout, then its end
+    at once. The recording is closed and the answer written by then; a normal exit would
+    tear the interpreter down first (with Rerun loaded, 0.1 s of CPU and more), and the
+    sweep's command waits for this process to end."""
+    import os
+    import signal
+
+    # a Ctrl-C is the sweep's (this process has a session of its own where there are
+    # sessions; elsewhere a console's Ctrl-C reaches every process in it): this one ends
+    # when its input does
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    record_sweep()
+    os._exit(0)
+
+
+def _record_sweep(setup: dict, inbox) -> None:
+    """The recording of :func:`record_sweep`, from the messages in ``inbox`` (None: the end)."""
+    import queue
+
+    from ..params import ParameterError
+    from .store import Tile, grid_of, is_store, open_view, scan
+
+    path = Path(setup["path"])
+    grid = grid_of(setup["attrs"])
+    view = None
+    drawn: set[tuple[int, int]] = set()  # tiles read from the store and put on the map
+    rrd = None if setup["rrd"] is None else Path(setup["rrd"])
+    with open_stream(f"coin basin {path}", rrd=rrd, spawn=setup["spawn"],
+                     connect=setup["connect"]) as rec:
+        stream = BasinStream(rec, setup["attrs"], grid.shape, path=path,
+                             verified=setup["verified"], live=True,
+                             min_interval=setup["min_interval"])
+        ended, elapsed = False, None
+        while not ended:
+            messages = [inbox.get()]
+            with contextlib.suppress(queue.Empty):  # all that came meanwhile, as one update
+                while True:
+                    messages.append(inbox.get_nowait())
+            points, written = [], []
+            for message in messages:
+                if message is None:
+                    ended = True
+                    break
+                elapsed = message["elapsed"]
+                if "cells_done" in message:
+                    points.append((elapsed, message["cells_done"]))
+                written += [tuple(tile) for tile in message.get("written", ())]
+            wanted = [tile for tile in written if tile not in drawn]
+            if view is None or ended:
+                if view is None and (written or ended) and is_store(path):
+                    with contextlib.suppress(ParameterError, OSError):  # a sweep that failed
+                        view = open_view(path, grid)
+                # its first look (a resumed store's tiles done before) and its last (tiles
+                # written meanwhile by others): every tile not drawn yet
+                wanted = [tile for tile in np.ndindex(*grid.tile_grid) if tile not in drawn]
+            tiles = {}
+            if view is not None and wanted:
+                for tile, state, data, _ in scan(view, with_data=True, tiles=wanted):
+                    if state is Tile.DONE:
+                        tiles[tile] = data
+                        drawn.add(tile)
+            if ended:
+                stream.update(tiles, grid, points, send=False)
+                stream.send(elapsed)  # the last map: the store's
+            else:
+                stream.update(tiles, grid, points)
 
 
 # -- coin fractions ------------------------------------------------------------------------------
@@ -555,4 +676,5 @@ class FractionsRecorder:
         return False
 
 
-__all__ = ["BasinStream", "Destination", "FractionsRecorder", "SweepRecorder", "show_basin"]
+__all__ = ["BasinStream", "Destination", "FractionsRecorder", "RecordingFailed", "SweepRecorder",
+           "record_sweep", "show_basin"]

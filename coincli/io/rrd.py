@@ -18,20 +18,23 @@ from __future__ import annotations
 
 import contextlib
 import math
+import numbers
 import os
 import shutil
 import sys
 import uuid
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from ..enums import Status
 from ..integrators.registry import setting_text
+from ..params import ParameterError
 from ..version import __version__
 from .frames import ARROW_PEAK_DIAMETERS, Frames, build_frames, force_arrows
 from .paths import atomic_output, check_connect_url, check_rrd_path
+from .timeseries import with_samples
 
 APPLICATION_ID = "coin"
 TIMELINE = "sim_time"
@@ -88,6 +91,7 @@ class RecordingInfo:
     frames: int
     events: int
     recording_id: str
+    viewer: object | None = None  # the notebook's viewer (rerun.notebook.Viewer), if shown
 
 
 def _rgba(colour) -> int:
@@ -250,21 +254,133 @@ def write_recording(trajectory, *, rrd: str | os.PathLike | None = None, spawn: 
         check_connect_url(connect)
     if frames is None:
         frames = build_frames(trajectory)
-    scene = trajectory.scene
-    init = scene.initial
 
-    with open_stream(f"coin simulate vy={init.vy:g} vphi={init.vphi:g} "
-                     f"phi0={init.phi0:g} ({scene.integration.method.label})",
-                     rrd=rrd_path, spawn=spawn, connect=connect, port=port,
-                     flush_timeout=flush_timeout) as rec:
-        rec.send_blueprint(blueprint(frames, scene), make_active=True, make_default=True)
-        _log_static(rec, rr, trajectory, frames, log_every)
-        if len(frames):
-            _send_scene(rec, rr, trajectory, frames)
-            _send_plots(rec, rr, trajectory, frames)
-        _send_text_log(rec, rr, trajectory, frames)
+    with open_stream(_recording_name(trajectory), rrd=rrd_path, spawn=spawn, connect=connect,
+                     port=port, flush_timeout=flush_timeout) as rec:
+        _send_throw(rec, rr, trajectory, frames, log_every)
     return RecordingInfo(rrd=rrd_path, connect=connect, spawn=spawn, frames=len(frames),
                          events=len(frames.events), recording_id=str(rec.get_recording_id()))
+
+
+def _recording_name(trajectory) -> str:
+    init = trajectory.scene.initial
+    return (f"coin simulate vy={init.vy:g} vphi={init.vphi:g} phi0={init.phi0:g} "
+            f"({trajectory.scene.integration.method.label})")
+
+
+def _send_throw(rec, rr, trajectory, frames: Frames, log_every: float | None) -> None:
+    """Everything a recording of one throw holds, sent to the stream ``rec``."""
+    rec.send_blueprint(blueprint(frames, trajectory.scene), make_active=True, make_default=True)
+    _log_static(rec, rr, trajectory, frames, log_every)
+    if len(frames):
+        _send_scene(rec, rr, trajectory, frames)
+        _send_plots(rec, rr, trajectory, frames)
+    _send_text_log(rec, rr, trajectory, frames)
+
+
+# -- the public recorder and the notebook's viewer -----------------------------------------------
+
+NOTEBOOK_EXTRA = 'pip install "coincli[notebook]"'
+
+
+class NotebookMissing(ImportError):
+    """Rerun's notebook viewer (the package rerun-notebook) is not installed."""
+
+
+def _viewer_class():
+    """rerun.notebook.Viewer, or NotebookMissing (one line naming the extra to install)."""
+    try:
+        import rerun_notebook  # noqa: F401  (rerun.notebook imports without it, then fails)
+        from rerun.notebook import Viewer
+    except ImportError:
+        raise NotebookMissing(f"showing a throw in a notebook needs Rerun's notebook viewer: "
+                              f"{NOTEBOOK_EXTRA}") from None
+    return Viewer
+
+
+def in_notebook() -> bool:
+    """Whether this runs in a notebook's kernel (Jupyter, VS Code, Colab; or marimo), where a
+    viewer can be displayed."""
+    ipython = sys.modules.get("IPython")
+    shell = ipython.get_ipython() if ipython is not None else None
+    if shell is not None and getattr(shell, "kernel", None) is not None:
+        return True
+    widget = sys.modules.get("rerun_notebook")  # imported by _viewer_class
+    return bool(widget is not None and widget.running_in_marimo())
+
+
+NOT_IN_NOTEBOOK = ("nothing to show the throw in: show() draws in a notebook (Jupyter); here "
+                   "write it with coincli.record(run, rrd='throw.rrd') and open it with "
+                   "`rerun throw.rrd`, or coincli.record(run, spawn=True)")
+
+
+def inline_viewer(trajectory, *, width: int | None = None, height: int | None = None,
+                  log_every: float | None = None):
+    """A Rerun notebook viewer (``rerun.notebook.Viewer``, not yet displayed) holding the
+    recording of ``trajectory`` (simulated again with samples every ``log_every`` seconds and
+    its contact events if it kept none). NotebookMissing without rerun-notebook."""
+    import rerun as rr
+
+    viewer_class = _viewer_class()
+    run = with_samples(trajectory, log_every)
+    frames = build_frames(run)
+    rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
+    viewer = viewer_class(width=width, height=height, recording=rec)
+    rec.send_recording_name(_recording_name(run))
+    _send_throw(rec, rr, run, frames, run.sample_dt)
+    rec.flush()
+    return viewer
+
+
+def show_inline(trajectory, *, width: int | None = None, height: int | None = None,
+                log_every: float | None = None) -> None:
+    """Display the recording of ``trajectory`` in the notebook's cell now
+    (:meth:`coincli.Trajectory.show`); outside a notebook RuntimeError (one line, naming what
+    to do instead)."""
+    _viewer_class()  # the missing extra first, wherever this runs
+    if not in_notebook():
+        raise RuntimeError(NOT_IN_NOTEBOOK)
+    inline_viewer(trajectory, width=width, height=height, log_every=log_every).display()
+
+
+def record(trajectory, *, rrd: str | os.PathLike | None = None, spawn: bool = False,
+           connect: str | None = None, notebook: bool = False, log_every: float | None = None,
+           width: int | None = None, height: int | None = None) -> RecordingInfo:
+    """Record one throw for Rerun's viewer: to the ``.rrd`` file ``rrd``, a new viewer
+    (``spawn``), a running one (``connect``, ``rerun+http://host:port/proxy``) and/or inline in
+    the notebook (``notebook``, ``width`` and ``height`` in pixels). ``log_every``: seconds of
+    simulated time between frames; by default the trajectory's own samples, or every
+    DEFAULT_LOG_EVERY s for a trajectory that kept none (it is then simulated again, keeping
+    its samples and contact events). Returns what was written (``viewer``: the notebook's)."""
+    if rrd is None and not spawn and connect is None and not notebook:
+        raise ParameterError("record() needs a destination: rrd=PATH, spawn=True, connect=URL "
+                             "or notebook=True")
+    if log_every is not None and (isinstance(log_every, bool) or
+                                  not isinstance(log_every, numbers.Real) or
+                                  not math.isfinite(log_every) or log_every <= 0):
+        raise ParameterError(f"log_every must be a number of seconds > 0, got {log_every!r}")
+    if connect is not None:
+        try:
+            check_connect_url(connect)
+        except ValueError:
+            raise ParameterError(f"connect must be the URL of a running Rerun viewer, e.g. "
+                                 f"rerun+http://127.0.0.1:9876/proxy, got {connect!r}") from None
+    if notebook:
+        _viewer_class()
+        if not in_notebook():
+            raise RuntimeError(NOT_IN_NOTEBOOK.replace("show()", "record(notebook=True)"))
+    run = with_samples(trajectory, log_every)
+    frames = build_frames(run)
+    info = RecordingInfo(rrd=None, connect=None, spawn=False, frames=len(frames),
+                         events=len(frames.events), recording_id="")
+    if rrd is not None or spawn or connect is not None:
+        info = write_recording(run, rrd=rrd, spawn=spawn, connect=connect, frames=frames,
+                               log_every=run.sample_dt)
+    if notebook:
+        viewer = inline_viewer(run, width=width, height=height)
+        viewer.display()
+        info = replace(info, viewer=viewer)
+    return info
 
 
 def _check_complete(path: Path) -> None:

@@ -404,18 +404,19 @@ def check_where(threads, workers, scheduler) -> None:
     """Refuse a contradictory or impossible choice of where to run (threads, a local Dask
     cluster of workers, or an existing scheduler)."""
     if workers is not None and scheduler is not None:
-        raise ParameterError("give --workers (a local cluster) or --scheduler (an existing "
-                             "one), not both")
-    for option, value in (("--threads", threads), ("--workers", workers)):
+        raise ParameterError("give workers (a local cluster) or scheduler (an existing "
+                             "one), not both", parameters=("workers", "scheduler"))
+    for option, value in (("threads", threads), ("workers", workers)):
         if value is not None and (isinstance(value, bool) or
                                   not isinstance(value, int | np.integer) or value < 1):
-            raise ParameterError(f"{option} must be a whole number >= 1, got {value!r}")
+            raise ParameterError(f"{option} must be a whole number >= 1, got {value!r}",
+                                 parameters=(option,))
     if threads is not None and (workers is not None or scheduler is not None):
-        raise ParameterError("--threads is for a local run; a Dask run uses one thread per "
-                             "worker")
+        raise ParameterError("threads is for a local run; a Dask run uses one thread per "
+                             "worker", parameters=("threads",))
     if scheduler is not None and "://" not in scheduler:
-        raise ParameterError(f"--scheduler '{scheduler}' is not an address like "
-                             "tcp://HOST:PORT")
+        raise ParameterError(f"scheduler '{scheduler}' is not an address like "
+                             "tcp://HOST:PORT", parameters=("scheduler",))
 
 
 __all__ = ["ItemQueue", "SchedulerLost", "TileDone", "WorkersLost", "check_where", "close_dask",

@@ -16,21 +16,23 @@ def parse_over(text: str) -> tuple[str, np.ndarray]:
     """``thickness=0.001:0.02:20`` -> ('thickness', linspace(0.001, 0.02, 20))."""
     m = re.fullmatch(r"\s*([a-z_]+)\s*=\s*([^:]+):([^:]+):([^:]+)\s*", str(text), re.IGNORECASE)
     if m is None:
-        raise ParameterError(f"--over '{text}' is not NAME=LO:HI:STEPS (e.g. "
-                             "thickness=0.001:0.02:20)")
+        raise ParameterError(f"over '{text}' is not NAME=LO:HI:STEPS (e.g. "
+                             "thickness=0.001:0.02:20)", parameters=("over",))
     name = m.group(1).lower()
     if name not in PARAMETERS:
-        raise ParameterError(f"--over {name}: not a physical parameter; one of "
-                             f"{', '.join(PARAMETERS)}")
+        raise ParameterError(f"over {name}: not a physical parameter; one of "
+                             f"{', '.join(PARAMETERS)}", parameters=("over",))
     try:
         lo, hi = float(m.group(2)), float(m.group(3))
         steps = float(m.group(4))
     except ValueError:
-        raise ParameterError(f"--over '{text}': LO, HI and STEPS must be numbers") from None
+        raise ParameterError(f"over '{text}': LO, HI and STEPS must be numbers",
+                             parameters=("over",)) from None
     if not (math.isfinite(lo) and math.isfinite(hi)) or not lo < hi:
-        raise ParameterError(f"--over '{text}': LO must be below HI")
+        raise ParameterError(f"over '{text}': LO must be below HI", parameters=("over",))
     if not steps.is_integer() or not 2 <= steps <= 10_000:
-        raise ParameterError(f"--over '{text}': STEPS must be a whole number from 2 to 10000")
+        raise ParameterError(f"over '{text}': STEPS must be a whole number from 2 to 10000",
+                             parameters=("over",))
     return name, np.linspace(lo, hi, int(steps))
 
 PARAMETERS = tuple(PARAMETER_UNITS)

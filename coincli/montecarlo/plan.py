@@ -52,8 +52,8 @@ def plan_fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=N
                              vx=vx, vy=vy, vphi=vphi)
     goal = make_goal(samples=samples, precision=precision, of=of, max_samples=max_samples)
     if sampler == "sobol" and goal.batches(sampling.batch) * sampling.batch > SOBOL_MAX:
-        raise ParameterError(f"a Sobol sequence has {SOBOL_MAX:,} points; lower --max-samples "
-                             "or use --sampler random")
+        raise ParameterError(f"a Sobol sequence has {SOBOL_MAX:,} points; lower max_samples "
+                             "or use sampler random", parameters=("max_samples", "sampler"))
     keep = tuple(keep or ())
     for name in keep:
         if name not in ("mass", "inertia"):

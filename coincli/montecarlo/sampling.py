@@ -120,8 +120,8 @@ def _number(name: str, text: str) -> tuple[float, bool]:
         return (-math.inf if t.startswith("-") else math.inf), False
     m = _NUMBER.match(t)
     if not t or m is None or (m.group("num") is None and m.group("unit") is None):
-        raise ParameterError(f"--{name}: '{text}' is not a number (like 0.5, 2pi, pi/2"
-                             f"{', 5r' if name == 'y0' else ''})")
+        raise ParameterError(f"{name}: '{text}' is not a number (like 0.5, 2pi, pi/2"
+                             f"{', 5r' if name == 'y0' else ''})", parameters=(name,))
     value = float(m.group("num")) if m.group("num") else 1.0
     unit = m.group("unit")
     if unit == "pi":
@@ -131,17 +131,18 @@ def _number(name: str, text: str) -> tuple[float, bool]:
     if m.group("sign") == "-":
         value = -value
     if unit == "r" and name != "y0":
-        raise ParameterError(f"--{name}: '{text}': multiples of r are for y0 only")
+        raise ParameterError(f"{name}: '{text}': multiples of r are for y0 only",
+                             parameters=(name, "y0"))
     if not math.isfinite(value):
-        raise ParameterError(f"--{name}: '{text}' is not finite")
+        raise ParameterError(f"{name}: '{text}' is not finite", parameters=(name,))
     return value, unit == "r"
 
 
 def _one_unit(name: str, parsed: list[tuple[float, bool]], text: str) -> bool:
     flags = {per_r for value, per_r in parsed if math.isfinite(value)}
     if len(flags) > 1:
-        raise ParameterError(f"--{name} {text}: give every number in multiples of r (e.g. "
-                             "r:5r) or every number in metres, not a mix")
+        raise ParameterError(f"{name} {text}: give every number in multiples of r (e.g. "
+                             "r:5r) or every number in metres, not a mix", parameters=(name,))
     return flags == {True}
 
 
@@ -159,17 +160,19 @@ def parse_dist(name: str, value) -> Dist:
     if isinstance(value, Dist):
         return _checked(name, value, str(value))
     if isinstance(value, bool):
-        raise ParameterError(f"--{name}: {value!r} is not a number or a distribution")
+        raise ParameterError(f"{name}: {value!r} is not a number or a distribution",
+                             parameters=(name,))
     if isinstance(value, int | float):
         if not math.isfinite(value):
-            raise ParameterError(f"--{name} must be finite, got {value}")
+            raise ParameterError(f"{name} must be finite, got {value}", parameters=(name,))
         return Dist("fixed", float(value))
     if isinstance(value, tuple | list):
         if len(value) != 2:
-            raise ParameterError(f"--{name}: a range is (LO, HI), got {value!r}")
+            raise ParameterError(f"{name}: a range is (LO, HI), got {value!r}", parameters=(name,))
         return parse_dist(name, ":".join(str(v) for v in value))
     if not isinstance(value, str):
-        raise ParameterError(f"--{name}: {value!r} is not a number or a distribution")
+        raise ParameterError(f"{name}: {value!r} is not a number or a distribution",
+                             parameters=(name,))
     text = value.strip()
     call = re.fullmatch(r"(?P<fn>[a-z]+)\s*\((?P<args>.*)\)", text, re.IGNORECASE)
     if call:
@@ -185,12 +188,13 @@ def parse_dist(name: str, value) -> Dist:
             return _checked(name, Dist("uniform", nums[0], nums[1], per_r=per_r), text)
         if fn == "fixed" and len(nums) == 1:
             return _checked(name, Dist("fixed", nums[0], per_r=per_r), text)
-        raise ParameterError(f"--{name}: '{text}' is not a distribution: use a value, LO:HI "
-                             "(uniform), normal(MEAN,SD) or normal(MEAN,SD,LO,HI) (truncated)")
+        raise ParameterError(f"{name}: '{text}' is not a distribution: use a value, LO:HI "
+                             "(uniform), normal(MEAN,SD) or normal(MEAN,SD,LO,HI) (truncated)",
+                             parameters=(name,))
     if ":" in text:
         parts = text.split(":")
         if len(parts) != 2 or not parts[0].strip() or not parts[1].strip():
-            raise ParameterError(f"--{name}: '{text}' is not a LO:HI range")
+            raise ParameterError(f"{name}: '{text}' is not a LO:HI range", parameters=(name,))
         parsed = [_number(name, p) for p in parts]
         per_r = _one_unit(name, parsed, text)
         return _checked(name, Dist("uniform", parsed[0][0], parsed[1][0], per_r=per_r), text)
@@ -200,16 +204,19 @@ def parse_dist(name: str, value) -> Dist:
 
 def _checked(name: str, d: Dist, text: str) -> Dist:
     if d.kind not in ("fixed", "uniform", "normal"):
-        raise ParameterError(f"--{name}: unknown distribution kind '{d.kind}'")
+        raise ParameterError(f"{name}: unknown distribution kind '{d.kind}'", parameters=(name,))
     if not math.isfinite(d.a) or (d.kind != "fixed" and not math.isfinite(d.b)):
-        raise ParameterError(f"--{name} {text}: numbers must be finite")
+        raise ParameterError(f"{name} {text}: numbers must be finite", parameters=(name,))
     if d.kind == "uniform" and not d.a < d.b:
-        raise ParameterError(f"--{name} {text}: empty range (LO must be below HI)")
+        raise ParameterError(f"{name} {text}: empty range (LO must be below HI)",
+                             parameters=(name,))
     if d.kind == "normal":
         if not d.b > 0:
-            raise ParameterError(f"--{name} {text}: the standard deviation must be positive")
+            raise ParameterError(f"{name} {text}: the standard deviation must be positive",
+                                 parameters=(name,))
         if not d.lo < d.hi:
-            raise ParameterError(f"--{name} {text}: empty truncation (LO must be below HI)")
+            raise ParameterError(f"{name} {text}: empty truncation (LO must be below HI)",
+                                 parameters=(name,))
     return d
 
 
@@ -262,14 +269,15 @@ def make_sampling(scene: Scene, *, sampler: str = "sobol", seed: int = 0,
         raise ParameterError(f"unknown initial condition(s) {sorted(unknown)}; drawn: "
                              f"{', '.join(IC5)}")
     if sampler not in SAMPLERS:
-        raise ParameterError(f"--sampler must be one of {', '.join(SAMPLERS)}, got "
-                             f"'{sampler}'")
+        raise ParameterError(f"sampler must be one of {', '.join(SAMPLERS)}, got "
+                             f"'{sampler}'", parameters=("sampler",))
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ParameterError(f"--seed must be a whole number >= 0, got {seed!r}")
+        raise ParameterError(f"seed must be a whole number >= 0, got {seed!r}",
+                             parameters=("seed",))
     if isinstance(batch, bool) or not isinstance(batch, int | np.integer) or \
             not 1 <= batch <= 1 << 20:
-        raise ParameterError(f"--batch must be a whole number from 1 to {1 << 20}, got "
-                             f"{batch!r}")
+        raise ParameterError(f"batch must be a whole number from 1 to {1 << 20}, got "
+                             f"{batch!r}", parameters=("batch",))
     dists = []
     for name in IC5:
         value = options.get(name)
@@ -310,8 +318,9 @@ def check_box(scene: Scene, sampling: Sampling) -> None:
     dists = {name: d.scaled(scene.coin.r) for name, d in sampling.dists}
     y_lo, _ = dists["y0"].support()
     if not math.isfinite(y_lo):
-        raise ParameterError("--y0: an untruncated normal reaches every height, into the "
-                             "foundation; truncate it, e.g. normal(3r,0.5r,r,5r)")
+        raise ParameterError("y0: an untruncated normal reaches every height, into the "
+                             "foundation; truncate it, e.g. normal(3r,0.5r,r,5r)",
+                             parameters=("y0",))
     phi_lo, phi_hi = dists["phi0"].support()
     _, phi = max_reach(scene, phi_lo, phi_hi)
     try:
@@ -372,7 +381,7 @@ class Draws:
 
         if start + count > SOBOL_MAX:
             raise ParameterError(f"a Sobol sequence has {SOBOL_MAX:,} points; use "
-                                 "--sampler random for more samples")
+                                 "sampler random for more samples", parameters=("sampler",))
         if self._engine is None or start < self._position:
             try:
                 self._engine = qmc.Sobol(self.dims, scramble=True, rng=self.sampling.seed)

@@ -216,23 +216,25 @@ def make_goal(samples=None, precision=None, of: str = "all",
             value = int(value)
         if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
             raise ParameterError(f"{option} must be a whole number of at least 1, got "
-                                 f"{value!r}")
+                                 f"{value!r}", parameters=(option,))
         return int(value)
 
     if of not in GOALS:
-        raise ParameterError(f"--of must be one of {', '.join(GOALS)}, got '{of}'")
-    max_samples = whole("--max-samples", max_samples)
+        raise ParameterError(f"of must be {' or '.join(GOALS)}, got '{of}'", parameters=("of",))
+    max_samples = whole("max_samples", max_samples)
     if samples is not None:
         if precision is not None:
-            raise ParameterError("give --samples (a fixed count) or --precision (stop when "
-                                 "the intervals are that narrow), not both")
-        return Goal(samples=whole("--samples", samples), of=of, max_samples=max_samples)
+            raise ParameterError("give samples (a fixed count) or precision (stop when "
+                                 "the intervals are that narrow), not both",
+                                 parameters=("samples", "precision"))
+        return Goal(samples=whole("samples", samples), of=of, max_samples=max_samples)
     if precision is None:
         precision = DEFAULT_PRECISION
     if isinstance(precision, bool) or not isinstance(precision, int | float) or \
             not math.isfinite(precision) or not 0 < precision < 0.5:
-        raise ParameterError(f"--precision must be a probability between 0 and 0.5 (the "
-                             f"half-width of a 95 % interval), got {precision!r}")
+        raise ParameterError(f"precision must be a probability between 0 and 0.5 (the "
+                             f"half-width of a 95 % interval), got {precision!r}",
+                             parameters=("precision",))
     return Goal(precision=float(precision), of=of, max_samples=max_samples)
 
 
@@ -247,8 +249,8 @@ def parse_precision(text) -> float | None:
     try:
         return float(t) * scale
     except ValueError:
-        raise ParameterError(f"--precision: '{text}' is not a number (0.001, or 0.1% in "
-                             "percentage points)") from None
+        raise ParameterError(f"precision: '{text}' is not a number (0.001, or 0.1% in "
+                             "percentage points)", parameters=("precision",)) from None
 
 
 def parse_count(option: str, text) -> int | None:
@@ -262,9 +264,11 @@ def parse_count(option: str, text) -> int | None:
     try:
         value = float(t) * scale
     except ValueError:
-        raise ParameterError(f"{option}: '{text}' is not a whole number") from None
+        raise ParameterError(f"{option}: '{text}' is not a whole number",
+                             parameters=(option,)) from None
     if not value.is_integer() or value < 1:
-        raise ParameterError(f"{option} must be a whole number of at least 1, got '{text}'")
+        raise ParameterError(f"{option} must be a whole number of at least 1, got '{text}'",
+                             parameters=(option,))
     return int(value)
 
 

@@ -1,0 +1,46 @@
+"""`coin basin export STORE OUT.nc|OUT.csv`: a basin store written out for other tools
+(:func:`coincli.api.export_basin` does the work)."""
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from .basin_cmd import _damaged_note, basin_app
+from .common import console, err_console, fail, user_errors
+from .text import counted, say
+
+
+@basin_app.command("export")
+def export_command(
+    path: Annotated[Path, typer.Argument(help="A basin store (complete or partial).",
+                                         metavar="STORE")],
+    out: Annotated[Path, typer.Argument(help="The file to write: .nc (NetCDF-4, every variable "
+                                             "and attribute) or .csv (one row per cell). An "
+                                             "existing file is replaced.",
+                                        metavar="OUT.nc|OUT.csv")],
+) -> None:
+    """Write a basin store to NetCDF-4 or CSV, by OUT's extension.
+
+    NetCDF: the Dataset of coincli.open_basin, which xarray.open_dataset and coincli.open_basin read back (quarter_turns NaN where a cell has no label; nested attributes as JSON text). CSV: one row per cell, the first swept axis outermost: the two swept values, n, pose, status, certainty, settle_time, steps, rung; header names with units; empty fields where a value is missing. Cells of tiles not computed (or damaged) are exported as not computed.
+    """  # noqa: E501
+    from .. import api
+    from ..io.export import check_export_path
+    from ..io.paths import check_writable, describe
+    from ..io.store import read_basin
+
+    with user_errors():
+        check_export_path(out)
+        basin = read_basin(path)
+        check_writable(out, what="export")  # before the work
+        try:
+            api.export_basin(basin, out)
+        except OSError as exc:
+            raise fail(describe(exc, f"cannot write {out}")) from None
+        done, total = int((basin.done != 0).sum()), int(basin.done.size)
+        n0, n1 = basin.arrays["status"].shape
+        console.print(f"wrote {out} ({n0} x {n1} cells)")
+        if done < total:
+            say(err_console, f"[yellow]partial:[/] {done} of {counted(total, 'tile')} "
+                             "computed; the cells of the others are exported as not computed")
+        _damaged_note(path, basin.damaged, "exported as not computed")
