@@ -74,7 +74,7 @@ assert len(SAMPLE_NAMES) == SAMPLE_COLUMNS and len(EVENT_NAMES) == EVENT_COLUMNS
 
 MAX_EVENTS = 200_000
 MAX_SAMPLES = 10_000_000  # states a trajectory keeps at most (560 MB)
-CAPPED_SAMPLES = 1_000_000  # ... without a fixed horizon (56 MB; see _sample_rows)
+CAPPED_SAMPLES = 1_000_000  # ... where the cap is infinite (56 MB; see _sample_rows)
 # Engine.AUTO runs the kernel as Python (no numba to import, no machine code to load: ~0.7 s
 # saved) when the run is adaptive and stops once settled; a typical throw takes under a hundred
 # steps (about 5 ms in Python). One that needs more than PYTHON_STEPS is run again compiled.
@@ -264,7 +264,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     validate(scene)
     method = check_step(scene, force=force)
     integ = scene.integration
-    _check_sample_dt(sample_dt, integ.t_end)
+    _check_sample_dt(sample_dt, scene.horizon())
     try:
         engine = Engine.parse(engine)
     except ValueError:
@@ -317,28 +317,26 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
 
 
 def _sample_rows(scene: Scene, sample_dt: float) -> int:
-    """Rows of the buffer of kept states: every state to the horizon; without a fixed one, to
-    the throw's cap but at most CAPPED_SAMPLES (a run mostly ends long before its cap; a
-    longer one keeps its first states, and its notes say so)."""
+    """Rows of the buffer of kept states: every state to the horizon (t_end, or the throw's
+    cap); CAPPED_SAMPLES for an infinite cap (a start no run can integrate, or no damping:
+    the run keeps its first states, and its notes say so)."""
     span = scene.horizon() / sample_dt
-    if not scene.fixed_horizon:
-        span = min(span, CAPPED_SAMPLES)
-    return int(span) + 3
+    return (int(span) if math.isfinite(span) else CAPPED_SAMPLES) + 3
 
 
-def _check_sample_dt(sample_dt, t_end: float | None) -> None:
-    """ParameterError (one line) unless ``sample_dt`` is None, 0 or a usable interval (over
-    ``t_end``, if the horizon is fixed)."""
+def _check_sample_dt(sample_dt, horizon: float) -> None:
+    """ParameterError (one line) unless ``sample_dt`` is None, 0 or a usable interval over
+    ``horizon`` (t_end, or the throw's cap; not checked where that is infinite)."""
     if sample_dt is None or (isinstance(sample_dt, numbers.Real) and sample_dt == 0):
         return  # keep no states
     if isinstance(sample_dt, bool) or not isinstance(sample_dt, numbers.Real) or \
             not math.isfinite(sample_dt) or sample_dt < 0:
         raise ParameterError(f"sample_dt must be a number of seconds > 0 (0 or None: keep "
                              f"none), got {sample_dt!r}")
-    if t_end is not None and t_end / sample_dt > MAX_SAMPLES:
-        raise ParameterError(f"sample_dt = {sample_dt:g} s would keep {t_end / sample_dt:.3g} "
-                             f"states over t_end = {t_end:g} s, at most {MAX_SAMPLES:,}: take "
-                             f"sample_dt >= {t_end / MAX_SAMPLES:.2g} s")
+    if math.isfinite(horizon) and horizon / sample_dt > MAX_SAMPLES:
+        raise ParameterError(f"sample_dt = {sample_dt:g} s would keep {horizon / sample_dt:.3g} "
+                             f"states over {horizon:g} s, at most {MAX_SAMPLES:,}: take "
+                             f"sample_dt >= {horizon / MAX_SAMPLES:.2g} s")
 
 
 def _run(p, settings, state0, samples, events, final, control, engine: Engine):

@@ -196,7 +196,10 @@ def _announce(scene) -> None:
     if info(integ.method).adaptive:
         return
     ladder = ladder_of(integ)
-    steps = sum(ladder.budgets)  # every rung's own budget: t_end / dt of its step
+    # every rung's own budget (t_end / dt of its step), or the steps to the throw's cap
+    horizon = scene.horizon()
+    steps = sum(min(budget, math.ceil(horizon / dt)) if math.isfinite(horizon) else budget
+                for budget, dt in zip(ladder.budgets, ladder.dts, strict=True))
     if steps > SLOW_STEPS:
         from ..api import format_duration
 
@@ -212,10 +215,11 @@ def _check_log_every(scene, log_every) -> None:
     """Fail in one line, before the run, on an unusable display rate."""
     if isinstance(log_every, bool) or not math.isfinite(log_every) or log_every <= 0:
         raise fail(f"--log-every must be a positive number of seconds, got {log_every}")
-    frames = scene.integration.t_end / log_every if scene.fixed_horizon else 0.0
-    if frames > MAX_FRAMES:  # without a fixed horizon the run keeps its first states only
-        raise fail(f"--log-every {log_every:g} s makes {frames:.3g} frames for t_end = "
-                   f"{scene.integration.t_end:g} s (at most {MAX_FRAMES:,}); raise it")
+    horizon = scene.horizon()  # t_end, or the throw's cap (infinite: from a non-finite start)
+    frames = horizon / log_every if math.isfinite(horizon) else 0.0
+    if frames > MAX_FRAMES:
+        raise fail(f"--log-every {log_every:g} s makes {frames:.3g} frames over "
+                   f"{horizon:g} s ({scene.horizon_text()}; at most {MAX_FRAMES:,}); raise it")
 
 
 def _check_exports(csv, gif) -> None:
