@@ -18,6 +18,7 @@ _API = ("Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan", "F
         "Method", "Outcome", "ParameterError", "Scene", "Status", "StopReason", "SweepEstimate",
         "SweepPlan", "SweepProgress", "SweepReport", "SweepStart", "SweepTooLong", "Trajectory",
         "analyze", "basin", "basin_attrs", "basin_stats", "cell_scene", "classify",
+        "compile_kernels",
         "estimate_fractions", "estimate_sweep", "export_basin",
         "fractions", "fractions_over", "load_preset", "open_basin", "open_fractions",
         "plan_fractions", "plan_sweep", "record", "render_analysis", "render_basin",

@@ -487,6 +487,23 @@ def _load_kernels(spec: SweepSpec) -> None:
             (verified_labels,))
 
 
+def compile_kernels() -> bool:
+    """Compile every kernel for this machine now, unless this version is compiled here already
+    (:func:`coincli.jit.kernels_cached`): what the first run of any of them would do, in about
+    ``coincli.jit.FIRST_COMPILE_SECONDS``. Whatever the scene, the kernels take the same
+    argument types, so the default scene's compile serves every later one. True if it
+    compiled. Silent: a caller that wants to show the wait does (``coin compile``)."""
+    from . import jit
+    from .params import model_params, run_settings
+
+    if jit.kernels_cached():
+        return False
+    scene = Scene()
+    warm_up(model_params(scene), run_settings(scene.integration),
+            np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+    return True
+
+
 def open_basin(store: str | os.PathLike):
     """A basin store (or a NetCDF file of :func:`export_basin`) as an xarray Dataset, in
     memory; every tile of a store checked: cells of unfinished or damaged tiles read as not
@@ -886,11 +903,10 @@ def render_fractions(result: FractionsOver, out: str | os.PathLike | None = None
 
 __all__ = ["Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
            "FractionsProgress", "Method", "Outcome", "ParameterError", "Scene", "Status",
-           "StopReason", "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport",
-           "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin", "basin_attrs",
-           "basin_stats", "cell_scene", "classify", "estimate_fractions", "estimate_sweep",
-           "export_basin", "fractions",
-           "fractions_over",
-           "load_preset", "open_basin", "open_fractions", "plan_fractions", "plan_sweep",
-           "record", "render_analysis", "render_basin", "render_fractions", "run_fractions",
-           "simulate", "stability", "sweep", "verify_basin"]
+           "StopReason", "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport", "SweepStart",
+           "SweepTooLong", "Trajectory", "analyze", "basin", "basin_attrs", "basin_stats",
+           "cell_scene", "classify", "compile_kernels", "estimate_fractions", "estimate_sweep",
+           "export_basin", "fractions", "fractions_over", "load_preset", "open_basin",
+           "open_fractions", "plan_fractions", "plan_sweep", "record", "render_analysis",
+           "render_basin", "render_fractions", "run_fractions", "simulate", "stability", "sweep",
+           "verify_basin"]

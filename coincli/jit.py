@@ -127,25 +127,6 @@ def python(fn):
 FIRST_COMPILE_SECONDS = 120
 
 
-def compile_kernels() -> bool:
-    """Compile every kernel for this machine now, unless this version is compiled here already
-    (:func:`kernels_cached`): what the first run of any of them would do, in about
-    FIRST_COMPILE_SECONDS. Whatever the scene, the kernels take the same argument types, so the
-    default scene's compile serves every later one. True if it compiled. Silent: a caller that
-    wants to show the wait does (``coin compile``, :func:`coincli.cli.common.compile_first`)."""
-    if kernels_cached():
-        return False
-    import numpy as np
-
-    from .integrators.batch import warm_up
-    from .params import Scene, model_params, run_settings
-
-    scene = Scene()
-    warm_up(model_params(scene), run_settings(scene.integration),
-            np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
-    return True
-
-
 def _marker() -> Path:
     """The file that says these sources are compiled for this installation: numba's cache entries
     are keyed by the path of the source file, so a second checkout of the same version compiles
@@ -377,6 +358,6 @@ def _install_locator(numba) -> None:
     locators.insert(0, CoincliCacheLocator)
 
 
-__all__ = ["FIRST_COMPILE_SECONDS", "LOADS_WITHOUT_REFRESH", "cache_dir", "compile_kernels",
+__all__ = ["FIRST_COMPILE_SECONDS", "LOADS_WITHOUT_REFRESH", "cache_dir",
            "compiled", "derive", "is_active", "kernel", "kernels_cached", "loads_without_refresh",
            "mark_cached", "prune_cache", "python", "sources_digest"]

@@ -8,7 +8,7 @@ import sys
 from typing import Annotated
 
 import typer
-from typer.core import TyperGroup, TyperOption
+from typer.core import TyperGroup
 
 # The commands `coin --help` lists first, each with an example; the others follow in the order
 # their modules register them.
@@ -36,27 +36,6 @@ class CommandList(TyperGroup):
             command.short_help = f"{summary}\n[dim]e.g.[/dim] {MAIN_COMMANDS[name]}"
         return command
 
-
-def _flags_show_no_type() -> None:
-    """typer 0.29 shows '<bool>' as the value of every flag in the option tables (--help,
-    --install-completion, --quiet), as if it took one (0.28 showed none, and has no
-    display_type_rich): a flag shows no value. Our own flags say so with metavar=""; the ones
-    typer adds (--help and the completion options) are built by typer, hence this one change
-    of its option class."""
-    shown = getattr(TyperOption, "display_type_rich", None)
-    if shown is None or getattr(shown, "flag_aware", False):
-        return
-
-    def display_type_rich(self, ctx):
-        if getattr(self, "is_flag", False) and self.metavar is None:
-            return None
-        return shown(self, ctx)
-
-    display_type_rich.flag_aware = True
-    TyperOption.display_type_rich = display_type_rich
-
-
-_flags_show_no_type()
 
 app = typer.Typer(
     name="coin",

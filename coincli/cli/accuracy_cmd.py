@@ -71,11 +71,12 @@ def accuracy_command(
                                          "(default: all of them, see coin methods).",
                                          show_default=False)] = ",".join(
         m.label for m in Method),
-    quick: Annotated[bool, typer.Option("--quick", help="Two settings per method (a smoke "
+    quick: Annotated[bool, typer.Option("--quick", metavar="",
+                                        help="Two settings per method (a smoke "
                                         "test, not a chart to trust).")] = False,
     threads: Annotated[int | None, typer.Option("--threads", help="Threads (default: one per "
                                                 "core).", parser=whole_option, metavar="N")] = None,
-    stability: Annotated[bool, typer.Option("--stability", help="Only find where each "
+    stability: Annotated[bool, typer.Option("--stability", metavar="", help="Only find where each "
                                             "fixed-step method fails (bisection).")] = False,
     preset: PresetOpt = "paper", diameter: DiameterOpt = None, thickness: ThicknessOpt = None,
     mass: MassOpt = None, inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None,

@@ -157,13 +157,15 @@ def sweep_command(
                                        help="Tile size in cells, N or NxM: the "
                                        "unit of work, of writing and of resuming.",
                                        rich_help_panel=SWEEP)] = str(DEFAULT_CHUNK),
-    no_mirror: Annotated[bool, typer.Option("--no-mirror", help="Compute every tile, also "
+    no_mirror: Annotated[bool, typer.Option("--no-mirror", metavar="",
+                                            help="Compute every tile, also "
                                             "where the sweep is its own mirror image (phi0, "
                                             "vx, vphi zero or swept symmetrically: by default "
                                             "one tile of each pair is computed and the other "
                                             "is its mirror, n -> -n).",
                                             rich_help_panel=SWEEP)] = False,
-    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing store "
+    overwrite: Annotated[bool, typer.Option("--overwrite", metavar="",
+                                            help="Replace an existing store "
                                             "instead of resuming it.",
                                             rich_help_panel=SWEEP)] = False,
     threads: Annotated[int | None, typer.Option("--threads", help="Threads computing tiles "
@@ -180,9 +182,10 @@ def sweep_command(
                                                   "tiles to PATH, so PATH must be the same "
                                                   "shared directory on all of them.",
                                                   rich_help_panel=RUN)] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.",
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", metavar="", help="No progress bar.",
                                         rich_help_panel=RUN)] = False,
-    yes: Annotated[bool, typer.Option("--yes", "-y", help="Start a sweep estimated to take "
+    yes: Annotated[bool, typer.Option("--yes", "-y", metavar="",
+                                      help="Start a sweep estimated to take "
                                       "more than 12 hours anyway.",
                                       rich_help_panel=RUN)] = False,
     rrd: LiveRrdOpt = None, spawn: LiveSpawnOpt = False, connect: LiveConnectOpt = None,
@@ -744,7 +747,8 @@ def analyze_command(
                                                 "draw f(eps) and the measures by band to this "
                                                 ".png or .svg.")] = None,
     json_out: JsonOpt = False,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar.")] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", metavar="",
+                                        help="No progress bar.")] = False,
 ) -> None:
     """How fractal the basin boundaries are: whole map and by band of the first axis.
 

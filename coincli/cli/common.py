@@ -159,29 +159,14 @@ def fail(message: str) -> typer.Exit:
 
 def in_cli_words(exc: ParameterError) -> str:
     """The message of ``exc`` as the command line says it: each parameter the message names
-    that is an option of the running command (``exc.parameters``) by its option, ``res`` as
-    ``--res``; the Python API's words otherwise (a name that is no option of this command, as a
-    preset file's key, stays as it is)."""
+    as an option's (``exc.parameters``: the raiser lists only names that are options where the
+    API is called from the command line) by its option, ``t_end`` as ``--t-end``."""
     message = str(exc)
-    ctx = click_context()
-    if ctx is None:
-        return message
-    options = {param.name: max(param.opts, key=len) for param in ctx.command.params
-               if param.param_type_name == "option"}  # --res, not -r
     for name in getattr(exc, "parameters", ()):
-        if name in options:
-            message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])",
-                             lambda _, option=options[name]: option, message)
+        option = "--" + name.replace("_", "-")
+        message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])",
+                         lambda _, option=option: option, message)
     return message
-
-
-def click_context():
-    """The context of the command running (None outside one)."""
-    try:  # typer 0.28 on carries its own click
-        from typer._click.globals import get_current_context
-    except ImportError:  # a typer that uses click itself
-        from click import get_current_context
-    return get_current_context(silent=True)
 
 
 @contextlib.contextmanager
@@ -210,7 +195,8 @@ def compile_first(quiet: bool = False) -> None:
     stderr is no terminal, one line before and one after. Ctrl-C stops it: exit 130."""
     import time
 
-    from ..jit import FIRST_COMPILE_SECONDS, compile_kernels, kernels_cached
+    from .. import api
+    from ..jit import FIRST_COMPILE_SECONDS, kernels_cached
 
     if kernels_cached():
         return
@@ -220,7 +206,7 @@ def compile_first(quiet: bool = False) -> None:
             say(err_console, f"[yellow]compiling[/] the numerical kernels for this machine: once "
                              f"after installing or updating, about "
                              f"{FIRST_COMPILE_SECONDS / 60:.0f} min")
-            compile_kernels()
+            api.compile_kernels()
         else:
             from rich.progress import SpinnerColumn, TextColumn
 
@@ -230,7 +216,7 @@ def compile_first(quiet: bool = False) -> None:
                       CompileClock(FIRST_COMPILE_SECONDS), console=err_console,
                       transient=True) as bars:
                 bars.add_task("compile", total=None)
-                compile_kernels()
+                api.compile_kernels()
     except KeyboardInterrupt:
         say(err_console, "[yellow]interrupted:[/] while compiling the numerical kernels; "
                          "nothing was done")

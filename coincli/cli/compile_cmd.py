@@ -12,7 +12,8 @@ from .text import say
 
 @app.command("compile")
 def compile_command(
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="One line before and one after, "
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", metavar="",
+                                        help="One line before and one after, "
                                         "no live line.")] = False,
 ) -> None:
     """Compile the numerical kernels for this machine now (once after installing or updating; otherwise the first command that needs them does)."""  # noqa: E501

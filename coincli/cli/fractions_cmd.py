@@ -136,7 +136,8 @@ def fractions_command(
     store: Annotated[Path | None, typer.Option(
         "--store", metavar="PATH", help="Keep the samples and labels in this Zarr store; the "
         "same command resumes it.", rich_help_panel=RUN)] = None,
-    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace a --store of other "
+    overwrite: Annotated[bool, typer.Option("--overwrite", metavar="",
+                                            help="Replace a --store of other "
                                             "samples.", rich_help_panel=RUN)] = False,
     threads: Annotated[int | None, typer.Option("--threads", help="Threads on this machine "
                                                 "(default: one per core).",
@@ -150,9 +151,10 @@ def fractions_command(
                                                   "Dask cluster at this address "
                                                   "(tcp://HOST:PORT); the store stays here.",
                                                   rich_help_panel=RUN)] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress line.",
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", metavar="", help="No progress line.",
                                         rich_help_panel=RUN)] = False,
-    yes: Annotated[bool, typer.Option("--yes", "-y", help="Start a run estimated to take "
+    yes: Annotated[bool, typer.Option("--yes", "-y", metavar="",
+                                      help="Start a run estimated to take "
                                       "more than 12 hours, or to spend its budget before "
                                       "--precision, anyway.", rich_help_panel=RUN)] = False,
     every_n: Annotated[bool, typer.Option("--all", metavar="", help="List every n (by default "

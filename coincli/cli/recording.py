@@ -18,7 +18,7 @@ LiveRrdOpt = Annotated[Path | None, typer.Option(
     "--rrd", metavar="FILE", help="Write the recording to this .rrd file (open it with "
     "`rerun FILE`).", rich_help_panel=REC)]
 LiveSpawnOpt = Annotated[bool, typer.Option(
-    "--spawn", help="Open a Rerun viewer and stream to it as the work goes (without a "
+    "--spawn", metavar="", help="Open a Rerun viewer and stream to it as the work goes (without a "
     "display: says so, does the work, writes any --rrd file, exit 1).", rich_help_panel=REC)]
 LiveConnectOpt = Annotated[str | None, typer.Option(
     "--connect", metavar="URL", help="Stream to a running viewer, e.g. "

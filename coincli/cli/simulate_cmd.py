@@ -53,10 +53,12 @@ MAX_FRAMES = 1_000_000
 RrdOpt = Annotated[Path, typer.Option("--rrd", metavar="PATH", help="Write the recording of the "
                                       "throw to this .rrd file (open it with `rerun PATH`).",
                                       rich_help_panel=REC)]
-NoRrdOpt = Annotated[bool, typer.Option("--no-rrd", help="Write no .rrd file (with neither "
+NoRrdOpt = Annotated[bool, typer.Option("--no-rrd", metavar="",
+                                        help="Write no .rrd file (with neither "
                                         "--spawn nor --connect: print the numbers only).",
                                         rich_help_panel=REC)]
-SpawnOpt = Annotated[bool, typer.Option("--spawn", help="Open a Rerun viewer and stream the "
+SpawnOpt = Annotated[bool, typer.Option("--spawn", metavar="",
+                                        help="Open a Rerun viewer and stream the "
                                         "recording to it (without a display: says so, prints "
                                         "the outcome, writes any --rrd file, exit 1).",
                                         rich_help_panel=REC)]
