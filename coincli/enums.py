@@ -100,16 +100,40 @@ class Method(_Named):
 class Certainty(_Named):
     """Whether a label is converged (verification per cell, see coincli.integrators.ladder):
     CERTAIN when two successive rungs of the ladder of settings agree (same n, both settled),
-    UNCERTAIN when none did by the last rung, UNVERIFIED for a single pass (no ladder)."""
+    UNVERIFIED for a single pass (no ladder), and when no two agreed by the last rung, why:
+    UNCERTAIN when the rungs compared last were both decided (settled) but disagree, so that
+    the outcome is set by perturbations below what the ladder resolves (chaotic at this
+    precision), UNDECIDED when one of them was not decided (it reached its horizon or step
+    budget still able to pass an edge)."""
 
     UNCERTAIN = 0
     CERTAIN = 1
     UNVERIFIED = 2
+    UNDECIDED = 3
     NOT_COMPUTED = 255
 
     @property
     def label(self) -> str:
         return self.name.lower().replace("_", " ")
+
+    @property
+    def message(self) -> str:
+        return _CERTAINTY_MESSAGES[self]
+
+    @property
+    def unsure(self) -> bool:
+        """A verified label that did not converge, for either cause."""
+        return self in (Certainty.UNCERTAIN, Certainty.UNDECIDED)
+
+
+_CERTAINTY_MESSAGES = {
+    Certainty.UNCERTAIN: "decided at every rung compared, but no two successive rungs agree: "
+                         "chaotic at this precision",
+    Certainty.CERTAIN: "two successive rungs agree",
+    Certainty.UNVERIFIED: "a single pass, not verified",
+    Certainty.UNDECIDED: "a rung did not decide the outcome within its horizon or step budget",
+    Certainty.NOT_COMPUTED: "not computed",
+}
 
 
 class Engine(_Named):

@@ -397,6 +397,7 @@ def method_attrs(scene: Scene, method: MethodInfo) -> dict:
     return {"name": method.name, "kernel_id": int(method.method), "order": method.order,
             "adaptive": method.adaptive, "symplectic": method.symplectic,
             "dt": integ.dt, "rtol": integ.rtol, "t_end": integ.t_end,
+            "horizon": scene.horizon_text(),
             "stop_on_settle": integ.stop_on_settle, "max_steps": step_budget(integ),
             "verification": ladder_of(integ).to_dict()}
 

@@ -171,6 +171,33 @@ def total_energy(p, state):
     return total_energy_at(p, state[1], state[2], state[3], state[4], state[5])
 
 
+CAP_FACTOR = 4.0  # the cap of a run without a fixed horizon, in units of decision_time
+
+
+@kernel
+def decision_time(p, state):
+    """An upper estimate of how long a throw from ``state`` takes to be decided (its energy below
+    E_crit), from its physics alone: the free flight its energy allows, E / (m g) - r_t above a
+    lying coin's rest (at least the half diagonal r), with every bounce after it shorter by the
+    restitution e of a corner on the foundation (all of them: that flight times 1 / (1 - e),
+    ``p.bounce_factor``), plus the damping time of rocking on a corner (``p.decay_time``). On
+    the paper's coin, the thick one and a coin with t/d = 0.5, the 32 x 32 default basin
+    settles within half of it (docs/thickness.md); infinite for an undamped foundation."""
+    kinetic = 0.5 * p.mass * (state[3] * state[3] + state[4] * state[4]) \
+        + 0.5 * p.inertia * state[5] * state[5]
+    rise = max((kinetic + p.mass * p.g * state[1]) / (p.mass * p.g) - p.r_t, p.r)
+    return 2.0 * math.sqrt(2.0 * rise / p.g) * p.bounce_factor + p.decay_time
+
+
+@kernel
+def run_horizon(p, t_end, state):
+    """How long a run from ``state`` may last: ``t_end`` if the settings fix a horizon, else
+    (t_end infinite: run until decided) CAP_FACTOR times :func:`decision_time`."""
+    if t_end < math.inf:
+        return t_end
+    return CAP_FACTOR * decision_time(p, state)
+
+
 @kernel
 def rounded_quarter_turns(phi):
     """The paper's label n = round(2 phi / pi) (ties away from zero)."""

@@ -132,20 +132,24 @@ class Integration:
     """How the equations of motion are integrated.
 
     ``dt`` is the step of a fixed-step method (or the initial step of an adaptive one), ``rtol``
-    the relative tolerance of an adaptive one. ``stop_on_settle`` stops a run as soon as its
-    outcome is certain (total energy below E_crit); the paper's own runs always last ``t_end``.
+    the relative tolerance of an adaptive one. ``t_end`` is a fixed horizon; None (the default)
+    runs every throw until its outcome is decided, capped at CAP_FACTOR times the throw's
+    :func:`coincli.model.decision_time` (what its energy and the foundation's damping allow:
+    :meth:`Scene.horizon`), with ``max_steps`` as the guard against runs that never end.
+    ``stop_on_settle`` stops a run as soon as its outcome is certain (total energy below
+    E_crit); the paper's own runs always last ``t_end`` (2 s, preset paper-method).
     ``verify`` computes every outcome at a ladder of tighter settings until two agree
     (coincli.integrators.ladder); without it a run is a single pass, its label unverified.
     ``max_steps`` bounds the work of one run (like diffrax's ``max_steps``): a run that needs
     more ends with status ``budget``, not with a label. By default an adaptive run may take
     ADAPTIVE_MAX_STEPS steps (a typical throw takes under a hundred), a fixed-step run the
-    t_end / dt steps it asks for.
+    t_end / dt steps it asks for (FIXED_MAX_STEPS without a horizon).
     """
 
     method: Method = Method.EVENT
     dt: float = 1.0e-6
     rtol: float = 1.0e-6
-    t_end: float = 2.0
+    t_end: float | None = None  # s, a fixed horizon; None: until decided, within the cap
     stop_on_settle: bool = True
     max_steps: int | None = None  # the step budget of one run; None: the method's default
     verify: bool = True  # climb the ladder of settings until the label converges
@@ -174,6 +178,33 @@ class Scene:
     @property
     def y0(self) -> float:
         return self.coin.r if self.initial.y0 is None else self.initial.y0
+
+    @property
+    def fixed_horizon(self) -> bool:
+        """Whether runs last a fixed t_end (else: until decided, within the cap)."""
+        return self.integration.t_end is not None
+
+    def horizon(self, state=None) -> float:
+        """How long a run from ``state`` (default: the scene's initial state) may last: t_end,
+        or without one the cap, CAP_FACTOR times :func:`coincli.model.decision_time`."""
+        from .model import run_horizon
+
+        p = model_params(self)
+        if state is None:
+            s = self.initial
+            state = (s.x0, self.y0, s.phi0, s.vx, s.vy, s.vphi)
+        return float(run_horizon(p, math.inf if self.integration.t_end is None
+                                 else self.integration.t_end, state))
+
+    def horizon_text(self) -> str:
+        """The horizon as a user reads it: ``t_end = 2 s`` or the cap's rule."""
+        if self.fixed_horizon:
+            return f"t_end = {self.integration.t_end:g} s"
+        from .model import CAP_FACTOR
+
+        return (f"until decided, capped at {CAP_FACTOR:g} x (the flight its energy allows, "
+                f"summed over bounces of restitution {1 - 1 / model_params(self).bounce_factor:.3g}"
+                f", + {model_params(self).decay_time * 1e3:.3g} ms of damping)")
 
     @property
     def e_crit(self) -> float:
@@ -319,11 +350,15 @@ def validate(scene: Scene) -> Scene:
     check_start(scene)
     _check_number("dt", i.dt, positive=True)
     _check_number("rtol", i.rtol, positive=True)
-    _check_number("t_end", i.t_end, positive=True)
+    if i.t_end is not None:
+        _check_number("t_end", i.t_end, positive=True)
+    elif f.c == 0:
+        raise ParameterError("an undamped foundation (c = 0) never decides a throw: give t_end, "
+                             "a fixed horizon", parameters=("c", "t_end"))
     if not 1e-14 <= i.rtol < 1e-1:
         # below ~1e-14 the steps shrink into rounding noise and the run cannot proceed
         raise ParameterError(f"rtol must be between 1e-14 and 0.1, got {i.rtol:g}")
-    if i.t_end / i.dt > 1e12:
+    if i.t_end is not None and i.t_end / i.dt > 1e12:
         raise ParameterError(f"t_end / dt is {i.t_end / i.dt:.3g} steps; at most 1e12",
                              parameters=("t_end", "dt"))
     if i.max_steps is not None and (isinstance(i.max_steps, bool)
@@ -353,6 +388,8 @@ class ModelParams(NamedTuple):
     inv_mass: float  # 1/kg (a product is cheaper than a quotient in every step)
     inv_inertia: float  # 1/(kg m^2)
     omega: float  # rad/s, the stiffest contact mode: rocking on two corners, sqrt(2 k r_d^2 / I)
+    bounce_factor: float  # 1 / (1 - e), e the restitution of a corner (coincli.model.decision_time)
+    decay_time: float  # s, the damping time of rocking on a corner (I + m r^2) / (c r_d^2)
 
 
 def model_params(scene: Scene) -> ModelParams:
@@ -362,7 +399,23 @@ def model_params(scene: Scene) -> ModelParams:
                        r_t=float(coin.r_t), k=k, c=float(scene.foundation.c), g=float(scene.g),
                        r=float(coin.r), e_crit=float(scene.e_crit), phi_cr=float(coin.phi_cr),
                        inv_mass=1.0 / coin.mass, inv_inertia=1.0 / coin.inertia,
-                       omega=math.sqrt(2.0 * k * coin.r_d ** 2 / coin.inertia))
+                       omega=math.sqrt(2.0 * k * coin.r_d ** 2 / coin.inertia),
+                       **_decay(coin, k, float(scene.foundation.c)))
+
+
+def _decay(coin: Coin, k: float, c: float) -> dict:
+    """The damping constants of :func:`coincli.model.decision_time`: the restitution e of a
+    corner hitting the foundation with the whole mass behind it (damping ratio
+    zeta = c / (2 sqrt(k m)), the least damped impact) as the sum of its bounces' flight
+    times, 1 / (1 - e), and the damping time of rocking on a corner; infinite without
+    damping."""
+    if c <= 0 or k <= 0 or coin.mass <= 0:
+        return {"bounce_factor": math.inf, "decay_time": math.inf}
+    zeta = c / (2.0 * math.sqrt(k * coin.mass))
+    # 1 - e, exact for a small zeta (then e rounds to 1); 0 where even that underflows
+    loss = -math.expm1(-math.pi * zeta / math.sqrt(1.0 - zeta * zeta)) if zeta < 1 else 1.0
+    return {"bounce_factor": 1.0 / loss if loss > 0 else math.inf,
+            "decay_time": (coin.inertia + coin.mass * coin.r ** 2) / (c * coin.r_d ** 2)}
 
 
 class RunSettings(NamedTuple):
@@ -371,13 +424,14 @@ class RunSettings(NamedTuple):
     method: int  # a Method value
     dt: float  # s, the step of a fixed-step method, the first step of an adaptive one
     rtol: float  # relative tolerance of an adaptive method
-    t_end: float  # s
+    t_end: float  # s, a fixed horizon; infinite: until decided, within the cap (run_horizon)
     stop_on_settle: bool  # stop as soon as the outcome is certain
     max_steps: int  # the step budget (closed-form flights count their iterations)
     sample_dt: float  # s between recorded samples (0: record none)
 
 
 ADAPTIVE_MAX_STEPS = 1_000_000
+FIXED_MAX_STEPS = 100_000_000  # a fixed-step run without a horizon (100 s at dt = 1e-6 s)
 
 
 def step_budget(integration: Integration) -> int:
@@ -386,12 +440,15 @@ def step_budget(integration: Integration) -> int:
         return int(integration.max_steps)
     if integration.method in (Method.DOPRI5, Method.EVENT, Method.EVENT_DOP853):
         return ADAPTIVE_MAX_STEPS
+    if integration.t_end is None:
+        return FIXED_MAX_STEPS
     return int(math.ceil(integration.t_end / integration.dt - 1e-9))
 
 
 def run_settings(integration: Integration, sample_dt: float = 0.0) -> RunSettings:
     return RunSettings(method=int(integration.method), dt=float(integration.dt),
-                       rtol=float(integration.rtol), t_end=float(integration.t_end),
+                       rtol=float(integration.rtol),
+                       t_end=math.inf if integration.t_end is None else float(integration.t_end),
                        stop_on_settle=bool(integration.stop_on_settle),
                        max_steps=step_budget(integration), sample_dt=float(sample_dt))
 

@@ -4,8 +4,11 @@ cells without a label, the verification, and the sweep's cost.
 
 Fractions and probabilities are taken over the *labelled* cells: computed and finite (settled,
 or unsettled at t_end and labelled round(2 phi / pi) there, as the paper labels every run); in a
-verified sweep they are given again over the *certain* cells only. Where there is nothing to
-divide by they are NaN.
+verified sweep they are given again over the *certain* cells only, and over the *decided* cells
+(the deepest rung run settled: its label is final for that run, converged or not). The cells
+that are not certain are counted by cause: *uncertain* (decided, but no two rungs agree: chaotic
+at this precision) and *undecided* (a rung not settled within its horizon or step budget).
+Where there is nothing to divide by they are NaN.
 """
 
 from __future__ import annotations
@@ -61,7 +64,8 @@ class BasinCounts:
         self.certainty = Counter()
         self.outcomes = Counter()  # labelled cells
         self.certain_outcomes = Counter()  # labelled and certain
-        self.uncertain_outcomes = Counter()
+        self.uncertain_outcomes = Counter()  # labelled and not certain, either cause
+        self.decided_outcomes = Counter()  # settled at the deepest rung run
 
     def add(self, quarter_turns: np.ndarray, status: np.ndarray,
             certainty: np.ndarray | None = None) -> None:
@@ -77,9 +81,11 @@ class BasinCounts:
                                  Certainty.UNVERIFIED)
         cert = np.asarray(certainty).ravel()
         self.certainty.update(dict(zip(*np.unique(cert, return_counts=True), strict=True)))
-        for flag, counter in ((Certainty.CERTAIN, self.certain_outcomes),
-                              (Certainty.UNCERTAIN, self.uncertain_outcomes)):
-            sel = labelled & (cert == flag)
+        unsure = (cert == Certainty.UNCERTAIN) | (cert == Certainty.UNDECIDED)
+        for sel, counter in ((cert == Certainty.CERTAIN, self.certain_outcomes),
+                             (unsure, self.uncertain_outcomes),
+                             (st == Status.SETTLED, self.decided_outcomes)):
+            sel = labelled & sel
             counter.update(dict(zip(*np.unique(q[sel], return_counts=True), strict=True)))
 
     def add_not_computed(self, cells: int) -> None:
@@ -103,18 +109,23 @@ class BasinCounts:
             "standing": proportion(standing, labelled),
             "lying": proportion(labelled - standing, labelled),
         }
-        verified = (self.certainty.get(int(Certainty.CERTAIN), 0)
-                    + self.certainty.get(int(Certainty.UNCERTAIN), 0)) > 0
+        chaotic = int(self.certainty.get(int(Certainty.UNCERTAIN), 0))
+        undecided = int(self.certainty.get(int(Certainty.UNDECIDED), 0))
+        verified = self.certainty.get(int(Certainty.CERTAIN), 0) + chaotic + undecided > 0
         out["verified"] = verified
+        decided = sum(self.decided_outcomes.values())
+        standing_decided = sum(c for n, c in self.decided_outcomes.items() if n % 2)
+        out["decided"] = proportion(decided, labelled)
+        out["standing_decided"] = proportion(standing_decided, decided)
         if verified:
             certain = sum(self.certain_outcomes.values())
-            uncertain_cells = int(self.certainty.get(int(Certainty.UNCERTAIN), 0))
             computed = out["computed"]
             standing_certain = sum(c for n, c in self.certain_outcomes.items() if n % 2)
             out["certain"] = proportion(certain, labelled)
-            out["uncertain"] = {**proportion(uncertain_cells, computed),
+            out["uncertain"] = {**proportion(chaotic + undecided, computed),
                                 "standing": sum(c for n, c in self.uncertain_outcomes.items()
-                                                if n % 2)}
+                                                if n % 2),
+                                "chaotic": chaotic, "undecided": undecided}
             out["outcomes_certain"] = outcome_rows(self.certain_outcomes)
             out["standing_certain"] = proportion(standing_certain, certain)
             out["lying_certain"] = proportion(certain - standing_certain, certain)

@@ -74,6 +74,7 @@ assert len(SAMPLE_NAMES) == SAMPLE_COLUMNS and len(EVENT_NAMES) == EVENT_COLUMNS
 
 MAX_EVENTS = 200_000
 MAX_SAMPLES = 10_000_000  # states a trajectory keeps at most (560 MB)
+CAPPED_SAMPLES = 1_000_000  # ... where the cap is infinite (56 MB; see _sample_rows)
 # Engine.AUTO runs the kernel as Python (no numba to import, no machine code to load: ~0.7 s
 # saved) when the run is adaptive and stops once settled; a typical throw takes under a hundred
 # steps (about 5 ms in Python). One that needs more than PYTHON_STEPS is run again compiled.
@@ -221,6 +222,9 @@ class Trajectory:
             "dt": integ.dt,
             "rtol": integ.rtol,
             "t_end": integ.t_end,
+            "horizon": self.scene.horizon(),
+            "horizon_rule": self.scene.horizon_text(),
+            "certainty_reason": self.certainty.message,
             "stop_on_settle": integ.stop_on_settle,
             "steps": self.steps,
             "wall_time": self.wall_time,
@@ -260,7 +264,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     validate(scene)
     method = check_step(scene, force=force)
     integ = scene.integration
-    _check_sample_dt(sample_dt, integ.t_end)
+    _check_sample_dt(sample_dt, scene.horizon())
     try:
         engine = Engine.parse(engine)
     except ValueError:
@@ -271,7 +275,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     ladder = ladder_of(integ)
     state0 = state_array(scene)
     if sample_dt:
-        samples = np.empty((int(integ.t_end / sample_dt) + 3, SAMPLE_COLUMNS))
+        samples = np.empty((_sample_rows(scene, sample_dt), SAMPLE_COLUMNS))
     else:
         samples = np.empty((0, SAMPLE_COLUMNS))
     events = np.empty((MAX_EVENTS if record_events else 0, EVENT_COLUMNS))
@@ -284,6 +288,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     certainty = Certainty.UNVERIFIED if not ladder.verified else Certainty.UNCERTAIN
     wall = 0.0
     previous = None  # the last rung's RunResult and label
+    decided = True  # both runs of the last comparison settled (else: undecided, not chaotic)
     for k in range(len(ladder)):
         settings = base._replace(method=int(ladder.methods[k]), rtol=ladder.rtols[k],
                                  dt=ladder.dts[k], max_steps=ladder.budget(k, base.max_steps))
@@ -295,29 +300,43 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
                           Status(result.status), float(result.settle_time), int(result.steps),
                           float(result.last_change)))
         if stops_ladder(result):
+            decided = False
             break
+        if previous is not None:
+            decided = previous[0].status == Status.SETTLED and result.status == Status.SETTLED
         if previous is not None and rungs_agree(previous[1], previous[0], label, result,
                                                 ladder.change_tolerance,
                                                 ladder.settle_tolerance):
             certainty = Certainty.CERTAIN
             break
         previous = (result, label)
+    if certainty == Certainty.UNCERTAIN and not decided:
+        certainty = Certainty.UNDECIDED
     return _trajectory(scene, p, state0, final, result, samples, events, sample_dt,
                        record_events, wall, certainty, rungs, settings.max_steps)
 
 
-def _check_sample_dt(sample_dt, t_end: float) -> None:
-    """ParameterError (one line) unless ``sample_dt`` is None, 0 or a usable interval."""
+def _sample_rows(scene: Scene, sample_dt: float) -> int:
+    """Rows of the buffer of kept states: every state to the horizon (t_end, or the throw's
+    cap); CAPPED_SAMPLES for an infinite cap (a start no run can integrate, or no damping:
+    the run keeps its first states, and its notes say so)."""
+    span = scene.horizon() / sample_dt
+    return (int(span) if math.isfinite(span) else CAPPED_SAMPLES) + 3
+
+
+def _check_sample_dt(sample_dt, horizon: float) -> None:
+    """ParameterError (one line) unless ``sample_dt`` is None, 0 or a usable interval over
+    ``horizon`` (t_end, or the throw's cap; not checked where that is infinite)."""
     if sample_dt is None or (isinstance(sample_dt, numbers.Real) and sample_dt == 0):
         return  # keep no states
     if isinstance(sample_dt, bool) or not isinstance(sample_dt, numbers.Real) or \
             not math.isfinite(sample_dt) or sample_dt < 0:
         raise ParameterError(f"sample_dt must be a number of seconds > 0 (0 or None: keep "
                              f"none), got {sample_dt!r}")
-    if t_end / sample_dt > MAX_SAMPLES:
-        raise ParameterError(f"sample_dt = {sample_dt:g} s would keep {t_end / sample_dt:.3g} "
-                             f"states over t_end = {t_end:g} s, at most {MAX_SAMPLES:,}: take "
-                             f"sample_dt >= {t_end / MAX_SAMPLES:.2g} s")
+    if math.isfinite(horizon) and horizon / sample_dt > MAX_SAMPLES:
+        raise ParameterError(f"sample_dt = {sample_dt:g} s would keep {horizon / sample_dt:.3g} "
+                             f"states over {horizon:g} s, at most {MAX_SAMPLES:,}: take "
+                             f"sample_dt >= {horizon / MAX_SAMPLES:.2g} s")
 
 
 def _run(p, settings, state0, samples, events, final, control, engine: Engine):
@@ -352,7 +371,9 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
                      f"but its energy fell below E_crit at t = {settle_time:.4g} s inside the "
                      f"well n = {quarter_turns}, which is the true outcome")
     if status == Status.UNSETTLED:
-        notes.append(f"the energy is still above E_crit at t = {t:g} s: n = {rounded} is "
+        end = ("" if scene.fixed_horizon else
+               f" (the cap of this throw: {scene.horizon_text()})")
+        notes.append(f"the energy is still above E_crit at t = {t:g} s{end}: n = {rounded} is "
                      "round(2 phi / pi) at the end and may still change; raise --t-end")
     if status == Status.NONFINITE and not is_finite_state(*state0):
         notes.append(f"the initial state is beyond what can be integrated (a value of "
@@ -367,9 +388,17 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
                      f"t = {t:.4g} s: "
                      "no outcome (raise --max-steps, or check the throw: a spin or a damping "
                      "this large needs steps too small to finish)")
+    if sample_dt and result.n_samples >= samples.shape[0]:
+        notes.append(f"the recording keeps the first {samples.shape[0]:,} states, to "
+                     f"t = {samples[-1, 0]:.4g} s: give --t-end (a fixed horizon) or a longer "
+                     "interval between states to keep them all")
     if certainty == Certainty.UNCERTAIN and status == Status.SETTLED:
         tried = "; ".join(f"{r.setting}: n = {r.quarter_turns} {r.status.label}" for r in rungs)
-        notes.append(f"the label did not converge: no two successive rungs agreed ({tried})")
+        notes.append(f"the label did not converge: no two successive rungs agreed ({tried}): "
+                     "chaotic at this precision")
+    if certainty == Certainty.UNDECIDED:
+        tried = "; ".join(f"{r.setting}: n = {r.quarter_turns} {r.status.label}" for r in rungs)
+        notes.append(f"the label is undecided: a rung did not settle ({tried})")
     with np.errstate(over="ignore", invalid="ignore"):  # a state past FINITE_BOUND: inf
         e0 = sum(energies(p, state0))
     e1 = sum(energies(p, final)) if status != Status.NONFINITE else math.nan

@@ -601,6 +601,8 @@ def stats_command(
     console.print(f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
                   f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells, "
                   f"{attrs['method']['name']}", highlight=False)
+    if attrs["method"].get("horizon"):
+        console.print(f"horizon: {attrs['method']['horizon']}", highlight=False)
     verified = stats["verified"]
     table = Table(title="Outcomes (fractions of the labelled cells)", title_justify="left")
     for col, just in (("n", "right"), ("pose", "left"), ("turn", "left"), ("cells", "right"),
@@ -641,10 +643,13 @@ def stats_command(
         u = stats["uncertain"]
         summary.append(("certain", share(stats["certain"])))
         summary.append(("uncertain", f"{u['count']:,} of {u['of']:,} = {percent(u['probability'])}"
-                                     f" (no two rungs agreed); {u['standing']:,} of them "
+                                     f" (no two rungs agreed): {u['chaotic']:,} chaotic "
+                                     f"(decided, rungs disagree), {u['undecided']:,} undecided "
+                                     f"(a rung not settled); {u['standing']:,} of them "
                                      "standing"))
         summary.append(("standing", f"{share(stats['standing_certain'])} of the certain "
                                     "cells"))
+        summary.append(("", f"{share(stats['standing_decided'])} of the decided cells"))
         summary.append(("", f"{share(stats['standing'])} of all labelled cells"))
     else:
         summary.append(("standing", share(stats["standing"])))

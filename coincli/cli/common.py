@@ -56,7 +56,7 @@ def _paper_defaults() -> dict:
     return {"diameter": scene.coin.diameter, "thickness": scene.coin.thickness,
             "mass": scene.coin.mass, "inertia": scene.coin.inertia, "k": scene.foundation.k,
             "c": scene.foundation.c, "g": scene.g, "method": integ.method.label, "dt": integ.dt,
-            "rtol": integ.rtol, "t_end": integ.t_end}
+            "rtol": integ.rtol}
 
 
 _PAPER = _paper_defaults()
@@ -110,7 +110,10 @@ DtOpt = Annotated[float | None, _opt("--dt", "Step of a fixed-step method, first
 RtolOpt = Annotated[float | None, _opt("--rtol", "Relative tolerance of an adaptive method "
                                        "(the first rung of the verification ladder).", "RTOL",
                                        INTEG)]
-TEndOpt = Annotated[float | None, _opt("--t-end", "End time.", "s", INTEG)]
+TEndOpt = Annotated[float | None, _opt(
+    "--t-end", "A fixed horizon: every run ends at this time, decided or not (\"unsettled\"). "
+    "[dim]\\[default: no horizon: a run ends when its outcome is decided, capped at 4 times the "
+    "time its energy and the damping need][/dim]", "s", INTEG)]
 StopOpt = Annotated[bool | None, _flag("--stop-on-settle/--full", "Stop as soon as the outcome "
                                        "is decided (E < E_crit), or always run to --t-end as "
                                        "the paper does [dim]\\[paper: --stop-on-settle][/dim]",

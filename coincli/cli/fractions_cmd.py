@@ -397,8 +397,16 @@ def _print_result(plan, r, every_n: bool = False) -> None:
     summary = []
     summary.append(("standing", share(r.standing)))
     summary.append(("lying", share(r.lying)))
-    what = "no two rungs of the ladder agreed, or no label" if r.verified else "not settled"
+    u = r.uncertain
+    what = (f"no two rungs of the ladder agreed, or no label: {u['chaotic']:,} chaotic (decided, "
+            f"rungs disagree), {u['undecided']:,} undecided (a rung not settled)"
+            if r.verified else "not settled")
     summary.append(("uncertain", f"{share(r.uncertain)} ({what})"))
+    d = r.all_decided
+    summary.append(("all decided", f"standing {percent(d['standing']['probability'])} (95 % CI "
+                                    f"{interval(d['standing'])}) of {d['decided']:,} decided "
+                                    "samples (each throw's deepest rung settled), chaotic ones "
+                                    "included"))
     a = r.all_labelled
     summary.append(("all labelled", f"standing {percent(a['standing']['probability'])} (95 % CI "
                                      f"{interval(a['standing'])}) of {a['labelled']:,} "
@@ -406,6 +414,7 @@ def _print_result(plan, r, every_n: bool = False) -> None:
     from ..integrators.ladder import describe
 
     summary.append(("method", describe(scene.integration)))
+    summary.append(("horizon", scene.horizon_text()))
     cost = r.cost
     if cost.get("computed"):
         where = counted(cost["workers"], "thread") if cost["mode"] == "threads" else "Dask"

@@ -75,6 +75,10 @@ def _words(scene, preset, force: bool, always=()) -> list[str] | None:
     for name in (*PHYSICAL, *IC_NAMES, *INTEGRATION):
         if want[name] != have[name] or name in always:
             value = want[name]
+            if value is None:  # t_end: no horizon, which no option sets against a preset's
+                if have[name] is None:
+                    continue
+                return None
             text = value if isinstance(value, str) else repr(float(value))
             words += [f"--{name.replace('_', '-')}", text]
             overrides[name] = text if isinstance(value, str) else float(text)

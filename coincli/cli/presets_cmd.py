@@ -35,6 +35,7 @@ def presets_command(json_out: JsonOpt = False) -> None:
     console.print(table)
     for p in found:
         integ = p.scene.integration
-        run_to = "stop when decided" if integ.stop_on_settle else f"full {integ.t_end:g} s"
+        run_to = ("stop when decided" if integ.stop_on_settle else "run to the end") + (
+            f", t_end = {integ.t_end:g} s" if p.scene.fixed_horizon else ", capped (no t_end)")
         say(console, f"[bold]{p.name}[/]: {describe(integ)}, {run_to}. "
                      f"{p.description}")

@@ -198,7 +198,10 @@ def _announce(scene) -> None:
     if info(integ.method).adaptive:
         return
     ladder = ladder_of(integ)
-    steps = sum(ladder.budgets)  # every rung's own budget: t_end / dt of its step
+    # every rung's own budget (t_end / dt of its step), or the steps to the throw's cap
+    horizon = scene.horizon()
+    steps = sum(min(budget, math.ceil(horizon / dt)) if math.isfinite(horizon) else budget
+                for budget, dt in zip(ladder.budgets, ladder.dts, strict=True))
     if steps > SLOW_STEPS:
         from ..api import format_duration
 
@@ -214,10 +217,11 @@ def _check_log_every(scene, log_every) -> None:
     """Fail in one line, before the run, on an unusable display rate."""
     if isinstance(log_every, bool) or not math.isfinite(log_every) or log_every <= 0:
         raise fail(f"--log-every must be a positive number of seconds, got {log_every}")
-    frames = scene.integration.t_end / log_every
+    horizon = scene.horizon()  # t_end, or the throw's cap (infinite: from a non-finite start)
+    frames = horizon / log_every if math.isfinite(horizon) else 0.0
     if frames > MAX_FRAMES:
-        raise fail(f"--log-every {log_every:g} s makes {frames:.3g} frames for t_end = "
-                   f"{scene.integration.t_end:g} s (at most {MAX_FRAMES:,}); raise it")
+        raise fail(f"--log-every {log_every:g} s makes {frames:.3g} frames over "
+                   f"{horizon:g} s ({scene.horizon_text()}; at most {MAX_FRAMES:,}); raise it")
 
 
 def _check_exports(csv, gif) -> None:
@@ -300,7 +304,10 @@ def outcome_text(tr) -> str:
         if tr.certainty == Certainty.CERTAIN:
             return f"{text} (certain: {tr.rungs[-2].setting} and {tr.rungs[-1].setting} agree)"
         if tr.certainty == Certainty.UNCERTAIN:
-            return f"{text} [yellow](uncertain: no two rungs of the ladder agreed)[/]"
+            return (f"{text} [yellow](uncertain: no two rungs of the ladder agreed, every one "
+                    "decided: chaotic at this precision)[/]")
+        if tr.certainty == Certainty.UNDECIDED:
+            return f"{text} [yellow](undecided: a rung of the ladder did not settle)[/]"
         return f"{text} (single pass, not verified)"
     if tr.status == Status.UNSETTLED:
         return (f"[yellow]none by t_end[/]: still moving at t = {tr.t_final:g} s "
@@ -339,8 +346,10 @@ def print_summary(tr) -> None:
         lost = 0.0
     rows.append(("energy", f"{tr.energy_initial * 1e3:.5g} mJ -> {tr.energy_final * 1e3:.5g} "
                            f"mJ ({lost * 1e3:.5g} mJ dissipated)"))
-    run_to = "stop when decided" if integ.stop_on_settle else f"full {integ.t_end:g} s"
+    run_to = "stop when decided" if integ.stop_on_settle else f"full {tr.scene.horizon():g} s"
     rows.append(("method", f"{describe(integ)}, {run_to}"))
+    rows.append(("horizon", f"{tr.scene.horizon():.4g} s" + (
+        "" if tr.scene.fixed_horizon else f": {tr.scene.horizon_text()}")))
     if len(tr.rungs) > 1:
         rows.append(("ladder", "; ".join(f"{r.setting}: n = {r.quarter_turns}".replace(" ", NBSP)
                                          for r in tr.rungs)))

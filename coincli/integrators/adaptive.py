@@ -48,6 +48,7 @@ from ..model import (
     energy_with_heights,
     last_boundary,
     rotate,
+    run_horizon,
     well_index,
 )
 from .common import (
@@ -272,7 +273,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
     if not is_finite_state(state[0], state[1], state[2], state[3], state[4], state[5]):
         return unstartable(state, final)
     rtol = settings.rtol
-    t_end = settings.t_end
+    t_end = run_horizon(p, settings.t_end, state)
     stop_on_settle = settings.stop_on_settle
     budget = settings.max_steps
     exact_flight = settings.method != Method.DOPRI5

@@ -111,8 +111,9 @@ def run_ladder(p, settings, methods, rtols, dts, budgets, change_tolerance, sett
     """Verified labels: each row of ``states`` is run at rung 0, 1, ... of the ladder (methods,
     rtols, dts, budgets: the rungs' settings, coarse to fine) until two successive rungs agree
     (:func:`rungs_agree`). Writes the finest run's outcome, the total steps, the certainty
-    (CERTAIN, UNCERTAIN if no two rungs agreed, UNVERIFIED for a one-rung ladder) and the index
-    of the last rung run. Releases the GIL; ``control[0]`` set stops it."""
+    (CERTAIN; if no two rungs agreed, UNCERTAIN when the last two compared had both settled,
+    UNDECIDED when one had not; UNVERIFIED for a one-rung ladder) and the index of the last
+    rung run. Releases the GIL; ``control[0]`` set stops it."""
     n_rungs = rtols.shape[0]
     for row in range(states.shape[0]):
         result = integrate(p, rung_settings(settings, methods, rtols, dts, budgets, 0),
@@ -120,6 +121,7 @@ def run_ladder(p, settings, methods, rtols, dts, budgets, change_tolerance, sett
         label = outcome_label(result.status, result.n_well, final[2])
         total = result.steps
         verdict = Certainty.UNVERIFIED if n_rungs == 1 else Certainty.UNCERTAIN
+        decided = result.status == Status.SETTLED  # both runs of the last comparison settled
         last = 0
         for k in range(1, n_rungs):
             if stops_ladder(result):
@@ -129,6 +131,7 @@ def run_ladder(p, settings, methods, rtols, dts, budgets, change_tolerance, sett
             finer_label = outcome_label(finer.status, finer.n_well, final[2])
             total += finer.steps
             last = k
+            decided = result.status == Status.SETTLED and finer.status == Status.SETTLED
             agree = rungs_agree(label, result, finer_label, finer, change_tolerance,
                                 settle_tolerance)
             result = finer
@@ -136,6 +139,8 @@ def run_ladder(p, settings, methods, rtols, dts, budgets, change_tolerance, sett
             if agree:
                 verdict = Certainty.CERTAIN
                 break
+        if verdict == Certainty.UNCERTAIN and not decided:
+            verdict = Certainty.UNDECIDED
         quarter_turns[row] = label
         status[row] = result.status
         settle_time[row] = result.settle_time

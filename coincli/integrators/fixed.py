@@ -18,6 +18,7 @@ from ..model import (
     contact_mask,
     corner_offset,
     last_boundary,
+    run_horizon,
     total_energy,
     total_energy_at,
     well_index,
@@ -163,7 +164,7 @@ def integrate_fixed(p, settings, state, samples, events, final, control):
         return unstartable(state, final)
     method = settings.method
     dt = settings.dt
-    t_end = settings.t_end
+    t_end = run_horizon(p, settings.t_end, state)
     stop_on_settle = settings.stop_on_settle
     sample_dt = settings.sample_dt
     x, y, phi, vx, vy, vphi = state[0], state[1], state[2], state[3], state[4], state[5]

@@ -109,11 +109,12 @@ def ladder_of(integration: Integration) -> Ladder:
 
 def fixed_budgets(integration: Integration, dts: tuple[float, ...]) -> tuple[int, ...]:
     """The step budgets of fixed-step rungs: each the t_end / dt its own step takes (exactly
-    the steps its run makes), or, with ``max_steps`` given, that budget of the first rung
-    scaled by dt_0 / dt, so that every rung may reach the same time."""
-    if integration.max_steps is None:
+    the steps its run makes), or, with ``max_steps`` given (or no horizon), that budget of the
+    first rung scaled by dt_0 / dt, so that every rung may reach the same time."""
+    if integration.max_steps is None and integration.t_end is not None:
         return tuple(step_budget(replace(integration, dt=dt)) for dt in dts)
-    return tuple(math.ceil(integration.max_steps * dts[0] / dt - 1e-9) for dt in dts)
+    first = step_budget(integration)  # max_steps, or without a horizon FIXED_MAX_STEPS
+    return tuple(math.ceil(first * dts[0] / dt - 1e-9) for dt in dts)
 
 
 def describe(integration: Integration) -> str:

@@ -132,7 +132,8 @@ def check_step(scene: Scene, force: bool = False) -> MethodInfo:
             f"these parameters ({limit:.3g} s, from the rocking frequency "
             f"{stiffest_frequency(model_params(scene))[0]:.4g} rad/s); use a smaller --dt "
             "or --force")
-    if method.adaptive and scene.integration.dt >= scene.integration.t_end:
+    if (method.adaptive and scene.fixed_horizon
+            and scene.integration.dt >= scene.integration.t_end):
         raise ParameterError(f"--t-end {scene.integration.t_end:g} s is not longer than the "
                              f"first step (--dt {scene.integration.dt:g} s): give a longer "
                              "--t-end (or a smaller --dt)")

@@ -28,6 +28,7 @@ from .paths import check_figure_path
 WHITE = (1.0, 1.0, 1.0, 1.0)
 STANDING = (0.0, 0.0, 0.0, 1.0)
 UNCERTAIN = (0.62, 0.62, 0.62, 1.0)
+UNDECIDED = (0.36, 0.36, 0.36, 1.0)  # a rung not settled: darker than chaotic uncertain cells
 UNSETTLED = (0.56, 0.27, 0.68, 1.0)
 NONFINITE = (1.0, 0.0, 1.0, 1.0)
 NOT_COMPUTED_BG = "#eeeeee"
@@ -91,7 +92,10 @@ def basin_rgba(basin: Basin, n_max: int | None = None) -> tuple[np.ndarray, dict
         uncertain = labelled & (basin.arrays["certainty"] == Certainty.UNCERTAIN)
         rgba[uncertain] = UNCERTAIN
         classes["uncertain"] = uncertain
-        classes["standing"] = standing & ~uncertain
+        undecided = labelled & (basin.arrays["certainty"] == Certainty.UNDECIDED)
+        rgba[undecided] = UNDECIDED
+        classes["undecided"] = undecided & (st != Status.UNSETTLED)  # those: unsettled below
+        classes["standing"] = standing & ~uncertain & ~undecided
     unsettled = st == Status.UNSETTLED
     rgba[unsettled] = UNSETTLED
     classes["unsettled"] = unsettled
@@ -159,7 +163,8 @@ def render_map(basin: Basin, out: str | os.PathLike | None = None, title: str | 
         cell_px = width * dpi / x.size
         if cell_px < 3 * MIN_MARK_PX:
             side = max(cell_px, MIN_MARK_PX) * 72.0 / dpi  # points
-            for name, colour in (("uncertain", UNCERTAIN), ("standing", STANDING)):
+            for name, colour in (("uncertain", UNCERTAIN), ("undecided", UNDECIDED),
+                                 ("standing", STANDING)):
                 mask = classes.get(name)
                 if mask is not None and mask.any():
                     i, j = np.nonzero(mask)
@@ -201,7 +206,8 @@ def render_map(basin: Basin, out: str | os.PathLike | None = None, title: str | 
     params = attrs["parameters"]
     setting_text = (f"{_fixed_text(basin)}; k = {params['foundation']['k']:g} N/m, "
                     f"c = {params['foundation']['c']:g} N s/m; {method['name']} {setting}, "
-                    f"$t_{{end}}$ = {method['t_end']:g} s")
+                    + (f"$t_{{end}}$ = {method['t_end']:g} s" if method["t_end"] is not None
+                       else "until decided"))
     if own:
         fig.suptitle(title, fontsize=11)
         ax.set_title(setting_text, fontsize=8, color="#444444")
@@ -267,11 +273,12 @@ def _class_handles(basin: Basin, classes: dict, Patch) -> list:
     counts = {name: int(mask.sum()) for name, mask in classes.items()}
     handles = [Patch(facecolor=STANDING, edgecolor="black",
                      label=f"standing (odd n): {counts['standing']:,}")]
-    for name, colour in (("uncertain", UNCERTAIN), ("unsettled", UNSETTLED),
-                         ("non-finite", NONFINITE)):
+    for name, colour in (("uncertain", UNCERTAIN), ("undecided", UNDECIDED),
+                         ("unsettled", UNSETTLED), ("non-finite", NONFINITE)):
         if name in counts and (counts[name] or (name == "uncertain" and basin.verified)):
-            label = {"unsettled": "no outcome by t_end",
-                     "uncertain": "uncertain (not converged)"}.get(name, name)
+            label = {"unsettled": "no outcome by the end",
+                     "uncertain": "uncertain (decided, rungs disagree: chaotic)",
+                     "undecided": "undecided (a rung did not settle)"}.get(name, name)
             handles.append(Patch(facecolor=colour, edgecolor="black",
                                  label=f"{label}: {counts[name]:,}"))
     if counts["not computed"]:

@@ -29,7 +29,7 @@ import numpy as np
 from ..enums import Certainty, Status
 from ..grid import AXIS_INFO
 from ..integrators import NO_LABEL
-from .basin_render import NONFINITE, STANDING, UNCERTAIN, UNSETTLED, n_range
+from .basin_render import NONFINITE, STANDING, UNCERTAIN, UNDECIDED, UNSETTLED, n_range
 from .dataset import Basin
 from .rrd import open_stream
 
@@ -48,6 +48,7 @@ NO_N = 0
 N_BIAS = 32768
 # Class ids of the certainty layer.
 CERTAIN, UNCERTAIN_ID, UNSETTLED_ID, NONFINITE_ID, NOT_COMPUTED_ID = 0, 1, 2, 3, 4
+UNDECIDED_ID = 5
 BACKGROUND = (238, 238, 238, 255)  # not computed: as the hatched background of the PNG
 
 
@@ -70,6 +71,7 @@ def certainty_class_ids(status: np.ndarray, certainty: np.ndarray | None) -> np.
     labelled = (status == Status.SETTLED) | (status == Status.UNSETTLED)
     if certainty is not None:
         ids[labelled & (certainty == Certainty.UNCERTAIN)] = UNCERTAIN_ID
+        ids[labelled & (certainty == Certainty.UNDECIDED)] = UNDECIDED_ID
     ids[status == Status.UNSETTLED] = UNSETTLED_ID
     ids[status == Status.NONFINITE] = NONFINITE_ID
     ids[status == Status.NOT_COMPUTED] = NOT_COMPUTED_ID
@@ -110,7 +112,10 @@ def certainty_classes(rr, verified: bool) -> list:
     grey = (*_rgb(UNCERTAIN), 255)
     return [rr.ClassDescription(info=(CERTAIN, "certain" if verified else
                                       "settled (single pass: not verified)", (0, 0, 0, 0))),
-            rr.ClassDescription(info=(UNCERTAIN_ID, "uncertain: no two rungs agreed", grey)),
+            rr.ClassDescription(info=(UNCERTAIN_ID, "uncertain: decided, but no two rungs "
+                                      "agreed (chaotic)", grey)),
+            rr.ClassDescription(info=(UNDECIDED_ID, "undecided: a rung did not settle",
+                                      (*_rgb(UNDECIDED), 255))),
             rr.ClassDescription(info=(UNSETTLED_ID, "unsettled at t_end",
                                       (*_rgb(UNSETTLED), 255))),
             rr.ClassDescription(info=(NONFINITE_ID, "non-finite", (*_rgb(NONFINITE), 255))),

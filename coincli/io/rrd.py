@@ -484,7 +484,7 @@ def _info_markdown(trajectory, frames: Frames, log_every: float | None) -> str:
                      + (f" at t = {trajectory.settle_time:.6g} s" if trajectory.settled else "")
                      + ").")
     step = setting_text(integ.method, integ.dt, integ.rtol)
-    lines += ["", f"**Method:** {integ.method.label}, {step}, t_end = {integ.t_end:g} s, "
+    lines += ["", f"**Method:** {integ.method.label}, {step}, {trajectory.scene.horizon_text()}, "
               + ("stop when settled" if integ.stop_on_settle else "full run"), ""]
     lines += ["| parameter | value |", "|---|---|"]
     for section, values in scene.to_dict().items():

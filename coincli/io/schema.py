@@ -15,7 +15,8 @@ from ..integrators.registry import MethodInfo
 from ..params import Scene
 from ..version import __version__
 
-FORMAT = 4  # 3: checksummed chunks, done = a digest of each tile; 4: ... and of the parameters
+FORMAT = 5  # 3: checksummed chunks, done = a digest of each tile; 4: ... and of the parameters;
+# 5: certainty 3 = undecided (before, undecided labels were 0, uncertain, like chaotic ones)
 # The attributes the sweep owns: what determines the labels (the parameters digest binds them)
 COMPARED_ATTRS = ("version", "parameters", "sweep", "method")
 MARK = "coin_basin"  # the root attribute that makes a group a basin store

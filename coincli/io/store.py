@@ -2,7 +2,7 @@
 
 Layout (dims named after the two swept initial conditions, e.g. ``vy`` and ``vphi``)::
 
-    out.zarr/                       group; attributes: coin_basin (format 4, the parameters
+    out.zarr/                       group; attributes: coin_basin (format 5, the parameters
                                     digest), version, parameters, sweep, method (with its
                                     verification ladder)
       vy, vphi                      float64 cell centres, linspace(LO, HI, n)
@@ -11,7 +11,9 @@ Layout (dims named after the two swept initial conditions, e.g. ``vy`` and ``vph
                                     3 over budget, 255 not computed
       settle_time    (vy, vphi)     float32 [s], NaN fill (also NaN when never settled)
       steps          (vy, vphi)     int64 integrator steps (cost), fill -1
-      certainty      (vy, vphi)     uint8, 0 uncertain, 1 certain, 2 unverified, 255 not computed
+      certainty      (vy, vphi)     uint8, 0 uncertain (decided, rungs disagree: chaotic), 1
+                                    certain, 2 unverified, 3 undecided (a rung not settled
+                                    within its horizon or budget), 255 not computed
       rung           (vy, vphi)     int8, last rung of the ladder run, fill -1
       done           (tile_vy, tile_vphi)  uint32 digest of the tile, 0 = not done; chunks (1, 1);
                                     attributes: a copy of the sweep's, with their digest

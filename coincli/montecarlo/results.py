@@ -21,8 +21,10 @@ class Fractions:
 
     ``standing``, ``lying``: over the counted (certain) labels; ``uncertain``: over all samples;
     ``outcomes``: one row per n; each a dict with ``probability``, ``low``, ``high`` (the 95 %
-    Wilson interval), ``count`` and ``of``. ``all_labelled`` holds the same over every labelled
-    sample. ``stopped`` says why the run ended (a :class:`coincli.StopReason`)."""
+    Wilson interval), ``count`` and ``of``. ``all_decided`` holds the same over every decided
+    sample (its deepest rung settled, converged or not), ``all_labelled`` over every labelled
+    one; ``uncertain`` also counts its causes (``chaotic``, ``undecided``). ``stopped`` says
+    why the run ended (a :class:`coincli.StopReason`)."""
 
     samples: int
     counted: int
@@ -42,6 +44,7 @@ class Fractions:
     store: str | None = None
     parameter: str | None = None  # of a continuation: the parameter and this value
     value: float | None = None
+    all_decided: dict = field(default_factory=dict)
 
     @property
     def interrupted(self) -> bool:
@@ -64,7 +67,8 @@ class Fractions:
         out = {
             "samples": self.samples, "counted": self.counted, "verified": self.verified,
             "standing": self.standing, "lying": self.lying, "uncertain": self.uncertain,
-            "outcomes": self.outcomes, "all_labelled": self.all_labelled,
+            "outcomes": self.outcomes, "all_decided": self.all_decided,
+            "all_labelled": self.all_labelled,
             "status": self.status, "stopped": self.stopped,
             "precision": {**self.goal, "achieved_half_width": self.achieved},
             "interval": INTERVAL_NOTE, "sampling": self.sampling, "parameters": self.scene,
@@ -88,7 +92,8 @@ def make_result(progression: Progression, sampling: Sampling, scene: Scene,
     s = summary(progression.tally, progression.verified)
     return Fractions(samples=s["samples"], counted=s["counted"], standing=s["standing"],
                      lying=s["lying"], uncertain=s["uncertain"], outcomes=s["outcomes"],
-                     all_labelled=s["all_labelled"], status=s["status"],
+                     all_labelled=s["all_labelled"], all_decided=s["all_decided"],
+                     status=s["status"],
                      verified=progression.verified, stopped=stopped,
                      goal=progression.goal.to_dict(),
                      achieved=widest(progression.tally, progression.goal.of),

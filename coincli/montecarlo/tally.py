@@ -19,12 +19,16 @@ from ..stats import outcome_rows, proportion
 class Tally:
     """Counts of a set of samples. ``counted``: the labels probabilities are taken over (certain
     ones; for a single pass, the settled ones); ``labelled``: every sample with a label
-    (settled, or unsettled at t_end)."""
+    (settled, or unsettled at t_end); ``decided``: every sample whose deepest rung run settled
+    (its label final for that run, converged or not); ``certainty``: the samples by
+    Certainty (why a label is not certain: uncertain, chaotic, or undecided)."""
 
     samples: int = 0
     counted: Counter = field(default_factory=Counter)  # n -> count
     labelled: Counter = field(default_factory=Counter)  # n -> count
     status: Counter = field(default_factory=Counter)  # Status value -> count
+    decided: Counter = field(default_factory=Counter)  # n -> count
+    certainty: Counter = field(default_factory=Counter)  # Certainty value -> count
 
     @classmethod
     def of(cls, quarter_turns, status, certainty, verified: bool = True) -> Tally:
@@ -36,18 +40,18 @@ class Tally:
             counted = labelled & (cert == Certainty.CERTAIN)
         else:
             counted = st == Status.SETTLED
-        t = cls(samples=int(q.size))
-        t.counted.update(dict(zip(*np.unique(q[counted], return_counts=True), strict=True)))
-        t.labelled.update(dict(zip(*np.unique(q[labelled], return_counts=True), strict=True)))
-        t.status.update(dict(zip(*np.unique(st, return_counts=True), strict=True)))
-        t.counted = Counter({int(k): int(v) for k, v in t.counted.items()})
-        t.labelled = Counter({int(k): int(v) for k, v in t.labelled.items()})
-        t.status = Counter({int(k): int(v) for k, v in t.status.items()})
-        return t
+        def counts(values) -> Counter:
+            return Counter({int(k): int(v) for k, v in
+                            zip(*np.unique(values, return_counts=True), strict=True)})
+
+        return cls(samples=int(q.size), counted=counts(q[counted]),
+                   labelled=counts(q[labelled]), status=counts(st),
+                   decided=counts(q[st == Status.SETTLED]), certainty=counts(cert))
 
     def __add__(self, other: Tally) -> Tally:
         return Tally(self.samples + other.samples, self.counted + other.counted,
-                     self.labelled + other.labelled, self.status + other.status)
+                     self.labelled + other.labelled, self.status + other.status,
+                     self.decided + other.decided, self.certainty + other.certainty)
 
     @property
     def n_counted(self) -> int:
@@ -64,6 +68,14 @@ class Tally:
     @property
     def standing_labelled(self) -> int:
         return sum(c for n, c in self.labelled.items() if n % 2)
+
+    @property
+    def n_decided(self) -> int:
+        return sum(self.decided.values())
+
+    @property
+    def standing_decided(self) -> int:
+        return sum(c for n, c in self.decided.items() if n % 2)
 
 GOALS = ("all", "standing")
 CONFIDENCE = 0.95
@@ -132,20 +144,33 @@ def samples_needed(tally: Tally, precision: float, of: str = "all") -> int:
 
 def summary(tally: Tally, verified: bool = True) -> dict:
     """Everything a result reports, as plain values: probabilities over the counted labels with
-    their 95 % intervals, the uncertain fraction over all samples, and the same over all
-    labelled samples."""
+    their 95 % intervals, the uncertain fraction over all samples with its causes (chaotic:
+    decided at every rung compared but no two agree; undecided: a rung not settled within its
+    horizon or budget), and the same probabilities over all decided samples (each throw's
+    deepest rung, settled: an estimate that keeps the chaotic throws, each with the label its
+    finest run gave) and over all labelled samples."""
     counted = tally.n_counted
     standing = tally.standing
     labelled = tally.n_labelled
     standing_all = tally.standing_labelled
+    decided = tally.n_decided
+    standing_decided = tally.standing_decided
     return {
         "samples": tally.samples,
         "counted": counted,
         "verified": verified,
         "standing": proportion(standing, counted),
         "lying": proportion(counted - standing, counted),
-        "uncertain": proportion(tally.samples - counted, tally.samples),
+        "uncertain": {**proportion(tally.samples - counted, tally.samples),
+                      "chaotic": int(tally.certainty.get(int(Certainty.UNCERTAIN), 0)),
+                      "undecided": int(tally.certainty.get(int(Certainty.UNDECIDED), 0))},
         "outcomes": outcome_rows(tally.counted),
+        "all_decided": {
+            "decided": decided,
+            "standing": proportion(standing_decided, decided),
+            "lying": proportion(decided - standing_decided, decided),
+            "outcomes": outcome_rows(tally.decided),
+        },
         "all_labelled": {
             "labelled": labelled,
             "standing": proportion(standing_all, labelled),
