@@ -5,6 +5,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.markup import escape
 
 from .basin_cmd import _damaged_note, basin_app
 from .common import console, err_console, fail, user_errors
@@ -39,7 +40,8 @@ def export_command(
             raise fail(describe(exc, f"cannot write {out}")) from None
         done, total = int((basin.done != 0).sum()), int(basin.done.size)
         n0, n1 = basin.arrays["status"].shape
-        console.print(f"wrote {out} ({n0} x {n1} cells)")
+        console.print(f"wrote {escape(str(out))} ({n0} x {n1} cells)", soft_wrap=True,
+                      highlight=False)  # a path on one line, to copy
         if done < total:
             say(err_console, f"[yellow]partial:[/] {done} of {counted(total, 'tile')} "
                              "computed; the cells of the others are exported as not computed")
