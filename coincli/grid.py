@@ -49,7 +49,7 @@ from .integrators import MethodInfo
 from .integrators.batch import NO_LABEL, verified_labels
 from .integrators.ladder import Ladder, ladder_of
 from .jit import python
-from .model import total_energy_at
+from .model import horizon_text, total_energy_at
 from .params import (
     ModelParams,
     ParameterError,
@@ -397,7 +397,7 @@ def method_attrs(scene: Scene, method: MethodInfo) -> dict:
     return {"name": method.name, "kernel_id": int(method.method), "order": method.order,
             "adaptive": method.adaptive, "symplectic": method.symplectic,
             "dt": integ.dt, "rtol": integ.rtol, "t_end": integ.t_end,
-            "horizon": scene.horizon_text(),
+            "horizon": horizon_text(scene),
             "stop_on_settle": integ.stop_on_settle, "max_steps": step_budget(integ),
             "verification": ladder_of(integ).to_dict()}
 

@@ -184,28 +184,6 @@ class Scene:
         """Whether runs last a fixed t_end (else: until decided, within the cap)."""
         return self.integration.t_end is not None
 
-    def horizon(self, state=None) -> float:
-        """How long a run from ``state`` (default: the scene's initial state) may last: t_end,
-        or without one the cap, CAP_FACTOR times :func:`coincli.model.decision_time`."""
-        from .model import run_horizon
-
-        p = model_params(self)
-        if state is None:
-            s = self.initial
-            state = (s.x0, self.y0, s.phi0, s.vx, s.vy, s.vphi)
-        return float(run_horizon(p, math.inf if self.integration.t_end is None
-                                 else self.integration.t_end, state))
-
-    def horizon_text(self) -> str:
-        """The horizon as a user reads it: ``t_end = 2 s`` or the cap's rule."""
-        if self.fixed_horizon:
-            return f"t_end = {self.integration.t_end:g} s"
-        from .model import CAP_FACTOR
-
-        return (f"until decided, capped at {CAP_FACTOR:g} x (the flight its energy allows, "
-                f"summed over bounces of restitution {1 - 1 / model_params(self).bounce_factor:.3g}"
-                f", + {model_params(self).decay_time * 1e3:.3g} ms of damping)")
-
     @property
     def e_crit(self) -> float:
         """Total energy below which the count of quarter turns can no longer change (NOTES.md)."""

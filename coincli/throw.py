@@ -38,7 +38,7 @@ from .integrators.common import (
 )
 from .integrators.ladder import ladder_of
 from .jit import compiled, is_active, python
-from .model import energies, rounded_quarter_turns
+from .model import energies, horizon_text, rounded_quarter_turns, scene_horizon
 from .params import (
     STATE_NAMES,
     ParameterError,
@@ -222,8 +222,8 @@ class Trajectory:
             "dt": integ.dt,
             "rtol": integ.rtol,
             "t_end": integ.t_end,
-            "horizon": self.scene.horizon(),
-            "horizon_rule": self.scene.horizon_text(),
+            "horizon": scene_horizon(self.scene),
+            "horizon_rule": horizon_text(self.scene),
             "certainty_reason": self.certainty.message,
             "stop_on_settle": integ.stop_on_settle,
             "steps": self.steps,
@@ -264,7 +264,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     validate(scene)
     method = check_step(scene, force=force)
     integ = scene.integration
-    _check_sample_dt(sample_dt, scene.horizon())
+    _check_sample_dt(sample_dt, scene_horizon(scene))
     try:
         engine = Engine.parse(engine)
     except ValueError:
@@ -320,7 +320,7 @@ def _sample_rows(scene: Scene, sample_dt: float) -> int:
     """Rows of the buffer of kept states: every state to the horizon (t_end, or the throw's
     cap); CAPPED_SAMPLES for an infinite cap (a start no run can integrate, or no damping:
     the run keeps its first states, and its notes say so)."""
-    span = scene.horizon() / sample_dt
+    span = scene_horizon(scene) / sample_dt
     return (int(span) if math.isfinite(span) else CAPPED_SAMPLES) + 3
 
 
@@ -372,7 +372,7 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
                      f"well n = {quarter_turns}, which is the true outcome")
     if status == Status.UNSETTLED:
         end = ("" if scene.fixed_horizon else
-               f" (the cap of this throw: {scene.horizon_text()})")
+               f" (the cap of this throw: {horizon_text(scene)})")
         notes.append(f"the energy is still above E_crit at t = {t:g} s{end}: n = {rounded} is "
                      "round(2 phi / pi) at the end and may still change; raise --t-end")
     if status == Status.NONFINITE and not is_finite_state(*state0):

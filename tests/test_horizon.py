@@ -15,7 +15,7 @@ from coincli.integrators.batch import verified_labels
 from coincli.integrators.ladder import ladder_of
 from coincli.io.basin_render import UNCERTAIN, UNDECIDED, basin_rgba
 from coincli.io.dataset import from_dataset
-from coincli.model import CAP_FACTOR, decision_time
+from coincli.model import CAP_FACTOR, decision_time, horizon_text, scene_horizon
 from coincli.params import ParameterError, model_params, run_settings, validate
 
 # the coin of the issue: d = 2 cm, t = 1 cm (t/d = 0.5), mass and inertia of a solid disc of the
@@ -27,17 +27,17 @@ HALF = dict(thickness=0.01, mass=HALF_MASS, inertia=HALF_MASS * (3 * 0.01 ** 2 +
 def test_no_horizon_by_default_and_the_cap_scales_with_the_throw():
     scene = coincli.load_preset("paper")
     assert scene.integration.t_end is None and not scene.fixed_horizon
-    gentle = scene.with_overrides(vy=0.1).horizon()
-    hard = scene.with_overrides(vy=2.0, vphi=20.0).horizon()
+    gentle = scene_horizon(scene.with_overrides(vy=0.1))
+    hard = scene_horizon(scene.with_overrides(vy=2.0, vphi=20.0))
     assert gentle < hard  # more energy: longer flights to decide
     p = model_params(scene)
     state = (0.0, scene.y0, 0.0, 0.0, 2.0, 20.0)
     assert hard == pytest.approx(CAP_FACTOR * decision_time(p, state))
     # a fixed horizon is what it says, whatever the throw; paper-method keeps the paper's 2 s
-    assert scene.with_overrides(t_end=3.0, vy=2.0).horizon() == 3.0
-    assert coincli.load_preset("paper-method").horizon() == 2.0
-    assert "until decided" in scene.horizon_text()
-    assert scene.with_overrides(t_end=3.0).horizon_text() == "t_end = 3 s"
+    assert scene_horizon(scene.with_overrides(t_end=3.0, vy=2.0)) == 3.0
+    assert scene_horizon(coincli.load_preset("paper-method")) == 2.0
+    assert "until decided" in horizon_text(scene)
+    assert horizon_text(scene.with_overrides(t_end=3.0)) == "t_end = 3 s"
 
 
 def test_an_undamped_foundation_needs_a_fixed_horizon():

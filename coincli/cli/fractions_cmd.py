@@ -412,9 +412,10 @@ def _print_result(plan, r, every_n: bool = False) -> None:
                                      f"{interval(a['standing'])}) of {a['labelled']:,} "
                                      "labelled samples, uncertain ones included"))
     from ..integrators.ladder import describe
+    from ..model import horizon_text
 
     summary.append(("method", describe(scene.integration)))
-    summary.append(("horizon", scene.horizon_text()))
+    summary.append(("horizon", horizon_text(scene)))
     cost = r.cost
     if cost.get("computed"):
         where = counted(cost["workers"], "thread") if cost["mode"] == "threads" else "Dask"

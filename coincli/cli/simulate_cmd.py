@@ -191,6 +191,7 @@ def _announce(scene) -> None:
     """Say before it starts how long a long fixed-step run will take at most."""
     from ..integrators import info
     from ..integrators.ladder import ladder_of
+    from ..model import scene_horizon
 
     integ = scene.integration
     if not (info(integ.method).adaptive and integ.stop_on_settle):
@@ -199,7 +200,7 @@ def _announce(scene) -> None:
         return
     ladder = ladder_of(integ)
     # every rung's own budget (t_end / dt of its step), or the steps to the throw's cap
-    horizon = scene.horizon()
+    horizon = scene_horizon(scene)
     steps = sum(min(budget, math.ceil(horizon / dt)) if math.isfinite(horizon) else budget
                 for budget, dt in zip(ladder.budgets, ladder.dts, strict=True))
     if steps > SLOW_STEPS:
@@ -217,11 +218,13 @@ def _check_log_every(scene, log_every) -> None:
     """Fail in one line, before the run, on an unusable display rate."""
     if isinstance(log_every, bool) or not math.isfinite(log_every) or log_every <= 0:
         raise fail(f"--log-every must be a positive number of seconds, got {log_every}")
-    horizon = scene.horizon()  # t_end, or the throw's cap (infinite: from a non-finite start)
+    from ..model import horizon_text, scene_horizon
+
+    horizon = scene_horizon(scene)  # t_end, or the throw's cap (infinite: from a non-finite start)
     frames = horizon / log_every if math.isfinite(horizon) else 0.0
     if frames > MAX_FRAMES:
         raise fail(f"--log-every {log_every:g} s makes {frames:.3g} frames over "
-                   f"{horizon:g} s ({scene.horizon_text()}; at most {MAX_FRAMES:,}); raise it")
+                   f"{horizon:g} s ({horizon_text(scene)}; at most {MAX_FRAMES:,}); raise it")
 
 
 def _check_exports(csv, gif) -> None:
@@ -321,6 +324,7 @@ def outcome_text(tr) -> str:
 
 def print_summary(tr) -> None:
     from ..integrators.ladder import describe
+    from ..model import horizon_text, scene_horizon
 
     s = tr.summary()
     integ = tr.scene.integration
@@ -346,10 +350,10 @@ def print_summary(tr) -> None:
         lost = 0.0
     rows.append(("energy", f"{tr.energy_initial * 1e3:.5g} mJ -> {tr.energy_final * 1e3:.5g} "
                            f"mJ ({lost * 1e3:.5g} mJ dissipated)"))
-    run_to = "stop when decided" if integ.stop_on_settle else f"full {tr.scene.horizon():g} s"
+    run_to = "stop when decided" if integ.stop_on_settle else f"full {scene_horizon(tr.scene):g} s"
     rows.append(("method", f"{describe(integ)}, {run_to}"))
-    rows.append(("horizon", f"{tr.scene.horizon():.4g} s" + (
-        "" if tr.scene.fixed_horizon else f": {tr.scene.horizon_text()}")))
+    rows.append(("horizon", f"{scene_horizon(tr.scene):.4g} s" + (
+        "" if tr.scene.fixed_horizon else f": {horizon_text(tr.scene)}")))
     if len(tr.rungs) > 1:
         rows.append(("ladder", "; ".join(f"{r.setting}: n = {r.quarter_turns}".replace(" ", NBSP)
                                          for r in tr.rungs)))

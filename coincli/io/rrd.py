@@ -30,6 +30,7 @@ import numpy as np
 
 from ..enums import Status
 from ..integrators.registry import setting_text
+from ..model import horizon_text
 from ..params import ParameterError
 from ..version import __version__
 from .frames import ARROW_PEAK_DIAMETERS, Frames, build_frames, force_arrows
@@ -484,7 +485,7 @@ def _info_markdown(trajectory, frames: Frames, log_every: float | None) -> str:
                      + (f" at t = {trajectory.settle_time:.6g} s" if trajectory.settled else "")
                      + ").")
     step = setting_text(integ.method, integ.dt, integ.rtol)
-    lines += ["", f"**Method:** {integ.method.label}, {step}, {trajectory.scene.horizon_text()}, "
+    lines += ["", f"**Method:** {integ.method.label}, {step}, {horizon_text(trajectory.scene)}, "
               + ("stop when settled" if integ.stop_on_settle else "full run"), ""]
     lines += ["| parameter | value |", "|---|---|"]
     for section, values in scene.to_dict().items():
