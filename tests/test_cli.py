@@ -380,6 +380,18 @@ def test_the_first_compilation_off_a_terminal_or_quiet_is_two_lines(uncompiled, 
     assert lines[2].startswith("compiled the numerical kernels in 0 s"), lines
 
 
+def test_a_compilation_off_a_terminal_is_never_silent_for_long(uncompiled, monkeypatch):
+    """In a log (make install, CI) a line comes every STILL_COMPILING_EVERY seconds."""
+    from coincli.cli import common
+
+    monkeypatch.setattr(common, "STILL_COMPILING_EVERY", 0.3)
+    out = uncompiled(terminal=False, compile_kernels=lambda: time.sleep(1.1))
+    common.compile_first()
+    stills = [line for line in plain(out).splitlines() if line.startswith("still compiling: ")]
+    assert 2 <= len(stills) <= 4, plain(out)
+    assert plain(out).strip().splitlines()[-1].startswith("compiled the numerical kernels in 1 s")
+
+
 def test_ctrl_c_during_the_first_compilation_is_one_line_and_exit_130(uncompiled):
     import typer
 

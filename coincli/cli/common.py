@@ -188,11 +188,17 @@ def build_scene(preset: str, **overrides) -> Scene:
     return validate(scene)
 
 
+STILL_COMPILING_EVERY = 30.0  # s between the lines of a compile whose stderr is no terminal
+
+
 def compile_first(quiet: bool = False) -> None:
     """Before a command first runs the kernels on this machine (once after installing or
     updating), compile them, saying so (the library compiles in silence): on a terminal a live
-    line counts the minutes against the expected FIRST_COMPILE_SECONDS; with ``quiet`` or when
-    stderr is no terminal, one line before and one after. Ctrl-C stops it: exit 130."""
+    line counts the minutes against the expected FIRST_COMPILE_SECONDS; when stderr is no
+    terminal (a log, `make install`), a line every STILL_COMPILING_EVERY seconds, so that no
+    minute passes in silence; with ``quiet``, one line before and one after. Ctrl-C stops it:
+    exit 130."""
+    import threading
     import time
 
     from .. import api
@@ -206,7 +212,19 @@ def compile_first(quiet: bool = False) -> None:
             say(err_console, f"[yellow]compiling[/] the numerical kernels for this machine: once "
                              f"after installing or updating, about "
                              f"{FIRST_COMPILE_SECONDS / 60:.0f} min")
-            api.compile_kernels()
+            done = threading.Event()
+
+            def still() -> None:
+                while not done.wait(STILL_COMPILING_EVERY):
+                    say(err_console, f"still compiling: {time.monotonic() - start:.0f} s of "
+                                     f"about {FIRST_COMPILE_SECONDS:.0f} s")
+
+            if not quiet:
+                threading.Thread(target=still, name="coin-compile-clock", daemon=True).start()
+            try:
+                api.compile_kernels()
+            finally:
+                done.set()
         else:
             from rich.progress import SpinnerColumn, TextColumn
 
