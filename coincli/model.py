@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 
 from .jit import kernel
-from .params import model_params
+from .params import model_params, state_array
 
 # Body-frame signs of the corners: 0 = (+r_d, -r_t), 1 = (-r_d, -r_t), 2 = (-r_d, +r_t),
 # 3 = (+r_d, +r_t). With phi = 0 corners 0 and 1 are the lower ones.
@@ -175,14 +175,12 @@ def total_energy(p, state):
 CAP_FACTOR = 4.0  # the cap of a run without a fixed horizon, in units of decision_time
 
 
-def scene_horizon(scene, state=None) -> float:
-    """How long a run of ``scene`` from ``state`` (default: the scene's initial state) may last:
-    its t_end, or without one the cap, CAP_FACTOR times :func:`decision_time`."""
-    if state is None:
-        s = scene.initial
-        state = (s.x0, scene.y0, s.phi0, s.vx, s.vy, s.vphi)
+def scene_horizon(scene) -> float:
+    """How long a run of ``scene`` from its initial state may last: its t_end, or without one
+    the cap, CAP_FACTOR times :func:`decision_time`."""
     t_end = scene.integration.t_end
-    return float(run_horizon(model_params(scene), math.inf if t_end is None else t_end, state))
+    return float(run_horizon(model_params(scene), math.inf if t_end is None else t_end,
+                             state_array(scene)))
 
 
 def horizon_text(scene) -> str:

@@ -11,6 +11,7 @@ the float64 state vector of :func:`state_array`; that is what lets numba cache i
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import asdict, dataclass, field, fields, replace
 from typing import NamedTuple
 
@@ -257,9 +258,11 @@ def scene_from_dict(data: dict) -> Scene:
     return Scene(**kwargs)
 
 
-def _check_number(name: str, value, positive: bool = False, nonnegative: bool = False) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ParameterError(f"{name} must be a number, got {value!r}")
+def check_number(name: str, value, positive: bool = False, nonnegative: bool = False) -> None:
+    """ParameterError (one line, naming ``name``) unless ``value`` is a finite real number
+    (numpy's too), and positive or not negative if asked."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ParameterError(f"{name} must be a number, got {shown(value)}")
     if not math.isfinite(value):
         raise ParameterError(f"{name} must be finite, got {value}")
     if positive and value <= 0:
@@ -312,24 +315,24 @@ def validate(scene: Scene) -> Scene:
     require_scene(scene)
     c, f, s, i = scene.coin, scene.foundation, scene.initial, scene.integration
     for name in ("diameter", "thickness", "mass", "inertia"):
-        _check_number(name, getattr(c, name), positive=True)
+        check_number(name, getattr(c, name), positive=True)
     if c.thickness > c.diameter:
         # lying and standing, phi_cr >= 45 deg and the wells of NOTES.md assume a coin no
         # thicker than wide; a square (t = d, phi_cr = 45 deg) is fine: its wells are all equal
         raise ParameterError(f"thickness ({c.thickness:g} m) must be smaller than the diameter "
                              f"({c.diameter:g} m), or equal to it (a square section)")
-    _check_number("k", f.k, positive=True)
-    _check_number("c", f.c, nonnegative=True)
-    _check_number("g", scene.g, positive=True)  # without gravity no coin ever comes to rest
+    check_number("k", f.k, positive=True)
+    check_number("c", f.c, nonnegative=True)
+    check_number("g", scene.g, positive=True)  # without gravity no coin ever comes to rest
     for name in ("x0", "phi0", "vx", "vy", "vphi"):
-        _check_number(name, getattr(s, name))
+        check_number(name, getattr(s, name))
     if s.y0 is not None:
-        _check_number("y0", s.y0)
+        check_number("y0", s.y0)
     check_start(scene)
-    _check_number("dt", i.dt, positive=True)
-    _check_number("rtol", i.rtol, positive=True)
+    check_number("dt", i.dt, positive=True)
+    check_number("rtol", i.rtol, positive=True)
     if i.t_end is not None:
-        _check_number("t_end", i.t_end, positive=True)
+        check_number("t_end", i.t_end, positive=True)
     elif f.c == 0:
         raise ParameterError("an undamped foundation (c = 0) never decides a throw: give t_end, "
                              "a fixed horizon", parameters=("c", "t_end"))

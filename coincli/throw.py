@@ -264,7 +264,8 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     validate(scene)
     method = check_step(scene, force=force)
     integ = scene.integration
-    _check_sample_dt(sample_dt, scene_horizon(scene))
+    horizon = scene_horizon(scene)
+    _check_sample_dt(sample_dt, horizon)
     try:
         engine = Engine.parse(engine)
     except ValueError:
@@ -275,7 +276,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     ladder = ladder_of(integ)
     state0 = state_array(scene)
     if sample_dt:
-        samples = np.empty((_sample_rows(scene, sample_dt), SAMPLE_COLUMNS))
+        samples = np.empty((_sample_rows(horizon, sample_dt), SAMPLE_COLUMNS))
     else:
         samples = np.empty((0, SAMPLE_COLUMNS))
     events = np.empty((MAX_EVENTS if record_events else 0, EVENT_COLUMNS))
@@ -316,11 +317,11 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
                        record_events, wall, certainty, rungs, settings.max_steps)
 
 
-def _sample_rows(scene: Scene, sample_dt: float) -> int:
+def _sample_rows(horizon: float, sample_dt: float) -> int:
     """Rows of the buffer of kept states: every state to the horizon (t_end, or the throw's
     cap); CAPPED_SAMPLES for an infinite cap (a start no run can integrate, or no damping:
     the run keeps its first states, and its notes say so)."""
-    span = scene_horizon(scene) / sample_dt
+    span = horizon / sample_dt
     return (int(span) if math.isfinite(span) else CAPPED_SAMPLES) + 3
 
 

@@ -17,8 +17,7 @@ from typer.testing import CliRunner
 import coincli
 from coincli.cli import app
 from coincli.io import fractions_store as fstore
-from coincli.montecarlo.estimate import needed_samples
-from coincli.montecarlo.tally import Tally
+from coincli.montecarlo.tally import Tally, samples_needed
 
 PAPER = coincli.load_preset("paper")
 ROOT = Path(__file__).parent.parent
@@ -167,7 +166,7 @@ def test_samples_needed_does_not_take_an_unseen_outcome_as_impossible():
                              np.ones(1000, dtype=np.uint8))
     assert none_standing.standing == 0
     # an outcome never seen in 1,000 counts as 1 in 2,000: p(1 - p) about 5e-4, not 0
-    need = needed_samples(none_standing, 0.001, "standing")
+    need = samples_needed(none_standing, 0.001, "standing")
     assert 1500 < need < 2500
 
 

@@ -201,11 +201,11 @@ def compile_first(quiet: bool = False) -> None:
     import threading
     import time
 
-    from .. import api
     from ..jit import FIRST_COMPILE_SECONDS, kernels_cached
 
     if kernels_cached():
         return
+    from .. import api
     start = time.monotonic()
     try:
         if quiet or not err_console.is_terminal:

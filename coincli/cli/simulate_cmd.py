@@ -350,9 +350,10 @@ def print_summary(tr) -> None:
         lost = 0.0
     rows.append(("energy", f"{tr.energy_initial * 1e3:.5g} mJ -> {tr.energy_final * 1e3:.5g} "
                            f"mJ ({lost * 1e3:.5g} mJ dissipated)"))
-    run_to = "stop when decided" if integ.stop_on_settle else f"full {scene_horizon(tr.scene):g} s"
+    horizon = scene_horizon(tr.scene)
+    run_to = "stop when decided" if integ.stop_on_settle else f"full {horizon:g} s"
     rows.append(("method", f"{describe(integ)}, {run_to}"))
-    rows.append(("horizon", f"{scene_horizon(tr.scene):.4g} s" + (
+    rows.append(("horizon", f"{horizon:.4g} s" + (
         "" if tr.scene.fixed_horizon else f": {horizon_text(tr.scene)}")))
     if len(tr.rungs) > 1:
         rows.append(("ladder", "; ".join(f"{r.setting}: n = {r.quarter_turns}".replace(" ", NBSP)

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from ..boundary import LOG2
-from .charts import PANELS_HINT, figure_axes, write_figure
-from .paths import check_figure_path
+from .charts import PANELS_HINT, figure_axes
+from .paths import check_figure_path, save_figure
 
 WHOLE_COLOUR = "black"
 
@@ -206,7 +206,7 @@ def plot_analysis(analysis, path: Path | None = None, title: str | None = None,
                               f"{a1['lo']:g}:{a1['hi']:g} {a1['units']}, "
                               f"{a0['n']} x {a1['n']} cells", fontsize=11)
     if path is not None:
-        write_figure(fig, path, dpi)
+        save_figure(fig, path, dpi)
     return fig
 
 

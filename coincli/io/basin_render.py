@@ -21,9 +21,9 @@ import numpy as np
 from ..enums import Certainty, Status
 from ..grid import AXIS_INFO
 from ..integrators import NO_LABEL
-from .charts import figure_axes, write_figure
+from .charts import figure_axes
 from .dataset import Basin
-from .paths import check_figure_path
+from .paths import check_figure_path, save_figure
 
 WHITE = (1.0, 1.0, 1.0, 1.0)
 STANDING = (0.0, 0.0, 0.0, 1.0)
@@ -216,7 +216,7 @@ def render_map(basin: Basin, out: str | os.PathLike | None = None, title: str | 
         chars = max(30, int(_axes_width(ax) * 72 / (0.5 * 8)))
         ax.set_title(f"{title}\n{textwrap.fill(setting_text, chars)}", fontsize=8)
     if out is not None:
-        write_figure(fig, out, dpi)
+        save_figure(fig, out, dpi)
     return fig
 
 

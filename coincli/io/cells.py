@@ -21,7 +21,15 @@ from ..enums import Certainty, Engine, Status
 from ..grid import Axis, Grid
 from ..integrators import NO_LABEL
 from ..integrators.ladder import ladder_of
-from ..params import ParameterError, Scene, parse_number, scene_from_dict, shown, state_array
+from ..params import (
+    ParameterError,
+    Scene,
+    check_number,
+    parse_number,
+    scene_from_dict,
+    shown,
+    state_array,
+)
 
 
 def sweep_axes(attrs: dict) -> tuple[Axis, Axis]:
@@ -33,12 +41,8 @@ def sweep_axes(attrs: dict) -> tuple[Axis, Axis]:
 def _value(name: str, value) -> float:
     if isinstance(value, str):
         return parse_number(value)
-    if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
-        raise ParameterError(f"{name} must be a number, got {shown(value)}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise ParameterError(f"{name} must be finite, got {value}")
-    return value
+    check_number(name, value)
+    return float(value)
 
 
 def locate(attrs: dict, cell=None, **values) -> tuple[int, int]:

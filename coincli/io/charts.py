@@ -1,6 +1,5 @@
 """The work-precision chart (matplotlib, loaded lazily) and its table; and what every chart
-shares: a new Figure or the caller's Axes (:func:`figure_axes`), writing a figure
-(:func:`write_figure`)."""
+shares: a new Figure or the caller's Axes (:func:`figure_axes`)."""
 
 from __future__ import annotations
 
@@ -71,14 +70,6 @@ def _is_axes(ax) -> bool:
     return isinstance(ax, Axes)
 
 
-def write_figure(fig, out: str | Path, dpi: int):
-    """Write ``fig`` to ``out`` in the format of its extension (.png, .svg, .pdf), through
-    :func:`.paths.atomic_output` (complete or absent); returns the figure."""
-    with atomic_output(out) as tmp:
-        fig.savefig(tmp, dpi=dpi, format=Path(out).suffix.lstrip(".").lower())
-    return fig
-
-
 def study_rows(study) -> list[dict]:
     rows = []
     for p in study.points:
@@ -135,12 +126,7 @@ def _knob_text(point) -> str:
 
 
 def plot_study(study, path: Path, title: str = "") -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, (ax_traj, ax_label) = plt.subplots(1, 2, figsize=(13, 6.0), layout="constrained")
+    fig, (ax_traj, ax_label), _ = figure_axes(None, 2, (13, 6.0), ncols=2)
     floor = 0.5 / max(study.robust_cells, 1)  # a label error of 0 is drawn here
     by_method: dict[str, list] = {}
     for p in study.points:

@@ -88,6 +88,7 @@ def write_csv(basin: Basin, path: Path) -> None:
     with open(path, "w", newline="") as fh:
         writer = csv.writer(fh)
         writer.writerow(csv_header(basin))
+        y_text = np.array([repr(float(v)) for v in y])
         for start in range(0, x.size, CSV_BLOCK):
             rows = slice(start, min(start + CSV_BLOCK, x.size))
             q = a["quarter_turns"][rows]
@@ -98,7 +99,7 @@ def write_csv(basin: Basin, path: Path) -> None:
             steps = _ints(a["steps"][rows])
             rung = _ints(a["rung"][rows])
             xs = np.repeat(np.array([repr(float(v)) for v in x[rows]]), y.size)
-            ys = np.tile(np.array([repr(float(v)) for v in y]), rows.stop - rows.start)
+            ys = np.tile(y_text, rows.stop - rows.start)
             columns = (xs, ys, n, pose, status_words[rows], certainty_words[rows], settle,
                        steps, rung)
             # plain str lists: the csv module writes them several times faster than numpy's

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from ..montecarlo import PARAMETER_UNITS, FractionsOver, pender_uhrin
-from .charts import PANELS_HINT, figure_axes, write_figure
-from .paths import check_figure_path
+from .charts import PANELS_HINT, figure_axes
+from .paths import check_figure_path, save_figure
 
 
 def _band(ax, x, rows, label, colour, marker="o"):
@@ -55,7 +55,7 @@ def plot_over(result: FractionsOver, out=None, *, title: str | None = None, dpi:
                      "samples a value,\nthe same points at every value; bands: 95 % Wilson "
                      "intervals", fontsize=9)
     if out is not None:
-        write_figure(fig, out, dpi)
+        save_figure(fig, out, dpi)
     return fig
 
 

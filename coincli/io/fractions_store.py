@@ -59,11 +59,13 @@ from .store import (
     check_is_store,
     claims_dir,
     cost_dir,
+    creating_name,
     creation_lock,
     flatten_attrs,
     is_store,
     read_runs,
     record_run,
+    remove_orphans,
     show_value,
 )
 
@@ -147,9 +149,8 @@ def _create(path: Path, attrs: dict, layout: Layout, values: np.ndarray | None) 
     """Create the store in a temporary directory beside it and rename it into place (call with
     the creation lock held)."""
     zarr = _zarr()
-    for leftover in path.parent.glob(f".{path.name}.creating-*"):  # creations that died
-        shutil.rmtree(leftover, ignore_errors=True)
-    tmp = path.with_name(f".{path.name}.creating-{os.getpid()}")
+    remove_orphans(path)  # creations that died
+    tmp = path.with_name(creating_name(path))
     group = zarr.open_group(str(tmp), mode="w-", zarr_format=3, attributes=attrs)
     lead, dims, chunk = layout.lead(), layout.lead_dims(), layout.lead_chunk()
     if values is not None:

@@ -155,15 +155,10 @@ def check_figure_path(path: str | os.PathLike, what: str = "figure") -> Path:
 
 def save_figure(fig, path: str | os.PathLike, dpi: int) -> Path:
     """Save a matplotlib figure in the format its file name ends in (.png, .svg, .pdf), through
-    :func:`atomic_output`, and close it."""
-    import matplotlib.pyplot as plt
-
+    :func:`atomic_output` (complete or absent)."""
     path = Path(path)
-    try:
-        with atomic_output(path) as tmp:
-            fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
-    finally:
-        plt.close(fig)
+    with atomic_output(path) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
     return path
 
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import numbers
 import os
 import shutil
 import sys
@@ -31,7 +30,7 @@ import numpy as np
 from ..enums import Status
 from ..integrators.registry import setting_text
 from ..model import horizon_text
-from ..params import ParameterError
+from ..params import ParameterError, check_number
 from ..version import __version__
 from .frames import ARROW_PEAK_DIAMETERS, Frames, build_frames, force_arrows
 from .paths import atomic_output, check_connect_url, check_rrd_path
@@ -310,21 +309,29 @@ def in_notebook() -> bool:
     return bool(widget is not None and widget.running_in_marimo())
 
 
-NOT_IN_NOTEBOOK = ("nothing to show the throw in: show() draws in a notebook (Jupyter); here "
-                   "write it with coincli.record(run, rrd='throw.rrd') and open it with "
-                   "`rerun throw.rrd`, or coincli.record(run, spawn=True)")
+def require_notebook(what: str) -> None:
+    """NotebookMissing without rerun-notebook (wherever this runs), then RuntimeError (one line,
+    naming what to do instead) outside a notebook: ``what`` is the call that needs one."""
+    _viewer_class()
+    if not in_notebook():
+        raise RuntimeError(f"nothing to show the throw in: {what} draws in a notebook "
+                           "(Jupyter); here write it with coincli.record(run, rrd='throw.rrd') "
+                           "and open it with `rerun throw.rrd`, or coincli.record(run, "
+                           "spawn=True)")
 
 
 def inline_viewer(trajectory, *, width: int | None = None, height: int | None = None,
-                  log_every: float | None = None):
+                  log_every: float | None = None, frames: Frames | None = None):
     """A Rerun notebook viewer (``rerun.notebook.Viewer``, not yet displayed) holding the
     recording of ``trajectory`` (simulated again with samples every ``log_every`` seconds and
-    its contact events if it kept none). NotebookMissing without rerun-notebook."""
+    its contact events if it kept none; ``frames``: those of its samples, if built already).
+    NotebookMissing without rerun-notebook."""
     import rerun as rr
 
     viewer_class = _viewer_class()
     run = with_samples(trajectory, log_every)
-    frames = build_frames(run)
+    if frames is None:
+        frames = build_frames(run)
     rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
     viewer = viewer_class(width=width, height=height, recording=rec)
     rec.send_recording_name(_recording_name(run))
@@ -338,9 +345,7 @@ def show_inline(trajectory, *, width: int | None = None, height: int | None = No
     """Display the recording of ``trajectory`` in the notebook's cell now
     (:meth:`coincli.Trajectory.show`); outside a notebook RuntimeError (one line, naming what
     to do instead)."""
-    _viewer_class()  # the missing extra first, wherever this runs
-    if not in_notebook():
-        raise RuntimeError(NOT_IN_NOTEBOOK)
+    require_notebook("show()")
     inline_viewer(trajectory, width=width, height=height, log_every=log_every).display()
 
 
@@ -356,10 +361,8 @@ def record(trajectory, *, rrd: str | os.PathLike | None = None, spawn: bool = Fa
     if rrd is None and not spawn and connect is None and not notebook:
         raise ParameterError("record() needs a destination: rrd=PATH, spawn=True, connect=URL "
                              "or notebook=True")
-    if log_every is not None and (isinstance(log_every, bool) or
-                                  not isinstance(log_every, numbers.Real) or
-                                  not math.isfinite(log_every) or log_every <= 0):
-        raise ParameterError(f"log_every must be a number of seconds > 0, got {log_every!r}")
+    if log_every is not None:
+        check_number("log_every", log_every, positive=True)
     if connect is not None:
         try:
             check_connect_url(connect)
@@ -367,9 +370,7 @@ def record(trajectory, *, rrd: str | os.PathLike | None = None, spawn: bool = Fa
             raise ParameterError(f"connect must be the URL of a running Rerun viewer, e.g. "
                                  f"rerun+http://127.0.0.1:9876/proxy, got {connect!r}") from None
     if notebook:
-        _viewer_class()
-        if not in_notebook():
-            raise RuntimeError(NOT_IN_NOTEBOOK.replace("show()", "record(notebook=True)"))
+        require_notebook("record(notebook=True)")
     run = with_samples(trajectory, log_every)
     frames = build_frames(run)
     info = RecordingInfo(rrd=None, connect=None, spawn=False, frames=len(frames),
@@ -378,7 +379,7 @@ def record(trajectory, *, rrd: str | os.PathLike | None = None, spawn: bool = Fa
         info = write_recording(run, rrd=rrd, spawn=spawn, connect=connect, frames=frames,
                                log_every=run.sample_dt)
     if notebook:
-        viewer = inline_viewer(run, width=width, height=height)
+        viewer = inline_viewer(run, width=width, height=height, frames=frames)
         viewer.display()
         info = replace(info, viewer=viewer)
     return info

@@ -364,11 +364,11 @@ def creation_lock(path: Path, blocking: bool = True):
         os.close(fd)
 
 
-def _creating_name(path: Path) -> str:
+def creating_name(path: Path) -> str:
     return f".{path.name}.creating-{socket.gethostname()}-{os.getpid()}"
 
 
-def _remove_orphans(path: Path) -> None:
+def remove_orphans(path: Path) -> None:
     """Temporary stores of creations that died (call with the creation lock held)."""
     for leftover in path.parent.glob(f".{path.name}.creating-*"):
         shutil.rmtree(leftover, ignore_errors=True)
@@ -393,7 +393,7 @@ def tidy(path: str | os.PathLike) -> None:
         return
     with contextlib.suppress(OSError), creation_lock(path, blocking=False) as held:
         if held:
-            _remove_orphans(path)
+            remove_orphans(path)
 
 
 def _create(path: Path, attrs: dict, spec: SweepSpec, overwrite: bool) -> None:
@@ -401,12 +401,12 @@ def _create(path: Path, attrs: dict, spec: SweepSpec, overwrite: bool) -> None:
     with creation_lock(path):
         if is_store(path) and not overwrite:
             return  # another process won the race: open its store
-        _remove_orphans(path)
+        remove_orphans(path)
         if is_store(path):  # overwrite
             shutil.rmtree(path)
         elif path.is_dir() and not any(path.iterdir()):
             path.rmdir()
-        tmp = path.with_name(_creating_name(path))
+        tmp = path.with_name(creating_name(path))
         try:
             _write_files(tmp, template(attrs, spec.grid))
             shutil.rmtree(cost_dir(path), ignore_errors=True)  # the records of an older store

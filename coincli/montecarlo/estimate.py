@@ -6,7 +6,6 @@ samples left take."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,11 +15,10 @@ from ..params import state_array
 from .batch import BatchTask, compute_batch, make_fraction_spec
 from .plan import FractionsPlan
 from .sampling import Draws, initial_states
-from .tally import Tally
+from .tally import Tally, samples_needed
 
 PILOT_SAMPLES = 512  # samples a piloted value computes: the first of its first batch
 PILOT_VALUES = 3  # values piloted in a continuation: the first, the middle and the last
-Z95 = 1.959963984540054
 
 
 @dataclass(frozen=True)
@@ -40,26 +38,6 @@ class FractionsEstimate:
     @property
     def budget_suffices(self) -> bool:
         return self.needed is None or self.needed <= self.budget
-
-
-def needed_samples(tally: Tally, precision: float, of: str) -> int:
-    """The samples at which every interval the stop rule looks at (``of``) would be
-    ``precision`` wide (half-width), by the normal approximation at ``tally``'s estimates.
-    A proportion the pilot saw none (or all) of is taken as one half of a sample in ``n``, not
-    0: no count says it is exactly 0."""
-    n = max(tally.n_counted, 1)
-    floor = 0.5 / n
-
-    def var(count: int, total: int) -> float:
-        p = min(max(count / max(total, 1), floor), 1 - floor)
-        return p * (1 - p)
-
-    spread = [var(tally.standing, n)]
-    if of == "all":
-        spread += [var(c, n) for c in tally.counted.values()]
-        spread.append(var(tally.samples - tally.n_counted, tally.samples))
-    share = tally.n_counted / tally.samples if tally.samples else 1.0
-    return int(math.ceil(max(spread) * (Z95 / precision) ** 2 / max(share, 1e-9)))
 
 
 def estimate_fractions(plan: FractionsPlan, workers: int | None,
@@ -84,7 +62,7 @@ def estimate_fractions(plan: FractionsPlan, workers: int | None,
             lab = result.labels
             tally = Tally.of(lab["quarter_turns"], lab["status"], lab["certainty"],
                              spec.ladder.verified)
-            needs.append(needed_samples(tally, goal.precision, goal.of))
+            needs.append(samples_needed(tally, goal.precision, goal.of))
     per_sample = cpu / (count * len(piloted))
     needed = max(needs) if needs else None
     per_value = min(budget, needed) if needed is not None else budget
@@ -95,4 +73,4 @@ def estimate_fractions(plan: FractionsPlan, workers: int | None,
                              count * len(piloted), sum(held))
 
 
-__all__ = ["FractionsEstimate", "PILOT_SAMPLES", "estimate_fractions", "needed_samples"]
+__all__ = ["FractionsEstimate", "PILOT_SAMPLES", "estimate_fractions"]

@@ -128,18 +128,27 @@ def precise(tally: Tally, precision: float, of: str = "all") -> bool:
     return not math.isnan(w) and w <= precision
 
 
+Z95 = 1.959963984540054  # the normal quantile of a two-sided 95 % interval
+
+
 def samples_needed(tally: Tally, precision: float, of: str = "all") -> int:
-    """A guess of the samples the stop rule will need (normal approximation at the current
-    estimates; for the progress bar only)."""
-    z = 1.959963984540054
-    counted = max(tally.n_counted, 1)
-    props = [tally.standing / counted]
+    """The samples at which every interval the stop rule looks at (``of``) would be
+    ``precision`` wide (half-width), by the normal approximation at ``tally``'s estimates (the
+    progress bar's total, and the pilot's estimate of a run). A proportion seen none (or all)
+    of is taken as one half of a sample in ``n``, not 0: no count says it is exactly 0."""
+    n = max(tally.n_counted, 1)
+    floor = 0.5 / n
+
+    def var(count: int, total: int) -> float:
+        p = min(max(count / max(total, 1), floor), 1 - floor)
+        return p * (1 - p)
+
+    spread = [var(tally.standing, n)]
     if of == "all":
-        props += [c / counted for c in tally.counted.values()]
-        props.append((tally.samples - tally.n_counted) / max(tally.samples, 1))
+        spread += [var(c, n) for c in tally.counted.values()]
+        spread.append(var(tally.samples - tally.n_counted, tally.samples))
     share = tally.n_counted / tally.samples if tally.samples else 1.0
-    need = max(p * (1 - p) for p in props) * (z / precision) ** 2
-    return int(math.ceil(need / max(share, 1e-9)))
+    return int(math.ceil(max(spread) * (Z95 / precision) ** 2 / max(share, 1e-9)))
 
 
 def summary(tally: Tally, verified: bool = True) -> dict:
