@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 
 from .jit import kernel
-from .params import model_params, state_array
+from .params import model_params
 
 # Body-frame signs of the corners: 0 = (+r_d, -r_t), 1 = (-r_d, -r_t), 2 = (-r_d, +r_t),
 # 3 = (+r_d, +r_t). With phi = 0 corners 0 and 1 are the lower ones.
@@ -178,9 +178,10 @@ CAP_FACTOR = 4.0  # the cap of a run without a fixed horizon, in units of decisi
 def scene_horizon(scene) -> float:
     """How long a run of ``scene`` from its initial state may last: its t_end, or without one
     the cap, CAP_FACTOR times :func:`decision_time`."""
-    t_end = scene.integration.t_end
-    return float(run_horizon(model_params(scene), math.inf if t_end is None else t_end,
-                             state_array(scene)))
+    s, t_end = scene.initial, scene.integration.t_end
+    state = (s.x0, scene.y0, s.phi0, s.vx, s.vy, s.vphi)  # Python floats: an absurd start's
+    # energy overflows to inf (an infinite cap) without numpy's overflow warning
+    return float(run_horizon(model_params(scene), math.inf if t_end is None else t_end, state))
 
 
 def horizon_text(scene) -> str:

@@ -144,17 +144,27 @@ def clip_values(message: str) -> str:
     return re.sub(rf"\S{{{LONG_TOKEN},}}", lambda m: shown(m.group()), message)
 
 
-def fail(message: str) -> typer.Exit:
-    """Print a one-line error and return the exit to raise (code 2, like a usage error)."""
-    text = f"[bold red]error:[/] {escape(clip_values(message))}"
+def _one_line(head: str, style: str, message: str) -> None:
+    """``head: message`` on stderr as one line (``message`` plain text)."""
+    text = f"[{style}]{head}:[/] {escape(clip_values(message))}"
     if err_console.is_terminal:
         # A person reads it: break between phrases, not mid-word where the terminal would.
         # Piped or captured it stays one line, for grep and logs.
-        text = keep_whole(text, err_console.width, indent=len("error: "))
+        text = keep_whole(text, err_console.width, indent=len(head) + 2)
     else:  # a command in it (text.command) copies as one, with plain spaces
         text = text.replace(NBSP, " ")
     err_console.print(text, highlight=False, soft_wrap=True)
+
+
+def fail(message: str) -> typer.Exit:
+    """Print a one-line error and return the exit to raise (code 2, like a usage error)."""
+    _one_line("error", "bold red", message)
     return typer.Exit(code=2)
+
+
+def warn(message: str) -> None:
+    """Print a one-line warning: the work goes on."""
+    _one_line("warning", "yellow", message)
 
 
 def in_cli_words(exc: ParameterError) -> str:

@@ -22,7 +22,7 @@ from .common import (
     print_json,
     user_errors,
 )
-from .recording import record_throw
+from .recording import destination, record_throw
 from .simulate_cmd import (
     LABEL_WIDTH,
     REC,
@@ -30,9 +30,6 @@ from .simulate_cmd import (
     LogEveryOpt,
     SpawnOpt,
     _check_log_every,
-    _check_recording_options,
-    _display_available,
-    _no_display,
     print_recording,
 )
 from .text import NBSP, command, print_rows, say
@@ -170,23 +167,20 @@ def inspect_command(
     from ..io.cells import cell_scene, ladder_matches, locate, read_stored_cell, replay
     from ..io.store import open_view
 
-    no_viewer = spawn and not _display_available()
-    if no_viewer:  # said before the run; the outcome and any file still follow (exit 1)
-        spawn = False
-        err_console.print(f"[yellow]warning[/]: --spawn: {escape(_no_display(rrd))}",
-                          highlight=False, soft_wrap=True)
-    recording = rrd is not None or spawn or connect is not None
+    # checked before the replay; --spawn without a display is said now (the outcome and any
+    # file still follow, exit 1)
+    where_to, no_viewer = destination(rrd, spawn, connect)
+    recording = where_to is not None
+    rrd, spawn, connect = ((where_to.rrd, where_to.spawn, where_to.connect) if recording
+                           else (None, False, None))
     values = dict(x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
     with user_errors():
-        if rrd is not None and rrd.suffix != ".rrd":
-            raise fail(f"--rrd {rrd}: the file name must end in .rrd")
         attrs = open_view(path).attrs
         index = locate(attrs, cell=cell, **{k: v for k, v in values.items() if v is not None})
         attrs, stored = read_stored_cell(path, index)
         scene = cell_scene(attrs, index)
         if recording:
             _check_log_every(scene, log_every)
-            _check_recording_options(rrd, connect)
         words = simulate_words(scene, swept=tuple(attrs["sweep"]["dims"]))
         compile_first()
         try:

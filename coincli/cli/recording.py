@@ -9,7 +9,7 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from .common import err_console, fail
+from .common import err_console, fail, warn
 from .text import command, say
 
 REC = "Recording (Rerun)"
@@ -37,12 +37,12 @@ def destination(rrd: Path | None, spawn: bool, connect: str | None):
     from ..params import ParameterError
 
     if rrd is not None:
-        if rrd.suffix != ".rrd":
-            raise fail(f"--rrd {rrd}: the file name must end in .rrd")
         try:
             check_rrd_path(rrd)
         except (ParameterError, OSError) as exc:
             raise fail(str(exc)) from None
+        if rrd.suffix != ".rrd":
+            raise fail(f"--rrd {rrd}: the file name must end in .rrd")
     if connect is not None:
         try:
             probe_viewer(connect)
@@ -55,9 +55,8 @@ def destination(rrd: Path | None, spawn: bool, connect: str | None):
                  "where there is a display)" if rrd is not None else
                  "record it with --rrd FILE (open it with `rerun FILE` where there is a "
                  "display)")
-        say(err_console, f"[yellow]warning[/]: --spawn: {escape(NO_DISPLAY)}; the work is done "
-                         f"and its result printed; {escape(where)}, or stream it with "
-                         "--connect URL")
+        warn(f"--spawn: {NO_DISPLAY}; the work is done and its result printed; {where}, or "
+             "stream it with --connect URL")
     where = Destination(rrd, spawn, connect)
     return (where if where else None), no_viewer
 

@@ -44,7 +44,7 @@ from .common import (
     print_json,
     user_errors,
 )
-from .recording import places, record_throw
+from .recording import destination, places, record_throw
 from .text import NBSP, print_rows, say
 
 REC = "Recording (Rerun)"
@@ -106,13 +106,11 @@ def simulate_command(
     """  # noqa: E501
     from ..throw import simulate  # coincli.simulate, without the rest of the API's imports
 
-    rrd_path = None if no_rrd else rrd
-    no_viewer = spawn and not _display_available()
-    if no_viewer:  # said before the run; the outcome and any other output still follow
-        spawn = False
-        err_console.print(f"[yellow]warning[/]: --spawn: {escape(_no_display(rrd_path))}",
-                          highlight=False, soft_wrap=True)
-    recording = rrd_path is not None or spawn or connect is not None
+    # checked before the run; --spawn without a display is said now, the outcome still follows
+    where_to, no_viewer = destination(None if no_rrd else rrd, spawn, connect)
+    recording = where_to is not None
+    rrd_path, spawn, connect = ((where_to.rrd, where_to.spawn, where_to.connect) if recording
+                                else (None, False, None))
     sampled = recording or csv is not None or gif is not None  # what needs the time series
     with user_errors():
         scene = build_scene(preset, x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi,
@@ -122,8 +120,6 @@ def simulate_command(
                             verify=False if single_pass else None)
         if sampled:
             _check_log_every(scene, log_every)
-        if recording:
-            _check_recording_options(rrd_path, connect)
         _check_exports(csv, gif)
         _announce(scene)
         try:
@@ -164,24 +160,6 @@ def simulate_command(
         raise fail(f"could not write {what}: {why}")
     if trajectory.status not in (Status.SETTLED, Status.UNSETTLED) or no_viewer:
         raise SystemExit(1)  # no outcome (non-finite, out of budget), or no viewer to open
-
-
-def _display_available() -> bool:
-    from ..io.rrd import display_available
-
-    return display_available()
-
-
-def _no_display(rrd_path) -> str:
-    """Why --spawn opens no viewer here, and the way out, in the words of the options."""
-    from ..io.rrd import NO_DISPLAY
-
-    if rrd_path is not None:
-        return (f"{NO_DISPLAY}; the outcome is printed and the recording written to {rrd_path} "
-                f"(open it with `rerun {rrd_path}` where there is a display), or stream it "
-                "with --connect URL")
-    return (f"{NO_DISPLAY}; the outcome is printed; record it with --rrd FILE (open it with "
-            "`rerun FILE` where there is a display), or stream it with --connect URL")
 
 
 SLOW_STEPS = 1e8  # fixed steps above which a run is announced (about 2 s of compiled work)
@@ -276,19 +254,6 @@ def print_exports(trajectory, written: dict) -> None:
         rows.append(("animation", f"{escape(str(written['animation']))}: {DEFAULT_SECONDS:g} s at "
                                   f"{DEFAULT_FPS} frames a second"))
     print_rows(console, rows, LABEL_WIDTH)
-
-
-def _check_recording_options(rrd_path, connect) -> None:
-    """Fail in one line, before the run, on an unusable path or URL."""
-    from ..io.paths import check_rrd_path, probe_viewer
-
-    if rrd_path is not None:
-        check_rrd_path(rrd_path)
-    if connect is not None:
-        try:
-            probe_viewer(connect)
-        except (ValueError, ConnectionError) as exc:
-            raise fail(str(exc)) from None
 
 
 def print_recording(info) -> None:
