@@ -9,7 +9,9 @@ machine, the date, the medians, and the median and range of the per-pair ratios.
     python benchmarks/live_overhead.py --pairs 9 -- --res 256 --threads 2
 
 Issue 30's target: the recorded run at most 10 % slower (ratio <= 1.10). The kernels must be
-compiled already (run any `coin basin` once first); one unrecorded pair warms the caches.
+compiled already (`coin compile`); one pair, not counted, warms the caches. With `--write`, the
+line also goes between the markers ``<!-- live-overhead:start -->`` ... ``:end -->`` of
+docs/performance.md.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from docs_tables import machine  # noqa: E402
+from docs_tables import PERFORMANCE, machine, replace_between  # noqa: E402
 
 
 def run(command: list[str], cwd: Path) -> tuple[float, float]:
@@ -51,6 +53,8 @@ def main() -> None:
     parser.add_argument("--pairs", type=int, default=5)
     parser.add_argument("--coin", default=str(Path(sys.executable).with_name("coin")),
                         help="the coin executable (default: this Python's)")
+    parser.add_argument("--write", action="store_true",
+                        help="put the result line in docs/performance.md too")
     parser.add_argument("args", nargs="*", help="more arguments of `coin basin` (after --)")
     options = parser.parse_args()
 
@@ -86,11 +90,15 @@ def main() -> None:
 
     ratios = [r[0] / q[0] for q, r in zip(times["quiet"], times["rrd"], strict=True)]
     date = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    print(f"coincli {__version__}, {machine()}, {date}: `coin basin STORE -q"
-          f"{''.join(' ' + a for a in options.args)}` {median('quiet', 0):.2f} s wall "
-          f"({median('quiet', 1):.2f} s CPU), with --rrd {median('rrd', 0):.2f} s "
-          f"({median('rrd', 1):.2f} s CPU); ratio median {statistics.median(ratios):.3f} "
-          f"(range {min(ratios):.3f}-{max(ratios):.3f}) over {options.pairs} alternating pairs")
+    line = (f"coincli {__version__}, {machine()}, {date}: `coin basin STORE -q"
+            f"{''.join(' ' + a for a in options.args)}` {median('quiet', 0):.2f} s wall "
+            f"({median('quiet', 1):.2f} s CPU), with --rrd {median('rrd', 0):.2f} s "
+            f"({median('rrd', 1):.2f} s CPU); ratio median {statistics.median(ratios):.3f} "
+            f"(range {min(ratios):.3f}-{max(ratios):.3f}) over {options.pairs} alternating "
+            f"pairs: `python benchmarks/live_overhead.py`.")
+    print(line)
+    if options.write:
+        replace_between(PERFORMANCE, "live-overhead", line)
 
 
 if __name__ == "__main__":

@@ -22,7 +22,7 @@ from typer.testing import CliRunner
 from coincli.cli import app
 from coincli.enums import Certainty, Status
 from coincli.integrators import NO_LABEL
-from coincli.io import live
+from coincli.io import live, sweep_recording
 from coincli.io.basin_render import _ramp_colours, n_range
 from coincli.io.store import read_basin
 
@@ -227,8 +227,8 @@ def test_a_recording_process_that_dies_is_said_and_the_sweep_goes_on(tmp_path, m
     """The recording process killed (here at once, by itself): the sweep is done and its
     result printed, then one error line and exit 2 (as coin simulate's); no recording file,
     complete or not."""
-    monkeypatch.setattr(live, "RECORDER", "import os, signal; os.kill(os.getpid(), "
-                                          "signal.SIGKILL)")
+    monkeypatch.setattr(sweep_recording, "RECORDER", "import os, signal; os.kill(os.getpid(), "
+                                                     "signal.SIGKILL)")
     store, rrd = tmp_path / "s.zarr", tmp_path / "s.rrd"
     result = runner.invoke(app, ["basin", str(store), *SMALL, "--rrd", str(rrd)],
                            env={"COLUMNS": "400"})
@@ -285,3 +285,96 @@ def test_a_sweep_ended_by_a_signal_leaves_the_recording_of_its_store(tmp_path, h
     basin = read_basin(store)
     assert 0 < basin.done.sum() < basin.done.size  # stopped on the way
     check_map(rows(rrd), basin, static=False)
+
+
+# -- the recording's process started by `coin` itself, before the command line is parsed ------
+def test_the_early_guess_knows_the_commands_and_options_of_coin_basin():
+    import typer.main
+
+    from coincli.cli.basin_cmd import basin_app
+    from coincli.cli.recording import REC
+
+    group = typer.main.get_group(basin_app)
+    assert sweep_recording.BASIN_COMMANDS == set(group.commands)
+    recording = {opt for p in group.commands["sweep"].params
+                 if getattr(p, "rich_help_panel", None) == REC for opt in p.opts}
+    assert recording == set(sweep_recording.RECORDING_OPTIONS)
+
+
+@pytest.mark.parametrize("args, asked", [
+    (["basin", "s.zarr", "--rrd", "s.rrd"], True),
+    (["basin", "s.zarr", "--res", "64", "--rrd=s.rrd"], True),
+    (["basin", "sweep", "s.zarr", "--spawn"], True),
+    (["basin", "s.zarr", "--connect", "rerun+http://127.0.0.1:9876/proxy"], True),
+    (["basin", "s.zarr"], False),
+    (["basin", "show", "s.zarr", "--rrd", "s.rrd"], False),
+    (["basin", "inspect", "s.zarr", "--cell", "1,2", "--spawn"], False),
+    (["basin", "s.zarr", "--rrd", "s.rrd", "--help"], False),
+    (["simulate", "--rrd", "s.rrd"], False),
+    (["fractions", "--spawn"], False),
+    (["basin"], False),
+    ([], False),
+])
+def test_the_early_guess_of_a_sweep_with_a_recording(args, asked):
+    assert sweep_recording.sweep_recording_asked(args) is asked
+
+
+def test_a_process_started_on_a_wrong_guess_ends_at_once():
+    """Started for what looked like a recorded sweep, then not wanted (the command line said
+    otherwise, or failed): the process ends as soon as its input closes, without a word,
+    whatever it was importing."""
+    sweep_recording.start_early(["basin", "s.zarr", "--rrd", "s.rrd"])
+    process = sweep_recording._started_early._process
+    assert process.poll() is None
+    assert sweep_recording.recorder_for(False) is None
+    assert process.returncode == 0
+    assert sweep_recording._started_early is None
+
+
+def test_the_sweep_takes_the_process_started_early():
+    sweep_recording.start_early(["basin", "sweep", "s.zarr", "--spawn"])
+    early = sweep_recording._started_early
+    try:
+        assert sweep_recording.recorder_for(True) is early
+        assert sweep_recording._started_early is None
+    finally:
+        early.cancel()
+
+
+def _processes_marked(mark: str) -> list:
+    import psutil
+
+    found = []
+    for process in psutil.process_iter():
+        try:
+            if process.environ().get("COIN_TEST_MARK") == mark:
+                found.append(process)
+        except (psutil.AccessDenied, psutil.NoSuchProcess, psutil.ZombieProcess):
+            pass
+    return found
+
+
+@pytest.mark.parametrize("case", ["recorded", "bad option", "unparsable"])
+def test_coin_starts_the_recording_first_and_leaves_no_process(tmp_path, case):
+    """`python -m coincli` (as the `coin` script) starts a recorded sweep's process before it
+    parses the command line: the recording is the store's, cell for cell; a command that
+    fails first (an option refused by the sweep, or by the parser) leaves no process
+    behind."""
+    store, rrd = tmp_path / "s.zarr", tmp_path / "s.rrd"
+    args = {"recorded": [*SMALL, "--rrd", str(rrd)],
+            "bad option": [*SMALL, "--res", "1", "--rrd", str(rrd)],
+            "unparsable": [*SMALL, "--no-such-option", "--rrd", str(rrd)]}[case]
+    mark = f"{os.getpid()}-{tmp_path.name}"
+    done = subprocess.run([sys.executable, "-m", "coincli", "basin", str(store), *args],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "COIN_TEST_MARK": mark, "COLUMNS": "200"})
+    if case == "recorded":
+        assert done.returncode == 0, done.stderr
+        check_map(rows(rrd), read_basin(store), static=False)
+    else:
+        assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+        assert not rrd.exists() and not store.exists()
+    deadline = time.monotonic() + 10
+    while _processes_marked(mark):
+        assert time.monotonic() < deadline, "a recording process outlived its command"
+        time.sleep(0.02)

@@ -206,23 +206,43 @@ def sweep_command(
 
     coin basin out.zarr --vy 0:2 --vphi -20:20 --res 512
     """  # noqa: E501
-    from .. import api
+    from ..io.sweep_recording import recorder_for
+
+    # a recording's process starts first (if `coin` has not started it already): it imports
+    # Rerun while this one plans the sweep
+    recorder = recorder_for(rrd is not None or spawn or connect is not None)
+    try:
+        from .. import api
+
+        with user_errors():
+            scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
+                                inertia=inertia, k=k, c=c, g=g, method=method, dt=dt,
+                                rtol=rtol, t_end=t_end, stop_on_settle=stop_on_settle,
+                                max_steps=max_steps, verify=False if single_pass else None)
+            plan = api.plan_sweep(scene, res=res, chunk=chunk, force=force,
+                                  mirror=not no_mirror, x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy,
+                                  vphi=vphi)
+            api.check_where(threads, workers, scheduler)
+        where_to, no_viewer = recording.destination(rrd, spawn, connect)
+        # before the sweep: its pilot estimate is the first run of the kernels (a store that
+        # is already complete on a fresh install is the one case compiled for without need)
+        compile_first(quiet)
+    except BaseException:
+        if recorder is not None:  # the recording will not be made: its process ends
+            recorder.cancel()
+        raise
+    if recorder is not None:
+        if where_to is None:  # --spawn alone, without a display
+            recorder.cancel()
+            recorder = None
+        else:
+            recorder.record(path, plan.attrs, where_to, verified=plan.spec.ladder.verified)
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
     from ..io import store as store_io
     from ..io.paths import DISK_ERRORS, NotWritable, describe
     from ..io.runner import SchedulerLost
     from . import interruptions
-
-    with user_errors():
-        scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
-                            inertia=inertia, k=k, c=c, g=g, method=method, dt=dt, rtol=rtol,
-                            t_end=t_end, stop_on_settle=stop_on_settle, max_steps=max_steps,
-                            verify=False if single_pass else None)
-        plan = api.plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=not no_mirror,
-                              x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
-        api.check_where(threads, workers, scheduler)
-    where_to, no_viewer = recording.destination(rrd, spawn, connect)
-    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-
     from .progress import Bars, RateColumn
 
     grid = plan.grid
@@ -263,15 +283,6 @@ def sweep_command(
         if start.cells_todo and not quiet:
             progress.start()
 
-    # before the sweep: its pilot estimate is the first run of the kernels (a store that is
-    # already complete on a fresh install is the one case compiled for without need)
-    compile_first(quiet)
-    recorder = None
-    if where_to is not None:
-        from ..io.live import SweepRecorder  # Rerun's code only when a recording is asked for
-
-        recorder = SweepRecorder(path, plan.attrs, grid, where_to,
-                                 verified=plan.spec.ladder.verified)
     try:
         with _Stop() as stop, recorder or contextlib.nullcontext():
             try:

@@ -12,8 +12,8 @@ A sweep sends the whole map again after the tiles written (at most every ``min_i
 seconds, and always at the end, read back from the store: the recording's last map is the
 store's), with the cells done and the rate as time series on the ``sweep_time`` timeline; one
 call per layer, never one per cell. A sweep's recording is made by a process of its own
-(:class:`SweepRecorder`), so that Rerun's start-up costs the sweep next to nothing. Rerun is
-imported lazily (as in :mod:`coincli.io.rrd`).
+(:mod:`coincli.io.sweep_recording`) that runs :func:`record_tiles`, so that Rerun's start-up
+costs the sweep next to nothing. Rerun is imported lazily (as in :mod:`coincli.io.rrd`).
 """
 
 from __future__ import annotations
@@ -295,160 +295,13 @@ def show_basin(basin: Basin, where: Destination) -> None:
         stream.whole(basin)
 
 
-class RecordingFailed(RuntimeError):
-    """A live recording that could not be made or finished (why, in one line)."""
-
-
-# The recording process of a sweep: this Python, running recording_process.
-RECORDER = "from coincli.io.live import recording_process; recording_process()"
-
-
-class SweepRecorder:
-    """The live recording of a sweep into the store at ``path``: a context manager whose
-    :meth:`progress` takes the sweep's SweepProgress (in the thread that runs the sweep).
-
-    The recording is made by a process of its own (:func:`record_sweep`), started on entering:
-    importing Rerun and making its first objects costs about half a second of CPU, which in
-    this process would be taken from the sweep (one interpreter lock), while another process
-    has the core that the sweep's own start-up (one thread loading the kernels) leaves idle.
-    This process only tells it, a line each update, which tiles were written; it reads them
-    from the store. On leaving, that line is closed: it reads any tile done that it has not
-    drawn (those of other processes too), sends the last map, the store's, closes the
-    recording and says how it went; this waits for it. A recording that cannot be made (no
-    viewer, no file) leaves ``error`` set and the sweep alone.
-
-    The process has a session of its own: a Ctrl-C at the terminal, or a signal to this
-    process's group, reaches only the sweep, which ends and closes the line; if this process
-    is killed, the line closes all the same. Either way the recording ends with the store's
-    map, and the process with it."""
-
-    def __init__(self, path, attrs: dict, grid, where: Destination, *, verified: bool,
-                 min_interval: float = 0.5):
-        self.path, self.attrs, self.grid, self.where = Path(path), attrs, grid, where
-        self.verified, self.min_interval = verified, min_interval
-        self.error: Exception | None = None  # why the recording failed (the sweep goes on)
-        self._process = None
-        self._started: float | None = None  # the sweep's start, on this process's clock
-
-    def __enter__(self):
-        import subprocess
-        import sys
-
-        try:
-            self._process = subprocess.Popen(
-                [sys.executable, "-c", RECORDER], stdin=subprocess.PIPE,
-                stdout=subprocess.PIPE, text=True, start_new_session=True)
-        except OSError as exc:
-            self.error = exc
-            return self
-        self._tell({"path": str(self.path), "attrs": self.attrs, "verified": self.verified,
-                    "rrd": None if self.where.rrd is None else str(self.where.rrd),
-                    "spawn": self.where.spawn, "connect": self.where.connect,
-                    "min_interval": self.min_interval})
-        return self
-
-    def _tell(self, message: dict) -> None:
-        """One line to the recording process (if it is gone, its answer says why)."""
-        import json
-
-        line = self._process.stdin
-        if line.closed:
-            return
-        try:
-            line.write(json.dumps(message) + "\n")
-            line.flush()
-        except OSError:  # it ended early (it could not record): no more lines
-            with contextlib.suppress(OSError):
-                line.close()
-
-    def progress(self, update) -> None:
-        if self._process is None:
-            return
-        self._started = time.perf_counter() - update.elapsed
-        self._tell({"elapsed": update.elapsed, "cells_done": update.cells_done,
-                    "written": [list(tile) for tile in update.written]})
-
-    def __exit__(self, *exc):
-        import json
-        import signal
-
-        if self._process is None:
-            return False
-        if self._started is not None:  # the time of the last map
-            self._tell({"elapsed": time.perf_counter() - self._started})
-        with contextlib.suppress(OSError):
-            self._process.stdin.close()
-        answer = self._process.stdout.read().strip().splitlines()
-        self._process.stdout.close()
-        code = self._process.wait()
-        try:
-            why = json.loads(answer[-1])["error"]
-        except (IndexError, ValueError, KeyError, TypeError):
-            how = (f"killed by {signal.Signals(-code).name}" if -code in signal.valid_signals()
-                   else f"exit code {code}")
-            why = f"the recording process ended before it was done ({how})"
-        if why is not None:
-            self.error = RecordingFailed(why)
-        return False
-
-
-def record_sweep(lines=None, out=None) -> None:
-    """The recording of :class:`SweepRecorder`'s process, reading ``lines`` (default stdin):
-    the first (JSON, as all) says what to record and where, each further one what the sweep
-    did (elapsed seconds, cells done, the tiles written), the last one the time of the last
-    map; their end, that the sweep ended. Writes one JSON line to ``out`` (default stdout)
-    when done: ``{"error": null}``, or why the recording failed."""
-    import json
-    import queue
-    import sys
-    import threading
-
-    from .paths import describe
-
-    lines = sys.stdin if lines is None else lines
-    out = sys.stdout if out is None else out
-    inbox: queue.SimpleQueue = queue.SimpleQueue()
-
-    def read() -> None:  # at once, whatever the recording is doing: the sweep never waits
-        try:
-            for line in lines:
-                inbox.put(json.loads(line))
-        except ValueError:  # a line cut off: the sweep's process was killed as it wrote it
-            pass
-        finally:
-            inbox.put(None)
-
-    threading.Thread(target=read, name="coin-sweep-lines", daemon=True).start()
-    try:
-        setup = inbox.get()
-        if setup is None:  # the sweep's process ended before it said what to record
-            return
-        _record_sweep(setup, inbox)
-        why = None
-    except Exception as exc:  # noqa: BLE001 - any failure is said in one line, not a traceback
-        why = describe(exc) if isinstance(exc, OSError) else (str(exc) or type(exc).__name__)
-    out.write(json.dumps({"error": why}) + "\n")
-    out.flush()
-
-
-def recording_process() -> None:
-    """The recording process's body: :func:`record_sweep` on stdin and stdout, then its end
-    at once. The recording is closed and the answer written by then; a normal exit would
-    tear the interpreter down first (with Rerun loaded, 0.1 s of CPU and more), and the
-    sweep's command waits for this process to end."""
-    import os
-    import signal
-
-    # a Ctrl-C is the sweep's (this process has a session of its own where there are
-    # sessions; elsewhere a console's Ctrl-C reaches every process in it): this one ends
-    # when its input does
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    record_sweep()
-    os._exit(0)
-
-
-def _record_sweep(setup: dict, inbox) -> None:
-    """The recording of :func:`record_sweep`, from the messages in ``inbox`` (None: the end)."""
+def record_tiles(setup: dict, inbox) -> None:
+    """The live recording of a sweep into a store, from the messages in ``inbox`` (a queue;
+    None: the end) of :mod:`coincli.io.sweep_recording`: ``setup`` says what to record and
+    where, each message what the sweep did (elapsed seconds, cells done, the tiles written).
+    The tiles are read back from the store, verified, so that the map shown is the store's;
+    the last map is sent once the sweep has ended, with every tile done by then (those of
+    other processes too)."""
     import queue
 
     from ..params import ParameterError
@@ -676,5 +529,4 @@ class FractionsRecorder:
         return False
 
 
-__all__ = ["BasinStream", "Destination", "FractionsRecorder", "RecordingFailed", "SweepRecorder",
-           "record_sweep", "show_basin"]
+__all__ = ["BasinStream", "Destination", "FractionsRecorder", "record_tiles", "show_basin"]
