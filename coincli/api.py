@@ -404,7 +404,8 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
           None = None, overwrite: bool = False, force: bool = False,
           threads: int | None = None, workers: int | None = None, scheduler: str | None = None,
           progress: Callable[[SweepProgress], None] | None = None, stop=None,
-          mirror: bool = True, x0=None, y0=None, phi0=None, vx=None, vy=None, vphi=None):
+          mirror: bool = True, x0=None, y0=None, phi0=None, vx=None, vy=None, vphi=None,
+          rrd: str | os.PathLike | None = None, spawn: bool = False, connect: str | None = None):
     """The basin map of two initial conditions as an xarray Dataset.
 
     Swept axes are given as ``name=(lo, hi)`` (vy and vphi sweep (0.05, 2) m/s and (-20, 20)
@@ -417,13 +418,24 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
     coincli.integrators.ladder) unless the scene's integration says ``verify=False``
     (``scene.with_overrides(verify=False)``). Interrupted (``stop`` set, or Ctrl-C, which stops
     the tiles in flight at once), it raises KeyboardInterrupt; a store keeps every finished
-    tile for a resume."""
+    tile for a resume.
+
+    ``rrd`` (an .rrd file), ``spawn`` (a new viewer) and ``connect`` (a running viewer's URL,
+    ``rerun+http://host:port/proxy``) stream the map to Rerun as it fills in, as
+    `coin basin STORE --rrd FILE` does: the recording reads the tiles back from the store, so
+    it needs ``store``. A recording that fails (a full disk, a viewer gone) does not fail the
+    sweep: it is said in a RuntimeWarning."""
     _check_progress(progress)
     plan = plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=mirror, x0=x0, y0=y0,
                       phi0=phi0, vx=vx, vy=vy, vphi=vphi)
+    where = _live(rrd, spawn, connect)
+    if where is not None and store is None:
+        raise ParameterError("a live recording of a sweep reads its tiles from the store: give "
+                             "store=PATH")
     if store is not None:
-        report = sweep(plan, store, overwrite=overwrite, threads=threads, workers=workers,
-                       scheduler=scheduler, progress=progress, stop=stop)
+        with _recording_sweep(plan, store, where, progress) as (recorder, progress):
+            report = sweep(plan, store, overwrite=overwrite, threads=threads, workers=workers,
+                           scheduler=scheduler, progress=progress, stop=stop)
         if report.interrupted:
             raise KeyboardInterrupt(f"sweep interrupted: {report.tiles_done} of "
                                     f"{report.tiles_total} tiles are in {report.path}")
@@ -431,6 +443,50 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
     if workers is not None or scheduler is not None:
         raise ParameterError("a sweep on Dask writes its tiles to a store: give store=PATH")
     return _basin_in_memory(plan, threads, progress, stop)
+
+
+def _live(rrd, spawn: bool, connect):
+    """The checked destination of a live recording (None if none is asked for)."""
+    if rrd is None and not spawn and connect is None:
+        return None  # Rerun's code is not even imported
+    from .io.live import check_destination
+
+    return check_destination(rrd, spawn, connect)
+
+
+def _both(first, second):
+    """A progress callback calling ``first`` then ``second`` (either may be None)."""
+    if first is None or second is None:
+        return first or second
+    return lambda update: (first(update), second(update))
+
+
+def _warn_if_failed(recorder) -> None:
+    if recorder is not None and recorder.error is not None:
+        import warnings
+
+        from .io.paths import describe
+
+        error = recorder.error
+        why = describe(error) if isinstance(error, OSError) else str(error)
+        warnings.warn(f"the live recording failed: {why}", RuntimeWarning, stacklevel=3)
+
+
+@contextlib.contextmanager
+def _recording_sweep(plan: SweepPlan, store, where, progress):
+    """(the recorder or None, the progress callback to give the sweep): the live recording of
+    a sweep into ``store`` at ``where`` (:mod:`coincli.io.sweep_recording`), if any; a failed
+    recording is warned of once the sweep is done."""
+    if where is None:
+        yield None, progress
+        return
+    from .io.sweep_recording import SweepRecorder
+
+    recorder = SweepRecorder().start().record(store, plan.attrs, where,
+                                              verified=plan.spec.ladder.verified)
+    with recorder:
+        yield recorder, _both(progress, recorder.progress)
+    _warn_if_failed(recorder)
 
 
 def _basin_in_memory(plan: SweepPlan, threads, progress, stop):
@@ -708,6 +764,21 @@ def render_basin(basin, out: str | os.PathLike | None = None, *, ax=None, field:
         raise ParameterError(str(exc)) from None
 
 
+def show_basin(basin, *, rrd: str | os.PathLike | None = None, spawn: bool = False,
+               connect: str | None = None) -> None:
+    """A basin (Dataset or store path, finished or partial) in Rerun's viewer, as
+    `coin basin show`: n in the paper's colours, each class named, the uncertain, undecided,
+    unsettled and non-finite cells over it, cells not computed (or damaged) marked; to the
+    .rrd file ``rrd``, a new viewer (``spawn``) and/or a running one (``connect``)."""
+    from .io.live import show_basin as show
+
+    where = _live(rrd, spawn, connect)
+    if where is None:
+        raise ParameterError("show_basin() needs a destination: rrd=PATH, spawn=True or "
+                             "connect=URL")
+    show(_as_basin(basin), where)
+
+
 # -- boundaries ---------------------------------------------------------------------------------
 def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
             eps: tuple[float, ...] | None = None, seed: int = 0, threads: int | None = None,
@@ -769,7 +840,8 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
               overwrite: bool = False, threads: int | None = None, workers: int | None = None,
               scheduler: str | None = None, force: bool = False,
               progress: Callable[[FractionsProgress], None] | None = None,
-              stop=None) -> Fractions:
+              stop=None, rrd: str | os.PathLike | None = None, spawn: bool = False,
+              connect: str | None = None) -> Fractions:
     """The outcome probabilities of throws whose initial conditions are drawn at random.
 
     Each of ``y0, phi0, vx, vy, vphi`` is a fixed value, a uniform range ``(lo, hi)`` or
@@ -787,13 +859,16 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
     threading.Event) ends the run early with what it has: the result then says
     ``stopped=StopReason.INTERRUPTED``. Ctrl-C (a notebook's interrupt) raises
     KeyboardInterrupt, as it does in :func:`basin`; a store keeps every batch counted so far
-    for a resume. Returns a :class:`coincli.montecarlo.Fractions`."""
+    for a resume. ``rrd``, ``spawn`` and ``connect`` stream the running estimates to Rerun
+    (as `coin fractions --rrd FILE`; see :func:`run_fractions`). Returns a
+    :class:`coincli.montecarlo.Fractions`."""
     plan = plan_fractions(scene, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi, samples=samples,
                           precision=precision, of=of, max_samples=max_samples, seed=seed,
                           sampler=sampler, batch=batch, force=force)
     return _raise_if_interrupted(
         run_fractions(plan, store=store, overwrite=overwrite, threads=threads,
-                      workers=workers, scheduler=scheduler, progress=progress, stop=stop), stop)
+                      workers=workers, scheduler=scheduler, progress=progress, stop=stop,
+                      rrd=rrd, spawn=spawn, connect=connect), stop)
 
 
 def _raise_if_interrupted(result, stop):
@@ -815,7 +890,8 @@ def fractions_over(scene: Scene, parameter: str, values, *, keep=(), **options) 
     value is resumable on its own in the store. Returns a
     :class:`coincli.montecarlo.FractionsOver`."""
     run_options = {k: options.pop(k) for k in ("store", "overwrite", "threads", "workers",
-                                               "scheduler", "progress", "stop")
+                                               "scheduler", "progress", "stop", "rrd",
+                                               "spawn", "connect")
                    if k in options}
     plan = plan_fractions(scene, over=(parameter, values), keep=keep, **options)
     return _raise_if_interrupted(run_fractions(plan, **run_options), run_options.get("stop"))
@@ -825,16 +901,34 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                   overwrite: bool = False, threads: int | None = None,
                   workers: int | None = None, scheduler: str | None = None,
                   progress: Callable[[FractionsProgress], None] | None = None,
-                  stop=None) -> Fractions | FractionsOver:
+                  stop=None, rrd: str | os.PathLike | None = None, spawn: bool = False,
+                  connect: str | None = None) -> Fractions | FractionsOver:
     """Run a Monte Carlo run planned by :func:`plan_fractions` (see :func:`fractions` for the
     options): a Fractions for a plain run, a FractionsOver for a continuation. Unlike
     :func:`fractions`, it does not raise on Ctrl-C: it returns what it has, with
-    ``stopped=StopReason.INTERRUPTED`` (as :func:`sweep` returns a report)."""
+    ``stopped=StopReason.INTERRUPTED`` (as :func:`sweep` returns a report).
+
+    ``rrd`` (an .rrd file), ``spawn`` (a new viewer) and ``connect`` (a running viewer's URL)
+    stream the estimates to Rerun as the run goes, as `coin fractions --rrd FILE` does: each
+    probability with its 95 % band against the samples, or, over a parameter, against the
+    parameter as each value finishes. A recording that fails does not fail the run: it is
+    said in a RuntimeWarning."""
     from .io.fractions_run import run_fractions as run
 
     _check_progress(progress)
-    return run(plan, store=store, overwrite=overwrite, threads=threads, workers=workers,
-               scheduler=scheduler, progress=progress, stop=stop)
+    where = _live(rrd, spawn, connect)
+    if where is None:
+        return run(plan, store=store, overwrite=overwrite, threads=threads, workers=workers,
+                   scheduler=scheduler, progress=progress, stop=stop)
+    from .io.live import FractionsRecorder
+
+    with FractionsRecorder(plan, where) as recorder:
+        result = run(plan, store=store, overwrite=overwrite, threads=threads,
+                     workers=workers, scheduler=scheduler,
+                     progress=_both(progress, recorder.progress), stop=stop)
+        recorder.result(result)
+    _warn_if_failed(recorder)
+    return result
 
 
 def estimate_fractions(plan: FractionsPlan, *, threads: int | None = None,
@@ -908,5 +1002,5 @@ __all__ = ["Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
            "cell_scene", "classify", "compile_kernels", "estimate_fractions", "estimate_sweep",
            "export_basin", "fractions", "fractions_over", "load_preset", "open_basin",
            "open_fractions", "plan_fractions", "plan_sweep", "record", "render_analysis",
-           "render_basin", "render_fractions", "run_fractions", "simulate", "stability", "sweep",
-           "verify_basin"]
+           "render_basin", "render_fractions", "run_fractions", "show_basin", "simulate",
+           "stability", "sweep", "verify_basin"]

@@ -378,3 +378,76 @@ def test_coin_starts_the_recording_first_and_leaves_no_process(tmp_path, case):
     while _processes_marked(mark):
         assert time.monotonic() < deadline, "a recording process outlived its command"
         time.sleep(0.02)
+
+
+# -- live recordings from Python --------------------------------------------------------------
+def test_python_basin_streams_the_map_as_the_cli_does(tmp_path):
+    import coincli
+
+    store, rrd = tmp_path / "s.zarr", tmp_path / "s.rrd"
+    seen = []
+    ds = coincli.basin(coincli.load_preset("paper"), res=16, chunk=8, threads=1, store=store,
+                       rrd=rrd, progress=seen.append)
+    assert ds.quarter_turns.shape == (16, 16) and seen  # the caller's progress still called
+    tables = rows(rrd)
+    check_map(tables, read_basin(store), static=False)
+    cells = tables[("/progress/cells", False)].sort_by("sweep_time")
+    assert cells.column("Scalars:scalars").to_pylist()[-1][0] == 16 * 16
+
+
+def test_python_live_recordings_are_checked_before_any_work(tmp_path, monkeypatch):
+    import coincli
+
+    base = coincli.load_preset("paper")
+    with pytest.raises(coincli.ParameterError, match="reads its tiles from the store"):
+        coincli.basin(base, res=8, rrd=tmp_path / "s.rrd")
+    with pytest.raises(coincli.ParameterError, match=r"rrd must be a file name ending in \.rrd"):
+        coincli.basin(base, res=8, store=tmp_path / "s.zarr", rrd=tmp_path / "s.txt")
+    with pytest.raises(OSError):
+        coincli.fractions(base, samples=500, rrd=tmp_path / "missing" / "f.rrd")
+    with pytest.raises(coincli.ParameterError, match="connect must be the URL"):
+        coincli.fractions(base, samples=500, connect="http://localhost:1")
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    with pytest.raises(coincli.ParameterError, match="spawn: no display"):
+        coincli.basin(base, res=8, store=tmp_path / "s.zarr", spawn=True)
+    with pytest.raises(coincli.ParameterError, match="needs a destination"):
+        coincli.show_basin(tmp_path / "s.zarr")
+    assert not (tmp_path / "s.zarr").exists() and list(tmp_path.iterdir()) == []
+
+
+def test_python_fractions_stream_their_estimates(tmp_path):
+    import coincli
+
+    rrd = tmp_path / "f.rrd"
+    result = coincli.fractions(coincli.load_preset("paper"), samples=1000, batch=500,
+                               threads=1, rrd=rrd)
+    series = rows(rrd)[("/estimate/standing", False)].sort_by("samples")
+    assert series.column("samples").to_pylist() == [500, 1000]
+    last = series.column("Scalars:scalars").to_pylist()[-1][0]
+    assert last == pytest.approx(100 * result.standing["probability"])
+
+
+def test_a_python_recording_that_fails_warns_and_keeps_the_result(tmp_path, monkeypatch):
+    """The run's result is what was asked for: a recording lost on the way (here its process
+    killed at once) is a RuntimeWarning, not an exception that would lose the result."""
+    import coincli
+
+    monkeypatch.setattr(sweep_recording, "RECORDER", "import os, signal; os.kill(os.getpid(), "
+                                                     "signal.SIGKILL)")
+    store = tmp_path / "s.zarr"
+    with pytest.warns(RuntimeWarning, match="the live recording failed: the recording "
+                                            "process ended before it was done"):
+        ds = coincli.basin(coincli.load_preset("paper"), res=16, chunk=8, threads=1,
+                           store=store, rrd=tmp_path / "s.rrd")
+    assert ds.quarter_turns.shape == (16, 16) and read_basin(store).done.all()
+
+
+def test_python_show_basin_is_coin_basin_show(tmp_path):
+    import coincli
+
+    store = tmp_path / "s.zarr"
+    assert runner.invoke(app, ["basin", str(store), *SMALL]).exit_code == 0
+    rrd = tmp_path / "show.rrd"
+    coincli.show_basin(coincli.open_basin(store), rrd=rrd)
+    check_map(rows(rrd), read_basin(store), static=True)

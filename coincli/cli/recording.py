@@ -9,7 +9,7 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from .common import err_console, fail, warn
+from .common import err_console, fail, in_cli_words, warn
 from .text import command, say
 
 REC = "Recording (Rerun)"
@@ -31,34 +31,27 @@ def destination(rrd: Path | None, spawn: bool, connect: str | None):
     its work is done). Fails in one line, before any work, on an unusable path or URL."""
     if rrd is None and not spawn and connect is None:
         return None, False  # nothing asked: Rerun's code is not even imported
-    from ..io.live import Destination
-    from ..io.paths import check_rrd_path, probe_viewer
+    from ..io.live import check_destination
     from ..io.rrd import NO_DISPLAY, display_available
     from ..params import ParameterError
 
-    if rrd is not None:
-        try:
-            check_rrd_path(rrd)
-        except (ParameterError, OSError) as exc:
-            raise fail(str(exc)) from None
-        if rrd.suffix != ".rrd":
-            raise fail(f"--rrd {rrd}: the file name must end in .rrd")
-    if connect is not None:
-        try:
-            probe_viewer(connect)
-        except (ValueError, ConnectionError) as exc:
-            raise fail(str(exc)) from None
+    if rrd is not None and rrd.suffix != ".rrd":
+        raise fail(f"--rrd {rrd}: the file name must end in .rrd")
     no_viewer = spawn and not display_available()
+    try:
+        where = check_destination(rrd, spawn and not no_viewer, connect)
+    except ParameterError as exc:
+        raise fail(in_cli_words(exc)) from None
+    except OSError as exc:  # ConnectionError: no viewer at --connect
+        raise fail(str(exc)) from None
     if no_viewer:
-        spawn = False
-        where = (f"the recording is written to {rrd} (open it with {command('rerun', rrd)} "
-                 "where there is a display)" if rrd is not None else
-                 "record it with --rrd FILE (open it with `rerun FILE` where there is a "
-                 "display)")
-        warn(f"--spawn: {NO_DISPLAY}; the work is done and its result printed; {where}, or "
+        to = (f"the recording is written to {rrd} (open it with {command('rerun', rrd)} "
+              "where there is a display)" if rrd is not None else
+              "record it with --rrd FILE (open it with `rerun FILE` where there is a "
+              "display)")
+        warn(f"--spawn: {NO_DISPLAY}; the work is done and its result printed; {to}, or "
              "stream it with --connect URL")
-    where = Destination(rrd, spawn, connect)
-    return (where if where else None), no_viewer
+    return where, no_viewer
 
 
 def places(where) -> list[str]:

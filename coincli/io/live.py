@@ -285,6 +285,37 @@ class Destination:
         return self.rrd is not None or self.spawn or self.connect is not None
 
 
+def check_destination(rrd=None, spawn: bool = False, connect: str | None = None
+                      ) -> Destination | None:
+    """The destination of a live recording (None if none is asked for), checked before any
+    work: ParameterError (naming ``rrd``, ``spawn`` or ``connect``) for an ``rrd`` whose name
+    does not end in .rrd, ``spawn`` without a display, a ``connect`` that is no viewer's URL;
+    OSError for an ``rrd`` that cannot be written, ConnectionError when no viewer answers at
+    ``connect``."""
+    from ..params import ParameterError
+    from .paths import DEFAULT_CONNECT_URL, check_rrd_path, probe_viewer
+    from .rrd import NO_DISPLAY, display_available
+
+    if rrd is not None:
+        rrd = Path(rrd)
+        if rrd.suffix != ".rrd":
+            raise ParameterError(f"rrd must be a file name ending in .rrd, got '{rrd}'",
+                                 parameters=("rrd",))
+        check_rrd_path(rrd)
+    if connect is not None:
+        try:
+            probe_viewer(connect)
+        except ValueError:
+            raise ParameterError(f"connect must be the URL of a running Rerun viewer, e.g. "
+                                 f"{DEFAULT_CONNECT_URL}, got {connect!r}",
+                                 parameters=("connect",)) from None
+    if spawn and not display_available():
+        raise ParameterError(f"spawn: {NO_DISPLAY}; record to a file (rrd=PATH) or stream to "
+                             "a running viewer (connect=URL)", parameters=("spawn",))
+    where = Destination(rrd, bool(spawn), connect)
+    return where if where else None
+
+
 def show_basin(basin: Basin, where: Destination) -> None:
     """A static recording of a basin store, finished or partial (`coin basin show`)."""
     shape = tuple(basin.arrays["quarter_turns"].shape)
@@ -529,4 +560,5 @@ class FractionsRecorder:
         return False
 
 
-__all__ = ["BasinStream", "Destination", "FractionsRecorder", "record_tiles", "show_basin"]
+__all__ = ["BasinStream", "Destination", "FractionsRecorder", "check_destination", "record_tiles",
+           "show_basin"]

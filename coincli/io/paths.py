@@ -183,7 +183,7 @@ def probe_viewer(url: str, timeout: float = 2.0) -> None:
             pass
     except OSError as exc:
         raise ConnectionError(f"no Rerun viewer reachable at {url} ({exc.strerror or exc}); "
-                              "start one with `rerun` or use --spawn") from None
+                              "start one with `rerun`") from None
 
 
 __all__ = ["DEFAULT_CONNECT_URL", "DISK_ERRORS", "FIGURE_FORMATS", "NotWritable", "atomic_output",
