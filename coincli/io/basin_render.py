@@ -56,11 +56,23 @@ def _ramp_colours(n_max_even: int):
     return colours
 
 
-def _labelled_mask(basin: Basin) -> np.ndarray:
-    st = basin.arrays["status"]
+def cell_classes(arrays: dict, verified: bool) -> dict[str, np.ndarray]:
+    """The cells of each class a map draws, as boolean masks, in the order drawn (a later
+    class covers an earlier one): "labelled" (an n, in its colour), "uncertain" and
+    "undecided" (verified sweeps: rungs that disagree, a rung not settled), "unsettled",
+    "non-finite", "not computed". The one classification of `coin basin render` and of the
+    Rerun view (:mod:`coincli.io.live`)."""
+    st, q = arrays["status"], arrays["quarter_turns"]
     # a label needs a labelled status and a count: never draw the fill value as an n
-    return (((st == Status.SETTLED) | (st == Status.UNSETTLED))
-            & (basin.arrays["quarter_turns"] != NO_LABEL))
+    labelled = ((st == Status.SETTLED) | (st == Status.UNSETTLED)) & (q != NO_LABEL)
+    classes = {"labelled": labelled}
+    if verified:
+        classes["uncertain"] = labelled & (arrays["certainty"] == Certainty.UNCERTAIN)
+        classes["undecided"] = labelled & (arrays["certainty"] == Certainty.UNDECIDED)
+    classes["unsettled"] = st == Status.UNSETTLED
+    classes["non-finite"] = st == Status.NONFINITE
+    classes["not computed"] = st == Status.NOT_COMPUTED
+    return classes
 
 
 def n_range(basin: Basin, n_max: int | None = None) -> int:
@@ -76,8 +88,8 @@ def basin_rgba(basin: Basin, n_max: int | None = None) -> tuple[np.ndarray, dict
     """RGBA image (axis 0 = first swept axis) and the cells of each overlay class; even n
     beyond the colour bar take its end colours."""
     q = basin.arrays["quarter_turns"].astype(np.int64)
-    st = basin.arrays["status"]
-    labelled = _labelled_mask(basin)
+    cells = cell_classes(basin.arrays, basin.verified)
+    labelled = cells["labelled"]
     top = n_range(basin, n_max)
     colours = _ramp_colours(top)
     rgba = np.zeros(q.shape + (4,), dtype=float)  # transparent = not computed
@@ -89,20 +101,16 @@ def basin_rgba(basin: Basin, n_max: int | None = None) -> tuple[np.ndarray, dict
     rgba[standing] = STANDING
     classes = {"standing": standing}
     if basin.verified:
-        uncertain = labelled & (basin.arrays["certainty"] == Certainty.UNCERTAIN)
-        rgba[uncertain] = UNCERTAIN
-        classes["uncertain"] = uncertain
-        undecided = labelled & (basin.arrays["certainty"] == Certainty.UNDECIDED)
-        rgba[undecided] = UNDECIDED
-        classes["undecided"] = undecided & (st != Status.UNSETTLED)  # those: unsettled below
-        classes["standing"] = standing & ~uncertain & ~undecided
-    unsettled = st == Status.UNSETTLED
-    rgba[unsettled] = UNSETTLED
-    classes["unsettled"] = unsettled
-    nonfinite = st == Status.NONFINITE
-    rgba[nonfinite] = NONFINITE
-    classes["non-finite"] = nonfinite
-    classes["not computed"] = st == Status.NOT_COMPUTED
+        rgba[cells["uncertain"]] = UNCERTAIN
+        rgba[cells["undecided"]] = UNDECIDED
+        classes["uncertain"] = cells["uncertain"]
+        # undecided and unsettled: counted as unsettled, drawn so
+        classes["undecided"] = cells["undecided"] & ~cells["unsettled"]
+        classes["standing"] = standing & ~cells["uncertain"] & ~cells["undecided"]
+    for name, colour in (("unsettled", UNSETTLED), ("non-finite", NONFINITE)):
+        rgba[cells[name]] = colour
+        classes[name] = cells[name]
+    classes["not computed"] = cells["not computed"]
     return rgba, classes
 
 

@@ -26,10 +26,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..enums import Certainty, Status
 from ..grid import AXIS_INFO
-from ..integrators import NO_LABEL
-from .basin_render import NONFINITE, STANDING, UNCERTAIN, UNDECIDED, UNSETTLED, n_range
+from .basin_render import (
+    NONFINITE,
+    STANDING,
+    UNCERTAIN,
+    UNDECIDED,
+    UNSETTLED,
+    cell_classes,
+    n_range,
+)
 from .dataset import Basin
 from .rrd import open_stream
 
@@ -56,26 +62,25 @@ def _rgb(colour) -> tuple[int, int, int]:
     return tuple(int(round(255 * c)) for c in colour[:3])
 
 
-def n_class_ids(quarter_turns: np.ndarray, status: np.ndarray) -> np.ndarray:
-    """The n layer's class ids of cells: n + N_BIAS where there is a label, else NO_N."""
-    labelled = (((status == Status.SETTLED) | (status == Status.UNSETTLED))
-                & (quarter_turns != NO_LABEL))
-    ids = np.zeros(quarter_turns.shape, dtype=np.uint16)
-    ids[labelled] = (quarter_turns[labelled].astype(np.int32) + N_BIAS).astype(np.uint16)
-    return ids
+# The certainty layer's class id of each class of basin_render.cell_classes drawn over the n.
+OVERLAY_IDS = {"uncertain": UNCERTAIN_ID, "undecided": UNDECIDED_ID, "unsettled": UNSETTLED_ID,
+               "non-finite": NONFINITE_ID, "not computed": NOT_COMPUTED_ID}
 
 
-def certainty_class_ids(status: np.ndarray, certainty: np.ndarray | None) -> np.ndarray:
-    """The certainty layer's class ids of cells (``certainty`` None: a single-pass sweep)."""
-    ids = np.full(status.shape, CERTAIN, dtype=np.uint8)
-    labelled = (status == Status.SETTLED) | (status == Status.UNSETTLED)
-    if certainty is not None:
-        ids[labelled & (certainty == Certainty.UNCERTAIN)] = UNCERTAIN_ID
-        ids[labelled & (certainty == Certainty.UNDECIDED)] = UNDECIDED_ID
-    ids[status == Status.UNSETTLED] = UNSETTLED_ID
-    ids[status == Status.NONFINITE] = NONFINITE_ID
-    ids[status == Status.NOT_COMPUTED] = NOT_COMPUTED_ID
-    return ids
+def class_ids(arrays: dict, verified: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The class ids of cells (``arrays``: quarter_turns, status and, for a ``verified``
+    sweep, certainty): of the n layer, n + N_BIAS where there is a label, else NO_N; of the
+    certainty layer, CERTAIN or the class drawn over the n (as `coin basin render` draws it)."""
+    q = arrays["quarter_turns"]
+    cells = cell_classes(arrays, verified)
+    labelled = cells["labelled"]
+    n_ids = np.zeros(q.shape, dtype=np.uint16)
+    n_ids[labelled] = (q[labelled].astype(np.int32) + N_BIAS).astype(np.uint16)
+    certainty_ids = np.full(q.shape, CERTAIN, dtype=np.uint8)
+    for name, class_id in OVERLAY_IDS.items():
+        if name in cells:
+            certainty_ids[cells[name]] = class_id
+    return n_ids, certainty_ids
 
 
 # The even n's colours of `coin basin render` (basin_render._ramp_colours(n_range(None)) as
@@ -183,7 +188,7 @@ class BasinStream:
                  live: bool, min_interval: float = 0.5):
         import rerun as rr
 
-        self.rr, self.rec, self.live = rr, rec, live
+        self.rr, self.rec, self.live, self.verified = rr, rec, live, verified
         self.shape = tuple(shape)
         self.n_ids = np.zeros(self.shape[::-1], dtype=np.uint16)  # image: rows x columns
         self.certainty_ids = np.full(self.shape[::-1], NOT_COMPUTED_ID, dtype=np.uint8)
@@ -208,11 +213,10 @@ class BasinStream:
 
     def _put(self, s0: slice, s1: slice, arrays: dict) -> None:
         """Cells [s0, s1] of the map (s0 along the first axis, s1 along the second)."""
-        q, st = arrays["quarter_turns"], arrays["status"]
-        n_ids = n_class_ids(q, st)
+        n_ids, certainty_ids = class_ids(arrays, self.verified)
         rows = slice(self.shape[1] - s1.stop, self.shape[1] - s1.start)
         self.n_ids[rows, s0] = _image(n_ids)
-        self.certainty_ids[rows, s0] = _image(certainty_class_ids(st, arrays.get("certainty")))
+        self.certainty_ids[rows, s0] = _image(certainty_ids)
         # one class per n present: the context grows as new outcomes come in (sent with the
         # map, once for all the tiles since the last)
         self.known |= set(np.unique(n_ids).tolist()) - {NO_N}
