@@ -30,12 +30,12 @@ from ..params import (
     shown,
     state_array,
 )
+from .store import grid_of
 
 
 def sweep_axes(attrs: dict) -> tuple[Axis, Axis]:
     """The two swept axes of a basin's attributes."""
-    return tuple(Axis(a["name"], float(a["lo"]), float(a["hi"]), int(a["n"]))
-                 for a in attrs["sweep"]["axes"])
+    return grid_of(attrs).axes
 
 
 def _value(name: str, value) -> float:
@@ -93,19 +93,10 @@ def locate(attrs: dict, cell=None, **values) -> tuple[int, int]:
     return out[0], out[1]
 
 
-def _grid(attrs: dict) -> Grid:
-    """The sweep's grid, with its fixed initial values and its mirror."""
-    sweep = attrs["sweep"]
-    fixed = sweep["fixed"]
-    base = tuple(float(fixed[name]) if name in fixed else 0.0 for name in IC_NAMES)
-    return Grid(sweep_axes(attrs), base, tuple(int(c) for c in sweep["chunk"]),
-                use_mirror=bool(sweep.get("mirror")))
-
-
 def mirror_source(attrs: dict, cell: tuple[int, int]) -> tuple[int, int] | None:
     """The cell whose throw the sweep computed and mirrored into ``cell`` (n -> -n), if it
     did (:attr:`coincli.grid.Grid.mirror_flips`); None for a cell computed itself."""
-    grid = _grid(attrs)
+    grid = grid_of(attrs)
     flips = grid.mirror_flips
     tile = tuple(int(c) // k for c, k in zip(cell, grid.chunk, strict=True))
     if flips is None or tile <= grid.mirror_tile(tile):  # a work tile: computed
@@ -120,7 +111,7 @@ def cell_state(attrs: dict, cell: tuple[int, int]) -> np.ndarray:
     tiles) at the cell, or, for a cell the sweep filled as the mirror image of another, that
     cell's state mirrored (its swept odd values negated: linspace's centres are antisymmetric
     only to a few ulps, and the label is the mirror throw's)."""
-    grid = _grid(attrs)
+    grid = grid_of(attrs)
     one = Grid(grid.axes, grid.base_state, (1, 1))
     source = mirror_source(attrs, cell)
     if source is None:

@@ -85,6 +85,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..defaults import IC_NAMES
 from ..grid import Axis, Grid, SweepSpec, TileResult
 from ..params import ParameterError
 from .dataset import Basin
@@ -254,11 +255,15 @@ def tile_digest(tile: tuple[int, int], arrays: dict[str, np.ndarray], parameters
 
 # -- creating ------------------------------------------------------------------------------------
 def grid_of(attrs: dict) -> Grid:
-    """The grid a store's attributes describe (the fixed values do not matter for reading)."""
+    """The grid a basin's attributes describe: its swept axes, its fixed initial values, its
+    tiles and its mirror."""
     sweep = attrs["sweep"]
     axes = tuple(Axis(a["name"], float(a["lo"]), float(a["hi"]), int(a["n"]))
                  for a in sweep["axes"])
-    return Grid(axes=axes, base_state=(0.0,) * 6, chunk=tuple(int(c) for c in sweep["chunk"]))
+    fixed = sweep.get("fixed") or {}
+    base = tuple(float(fixed[name]) if name in fixed else 0.0 for name in IC_NAMES)
+    return Grid(axes=axes, base_state=base, chunk=tuple(int(c) for c in sweep["chunk"]),
+                use_mirror=bool(sweep.get("mirror")))
 
 
 def _fill_json(fill):
