@@ -306,6 +306,7 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
         run_tile_task,
         usable_cores,
     )
+    from .io.schema import parameters_digest
 
     check_where(threads, workers, scheduler)
     _check_progress(progress)
@@ -352,13 +353,19 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
     claims = Claims(store_io.claims_dir(path))
     queue = TileQueue(todo, claims, is_done=is_done)
     cluster_workers: list[int] = []  # the Dask cluster's workers, each time it was looked at
+    # every tile binds the parameters it is computed with, whatever the store's metadata say
+    # when it is written (another process may have overwritten the store meanwhile: its tiles
+    # then do not verify there, and are computed again)
+    parameters = parameters_digest(plan.attrs)
     if dask:
         # workers open the store by this path: make it absolute (same path on every machine)
         runner = run_dask(str(path.resolve()), spec, queue, scheduler=scheduler,
-                          workers=workers, stop=stop, on_workers=cluster_workers.append)
+                          workers=workers, stop=stop, on_workers=cluster_workers.append,
+                          parameters=parameters)
     else:
         _load_kernels(spec)
-        runner = run_threads(partial(run_tile_task, str(path), spec), queue, n_workers, stop)
+        runner = run_threads(partial(run_tile_task, str(path), spec, parameters=parameters),
+                             queue, n_workers, stop)
     wall0 = time.perf_counter()
     interrupted = False
     lost = None

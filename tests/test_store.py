@@ -696,3 +696,35 @@ def test_a_store_is_not_resumed_with_the_other_mirror_setting(tmp_path, clean, m
         path = copy_store(source, tmp_path / f"{source.stem}.zarr")
         assert "mirror" in one_line_error(coin(path, *args))
         assert files_of(path) == files_of(source)
+
+
+def test_a_tile_binds_the_parameters_it_was_computed_with(tmp_path, monkeypatch):
+    """Another process overwrites the store with other parameters while this sweep computes
+    (here: just before its first tile is written). This sweep's tiles bind the parameters
+    they were computed with, not those the store says when they are written: under the new
+    parameters they do not verify, and are computed again, never taken for theirs."""
+    path = tmp_path / "s.zarr"
+    base = coincli.load_preset("paper")
+    mine = api.plan_sweep(base, res=16, chunk=8)
+    theirs = api.plan_sweep(base.with_overrides(k=400.0), res=16, chunk=8)
+    write = store.write_tile
+    overwritten = []
+
+    def overwrite_first(*args, **kwargs):
+        if not overwritten:
+            store.prepare(path, theirs.attrs, theirs.spec, overwrite=True)
+            overwritten.append(True)
+        return write(*args, **kwargs)
+
+    monkeypatch.setattr(store, "write_tile", overwrite_first)
+    api.sweep(mine, path, threads=1)
+    assert overwritten
+    assert store.check(path).attrs["parameters"]["foundation"]["k"] == 400.0  # the store is theirs now
+    assert not store.check(path).done.any()  # and holds none of this sweep's tiles as theirs
+    monkeypatch.setattr(store, "write_tile", write)
+    api.sweep(theirs, path, threads=1)  # the resume computes every tile again
+    assert store.check(path).done.all()
+    reference = tmp_path / "r.zarr"
+    api.sweep(theirs, reference, threads=1)
+    assert np.array_equal(store.read_basin(path).arrays["quarter_turns"],
+                          store.read_basin(reference).arrays["quarter_turns"])

@@ -72,10 +72,12 @@ class TileDone(NamedTuple):
 
 
 def run_tile_task(path: str, spec: SweepSpec, tile: tuple[int, int],
-                  control: np.ndarray | None = None) -> TileDone:
+                  control: np.ndarray | None = None, *,
+                  parameters: bytes | None = None) -> TileDone:
     """Compute one tile and write it to the store at ``path``, and its mirror tile if the
-    sweep has one (:meth:`coincli.grid.Grid.task_tiles`). ``control[0]`` set (from another
-    thread) stops the computation; a tile so stopped is not written at all."""
+    sweep has one (:meth:`coincli.grid.Grid.task_tiles`), binding the digest ``parameters``
+    of the parameters it was computed with (by default, the store's). ``control[0]`` set
+    (from another thread) stops the computation; a tile so stopped is not written at all."""
     from .store import write_tile
 
     control = new_control() if control is None else control
@@ -85,7 +87,7 @@ def run_tile_task(path: str, spec: SweepSpec, tile: tuple[int, int],
     start = time.perf_counter()
     results = with_mirror(result, spec.grid)
     for each in results:
-        write_tile(path, spec, each)
+        write_tile(path, spec, each, parameters)
     return TileDone(tuple(tile), sum(r.cells for r in results), result.cpu_seconds, True,
                     result.wall_seconds, time.perf_counter() - start, len(results))
 
@@ -199,10 +201,12 @@ def hard_stop(runner: Iterator) -> None:
 
 def run_dask(path: str, spec: SweepSpec, queue: TileQueue, scheduler: str | None = None,
              workers: int | None = None, stop=None,
-             on_workers: Callable[[int], None] | None = None) -> Iterator[TileDone]:
+             on_workers: Callable[[int], None] | None = None,
+             parameters: bytes | None = None) -> Iterator[TileDone]:
     """Yield each tile's :class:`TileDone` as its Dask task finishes: on the cluster at
     ``scheduler`` (tcp://host:port), or on a LocalCluster of ``workers`` processes with one
-    thread each. This process (the client) claims each tile before submitting it.
+    thread each. This process (the client) claims each tile before submitting it; each task
+    binds the parameters digest ``parameters`` (:func:`run_tile_task`).
 
     Tasks are submitted in a window of twice the cluster's threads (re-read as workers come and
     go), so that stopping is clean: ``stop`` set cancels the tasks no worker has taken and waits
@@ -240,8 +244,8 @@ def run_dask(path: str, spec: SweepSpec, queue: TileQueue, scheduler: str | None
                         if tile is None:
                             break
                         future = client.submit(
-                            run_tile_task, path, spec, tuple(tile), pure=False,
-                            key=f"coin-basin-tile-{tile[0]}-{tile[1]}-{run_id}")
+                            run_tile_task, path, spec, tuple(tile), parameters=parameters,
+                            pure=False, key=f"coin-basin-tile-{tile[0]}-{tile[1]}-{run_id}")
                         running[future] = tuple(tile)
                 if not running:
                     if stopping or queue.finished:
