@@ -242,6 +242,11 @@ def test_fewer_samples_from_a_store_of_more_is_complete_and_keeps_them(tmp_path)
     assert fewer.standing == coincli.fractions(PAPER, samples=1000, batch=512,
                                                phi0="-pi:pi").standing
     assert int((fstore.read_filled(store) > 0).sum()) == 4
+    # the estimate before such a run needs no pilot: the store holds the whole run
+    plan = coincli.plan_fractions(PAPER, samples=1000, batch=512, phi0="-pi:pi")
+    held = coincli.estimate_fractions(plan, store=store)
+    assert (held.pilot_samples, held.samples, held.seconds) == (0, 0, 0.0)
+    assert coincli.estimate_fractions(plan).pilot_samples > 0  # without the store, a pilot
 
 
 def test_a_looser_precision_keeps_what_a_tighter_one_computed(tmp_path):

@@ -6,6 +6,7 @@ samples left take."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +25,8 @@ PILOT_VALUES = 3  # values piloted in a continuation: the first, the middle and 
 @dataclass(frozen=True)
 class FractionsEstimate:
     """What a run will likely cost, from a pilot (``samples`` and ``seconds`` exclude what a
-    store holds already)."""
+    store holds already; a store that holds the whole run needs no pilot: ``pilot_samples``
+    0)."""
 
     samples: int  # samples still to compute, over every value
     needed: int | None  # the most samples any value's stop rule likely needs (precision goals)
@@ -47,6 +49,8 @@ def estimate_fractions(plan: FractionsPlan, workers: int | None,
     goal, sampling = plan.goal, plan.sampling
     budget = goal.samples or goal.batches(sampling.batch) * sampling.batch
     n_values = len(plan.scenes)
+    if held and all(h >= budget for h in held):  # the store holds the whole run: no pilot
+        return FractionsEstimate(0, None, budget, math.nan, 0.0, workers, 0, sum(held))
     piloted = sorted({0, n_values // 2, n_values - 1})[:PILOT_VALUES]
     count = min(PILOT_SAMPLES, sampling.batch, budget)
     points = Draws(sampling).batch(0)[:count]
