@@ -426,11 +426,14 @@ def _map_measures(lab, valid, opts: AnalysisOptions, seed: int):
 def analyze_basin(quarter_turns, status, certainty, attrs: dict, *,
                   options: AnalysisOptions | None = None,
                   progress: Callable[[str, int, int], None] | None = None,
+                  on_band: Callable[[int, tuple[int, int], UncertainFraction], None]
+                  | None = None,
                   stop=None) -> BasinAnalysis:
     """Measure the boundaries of a basin map (arrays indexed [first axis, second axis] and the
     store's attributes): see the module docstring. ``progress(stage, done, total)`` is called
-    as the work advances; ``stop`` (an Event) set, or Ctrl-C, interrupts it
-    (KeyboardInterrupt)."""
+    as the work advances, ``on_band(index, rows, f)`` as each band's uncertain fraction f(eps)
+    is measured (``rows``: the band's first row and the one past its last, along the first
+    axis); ``stop`` (an Event) set, or Ctrl-C, interrupts it (KeyboardInterrupt)."""
     opts = options or AnalysisOptions()
     t_start, cpu_start = time.perf_counter(), time.process_time()
     lab = np.asarray(quarter_turns).astype(np.int64)
@@ -499,6 +502,8 @@ def analyze_basin(quarter_turns, status, certainty, attrs: dict, *,
                 pert_bands[i] = uncertain_fraction(
                     classify, mine, eps, rng=np.random.default_rng([opts.seed, i]),
                     scale=ranges, direction=opts.direction, confidence=opts.confidence)
+                if on_band is not None:
+                    on_band(i, rows[i], pert_bands[i])
             trajectories = classify.runs
         measured = [p for p in pert_bands if p is not None]
         pert_whole = pool_uncertain_fractions(measured) if measured else None

@@ -462,10 +462,11 @@ def _live(rrd, spawn: bool, connect):
 
 
 def _both(first, second):
-    """A progress callback calling ``first`` then ``second`` (either may be None)."""
+    """A callback calling ``first`` then ``second`` with the same arguments (either may be
+    None)."""
     if first is None or second is None:
         return first or second
-    return lambda update: (first(update), second(update))
+    return lambda *args: (first(*args), second(*args))
 
 
 def _warn_if_failed(recorder) -> None:
@@ -791,7 +792,9 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
             eps: tuple[float, ...] | None = None, seed: int = 0, threads: int | None = None,
             radius: float = 5.0, balls: int = 1000, max_dilation: int = 6,
             direction: str = "random", confidence: float = 0.95,
-            progress: Callable[[str, int, int], None] | None = None, stop=None):
+            progress: Callable[[str, int, int], None] | None = None, stop=None,
+            on_band: Callable | None = None, rrd: str | os.PathLike | None = None,
+            spawn: bool = False, connect: str | None = None):
     """How fractal the boundaries of a basin (Dataset or store path) are, on the whole map and
     per band of its first swept axis: a :class:`coincli.analysis.BasinAnalysis`
     (``.whole``, ``.bands``; ``.to_dict()`` is what ``coin basin analyze --json`` prints).
@@ -804,7 +807,13 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
     0 skips it) perturbed by each of ``eps`` (relative to each axis's range; default 6 values,
     1e-9 to 1e-4), classified with verified labels on ``threads`` threads (default: one per
     core); D = 2 - alpha. ``seed`` makes it reproducible. ``progress(stage, done, total)``;
-    ``stop`` (an Event) or Ctrl-C interrupts it (KeyboardInterrupt)."""
+    ``on_band(index, rows, f)`` as each band's f(eps) (a
+    :class:`coincli.boundary.UncertainFraction`) is measured, ``rows`` its first row and the
+    one past its last along the first axis;
+    ``stop`` (an Event) or Ctrl-C interrupts it (KeyboardInterrupt). ``rrd``, ``spawn`` and
+    ``connect`` record it for Rerun as it goes (as `coin basin analyze --rrd FILE`): the map
+    with its bands, each band's f(eps) as it is measured, the fits and the measures; a
+    recording that fails is a RuntimeWarning, the analysis is returned all the same."""
     from .analysis import DEFAULT_POINTS, AnalysisOptions, analyze_basin
     from .io.runner import usable_cores
 
@@ -818,8 +827,21 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
                            confidence=float(confidence),
                            **({} if eps is None else {"eps": tuple(float(e) for e in eps)}))
     a = view.arrays
-    return analyze_basin(a["quarter_turns"], a["status"], a["certainty"], view.attrs,
-                         options=opts, progress=progress, stop=stop)
+    where = _live(rrd, spawn, connect)
+    if on_band is not None and not callable(on_band):
+        raise TypeError(f"on_band must be a function (or None), got {type(on_band).__name__}")
+    if where is None:
+        return analyze_basin(a["quarter_turns"], a["status"], a["certainty"], view.attrs,
+                             options=opts, progress=progress, on_band=on_band, stop=stop)
+    from .io.live import AnalysisRecorder
+
+    with AnalysisRecorder(view, where, bands=opts.bands, eps=opts.eps) as recorder:
+        result = analyze_basin(a["quarter_turns"], a["status"], a["certainty"], view.attrs,
+                               options=opts, progress=progress,
+                               on_band=_both(on_band, recorder.band), stop=stop)
+        recorder.result(result)
+    _warn_if_failed(recorder)
+    return result
 
 
 def render_analysis(analysis, out: str | os.PathLike | None = None, *, ax=None,

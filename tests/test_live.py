@@ -451,3 +451,52 @@ def test_python_show_basin_is_coin_basin_show(tmp_path):
     rrd = tmp_path / "show.rrd"
     coincli.show_basin(coincli.open_basin(store), rrd=rrd)
     check_map(rows(rrd), read_basin(store), static=True)
+
+
+# -- coin basin analyze ---------------------------------------------------------------------------
+def test_analyze_rrd_has_each_band_f_of_eps_the_fits_and_the_map(tmp_path):
+    import math
+
+    store, rrd = tmp_path / "s.zarr", tmp_path / "a.rrd"
+    assert runner.invoke(app, ["basin", str(store), "--res", "64", "--chunk", "32", "-q",
+                               "--threads", "1"]).exit_code == 0
+    result = runner.invoke(app, ["basin", "analyze", str(store), "--points", "400", "--bands",
+                                 "2", "--eps-values", "3", "--threads", "1", "-q", "--json",
+                                 "--rrd", str(rrd)])
+    assert result.exit_code == 0, result.output
+    out = json.loads(result.stdout)
+    tables = rows(rrd)
+    check_map(tables, read_basin(store), static=True)  # the map analysed
+    timeline = "log10 eps [1e-1]"  # eps 1e-9, 10**-6.5, 1e-4
+    for key, region in [("whole", out), *((f"band_{i + 1}", b)
+                                          for i, b in enumerate(out["bands"]))]:
+        fraction = region["perturbation"]["fraction"]
+        expected = [(s, math.log10(f)) for s, f in zip([-90, -65, -40], fraction, strict=True)
+                    if f > 0]  # log10: no point where no throw is uncertain
+        if not expected:
+            assert (f"/analysis/f/{key}", False) not in tables
+            continue
+        got = tables[(f"/analysis/f/{key}", False)].sort_by(timeline)
+        assert got.column(timeline).to_pylist() == [s for s, _ in expected]
+        assert [r[0] for r in got.column("Scalars:scalars").to_pylist()] == pytest.approx(
+            [v for _, v in expected])
+        if region["uncertainty_exponent"] is not None:  # the fitted line's ends
+            fit = tables[(f"/analysis/fit/{key}", False)].sort_by(timeline)
+            ends = [r[0] for r in fit.column("Scalars:scalars").to_pylist()]
+            assert (ends[1] - ends[0]) / 5.0 == pytest.approx(region["uncertainty_exponent"])
+    edge, = tables[("/basin/bands", True)].column("LineStrips2D:strips").to_pylist()[-1]
+    assert edge == [[out["bands"][1]["rows"][0], 0.0], [out["bands"][1]["rows"][0], 64.0]]
+    text = tables[("/analysis/info", True)].column("TextDocument:text").to_pylist()[-1][0]
+    assert f"{out['uncertainty_exponent']:.2f}" in text and "| whole map |" in text
+
+
+def test_python_analyze_records_and_calls_on_band(tmp_path):
+    import coincli
+
+    store, rrd = tmp_path / "s.zarr", tmp_path / "a.rrd"
+    coincli.basin(coincli.load_preset("paper"), res=32, chunk=32, threads=1, store=store)
+    seen = []
+    analysis = coincli.analyze(store, points=200, bands=2, threads=1, rrd=rrd,
+                               on_band=lambda i, band_rows, f: seen.append((i, band_rows)))
+    assert seen == [(i, b.rows) for i, b in enumerate(analysis.bands)]
+    assert ("/analysis/info", True) in rows(rrd)

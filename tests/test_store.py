@@ -719,7 +719,8 @@ def test_a_tile_binds_the_parameters_it_was_computed_with(tmp_path, monkeypatch)
     monkeypatch.setattr(store, "write_tile", overwrite_first)
     api.sweep(mine, path, threads=1)
     assert overwritten
-    assert store.check(path).attrs["parameters"]["foundation"]["k"] == 400.0  # the store is theirs now
+    # the store is theirs now
+    assert store.check(path).attrs["parameters"]["foundation"]["k"] == 400.0
     assert not store.check(path).done.any()  # and holds none of this sweep's tiles as theirs
     monkeypatch.setattr(store, "write_tile", write)
     api.sweep(theirs, path, threads=1)  # the resume computes every tile again

@@ -762,6 +762,7 @@ def analyze_command(
     json_out: JsonOpt = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", metavar="",
                                         help="No progress bar.")] = False,
+    rrd: LiveRrdOpt = None, spawn: LiveSpawnOpt = False, connect: LiveConnectOpt = None,
 ) -> None:
     """How fractal the basin boundaries are: whole map and by band of the first axis.
 
@@ -788,6 +789,7 @@ def analyze_command(
             check_rrd_path(figure)  # a writable file path
         basin = read_basin(path)
         api.check_where(threads, None, None)
+    where_to, no_viewer = recording.destination(rrd, spawn, connect)
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
     from .progress import Bars
@@ -807,11 +809,19 @@ def analyze_command(
     n_points = DEFAULT_POINTS if points is None else points
     if n_points:
         compile_first(quiet)
+    recorder = None
+    if where_to is not None:
+        from ..io.live import AnalysisRecorder  # Rerun's code only when asked for
+
+        recorder = AnalysisRecorder(basin, where_to, bands=bands, eps=eps_list)
     try:  # Ctrl-C: the simulator's threads stop within a chunk of points, nothing is written
-        with user_errors(), progress:
+        with user_errors(), progress, recorder or contextlib.nullcontext():
             result = api.analyze(basin, box=box, bands=bands, points=n_points, eps=eps_list,
                                  seed=seed, threads=threads, radius=radius, balls=balls,
-                                 max_dilation=max_dilation, progress=show)
+                                 max_dilation=max_dilation, progress=show,
+                                 on_band=None if recorder is None else recorder.band)
+            if recorder is not None:
+                recorder.result(result)
     except KeyboardInterrupt:
         err_console.print("[yellow]interrupted:[/] no result")
         raise typer.Exit(code=130) from None
@@ -822,10 +832,13 @@ def analyze_command(
     if json_out:
         print_json({"path": str(path), "version": __version__, **data,
                     **({"figure": str(figure)} if figure is not None else {})})
-        return
-    _print_analysis(path, result, data)
-    if figure is not None:
-        console.print(f"wrote {figure}")
+    else:
+        _print_analysis(path, result, data)
+        if figure is not None:
+            console.print(f"wrote {figure}")
+        if recorder is not None and recorder.error is None:
+            say(console, recording.recorded(where_to))
+    recording.finish(recorder, no_viewer)
 
 
 def _print_analysis(path: Path, result, data: dict) -> None:

@@ -16,7 +16,7 @@ from .paths import check_figure_path, save_figure
 WHOLE_COLOUR = "black"
 
 
-def _band_colours(n: int) -> list:
+def band_colours(n: int) -> list:
     import matplotlib
 
     cmap = matplotlib.colormaps["viridis"]
@@ -49,7 +49,7 @@ def _alpha_text(exp) -> str:
 def _plot_fractions(ax, analysis) -> None:
     axis0 = analysis.axes[0]
     regions = [(analysis.whole, WHOLE_COLOUR, "o")]
-    regions += list(zip(analysis.bands, _band_colours(len(analysis.bands)), ["s"] * 99,
+    regions += list(zip(analysis.bands, band_colours(len(analysis.bands)), ["s"] * 99,
                         strict=False))
     shown_bound = False
     for k, (region, colour, marker) in enumerate(regions):
@@ -210,4 +210,4 @@ def plot_analysis(analysis, path: Path | None = None, title: str | None = None,
     return fig
 
 
-__all__ = ["PANELS", "plot_analysis"]
+__all__ = ["PANELS", "band_colours", "plot_analysis"]

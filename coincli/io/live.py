@@ -185,7 +185,7 @@ class BasinStream:
     puts everything on the ``sweep_time`` timeline, else all is static."""
 
     def __init__(self, rec, attrs: dict, shape: tuple[int, int], *, path, verified: bool,
-                 live: bool, min_interval: float = 0.5):
+                 live: bool, min_interval: float = 0.5, blueprint: bool = True):
         import rerun as rr
 
         self.rr, self.rec, self.live, self.verified = rr, rec, live, verified
@@ -199,7 +199,9 @@ class BasinStream:
         self.last_sent = -math.inf
         self.pending = False
         self.start = time.perf_counter()
-        rec.send_blueprint(basin_blueprint(attrs, live), make_active=True, make_default=True)
+        if blueprint:  # else the caller's layout shows the map
+            rec.send_blueprint(basin_blueprint(attrs, live), make_active=True,
+                               make_default=True)
         rec.log(BASIN_CERTAINTY, rr.AnnotationContext(certainty_classes(rr, verified)),
                 static=True)
         rec.log(BASIN_N, rr.AnnotationContext(n_classes(rr, ())), static=True)
@@ -409,7 +411,9 @@ def parameter_timeline(parameter: str, unit: str, values) -> tuple[str, int]:
         scaled = np.asarray(values, dtype=np.float64) * 10.0 ** k
         if np.all(np.abs(scaled - np.round(scaled)) < 1e-6 * np.maximum(1.0, np.abs(scaled))):
             break
-    return (f"{parameter} [{unit}]" if k == 0 else f"{parameter} [1e-{k} {unit}]"), k
+    if k == 0:
+        return (f"{parameter} [{unit}]" if unit else parameter), 0
+    return f"{parameter} [1e-{k}{' ' + unit if unit else ''}]", k
 
 
 def fractions_blueprint(over: str | None):
@@ -564,5 +568,191 @@ class FractionsRecorder:
         return False
 
 
-__all__ = ["BasinStream", "Destination", "FractionsRecorder", "check_destination", "record_tiles",
-           "show_basin"]
+# -- coin basin analyze ---------------------------------------------------------------------------
+ANALYSIS_F = "analysis/f"  # log10 f(eps) of each region, against log10 eps
+ANALYSIS_FIT = "analysis/fit"  # the fitted line of each region
+ANALYSIS_INFO = "analysis/info"
+BANDS = "basin/bands"  # the band edges over the map
+WHOLE_COLOUR = (235, 235, 235)  # the whole map: light, on the viewer's dark plots
+
+
+def _region_key(index: int | None) -> str:
+    return "whole" if index is None else f"band_{index + 1}"
+
+
+def analysis_blueprint(attrs: dict, timeline: str):
+    import rerun.blueprint as rrb
+
+    horizontal, vertical = _axes_text(attrs)
+    n0, n1 = (ax["n"] for ax in attrs["sweep"]["axes"][:2])
+    the_map = rrb.Spatial2DView(name=f"n: {horizontal}, {vertical} (lines: the bands)",
+                                origin=BASIN, background=BACKGROUND,
+                                visual_bounds=rrb.VisualBounds2D(x_range=[0, n0],
+                                                                 y_range=[0, n1]))
+    whole = rrb.TimeAxis(view_range=rrb.TimeRange(start=rrb.TimeRangeBoundary.infinite(),
+                                                  end=rrb.TimeRangeBoundary.infinite()))
+    f_plot = rrb.TimeSeriesView(name="log10 f(eps): uncertain fraction (points; lines: fits)",
+                                origin="analysis", contents=[f"{ANALYSIS_F}/**",
+                                                             f"{ANALYSIS_FIT}/**"],
+                                axis_x=whole)
+    return rrb.Blueprint(
+        rrb.Horizontal(the_map, rrb.Vertical(f_plot, rrb.TextDocumentView(
+            name="measures", origin=ANALYSIS_INFO), row_shares=[3, 2]),
+            column_shares=[1, 1]),
+        rrb.BlueprintPanel(state="collapsed"), rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed", timeline=timeline))
+
+
+class AnalysisRecorder:
+    """The live recording of `coin basin analyze`: the map analysed with its bands, each
+    region's uncertain fraction f(eps) as it is measured (:meth:`band`, then the whole map's
+    with the fits from :meth:`result`) against log10 eps, and the measures as text. A
+    recording that cannot be made leaves ``error`` set and the analysis alone."""
+
+    def __init__(self, basin: Basin, where: Destination, *, bands: int, eps):
+        from .analysis_charts import band_colours
+
+        self.basin, self.where = basin, where
+        self.eps = np.asarray(eps, dtype=np.float64)
+        self.timeline, self.power = parameter_timeline(
+            "log10 eps", "", np.round(np.log10(self.eps), 2))
+        self.colours = [_rgb(c) for c in band_colours(bands)]
+        self.error: Exception | None = None
+        self.rec = self._context = None
+        self.edges: list = []  # the band edges drawn
+        self.lines = ["# coin basin analyze", "", "Measuring: the map first, then f(eps) band "
+                      "by band with the simulator."]
+
+    def __enter__(self):
+        import rerun as rr
+
+        basin = self.basin
+        try:
+            self._context = open_stream(f"coin basin analyze {basin.path or ''}".strip(),
+                                        rrd=self.where.rrd, spawn=self.where.spawn,
+                                        connect=self.where.connect)
+            self.rec = self._context.__enter__()
+        except (OSError, RuntimeError, ValueError) as exc:
+            self.error, self.rec, self._context = exc, None, None
+            return self
+        rec = self.rec
+        rec.send_blueprint(analysis_blueprint(basin.attrs, self.timeline), make_active=True,
+                           make_default=True)
+        shape = tuple(basin.arrays["quarter_turns"].shape)
+        BasinStream(rec, basin.attrs, shape, path=basin.path, verified=basin.verified,
+                    live=False, blueprint=False).whole(basin)
+        regions = [(None, WHOLE_COLOUR, "whole map")] + [
+            (i, colour, f"band {i + 1}") for i, colour in enumerate(self.colours)]
+        for index, colour, name in regions:
+            key = _region_key(index)
+            rec.log(f"{ANALYSIS_F}/{key}", rr.SeriesPoints(colors=[colour], names=[name],
+                                                          marker_sizes=[4.0]), static=True)
+            rec.log(f"{ANALYSIS_FIT}/{key}", rr.SeriesLines(colors=[colour],
+                                                           names=[f"{name}: fit"],
+                                                           widths=[1.5]), static=True)
+        self._info()
+        return self
+
+    def _edge(self, row: int) -> None:
+        """A band's first row, a vertical line over the map (the first axis is horizontal)."""
+        import rerun as rr
+
+        if row > 0:
+            height = float(self.basin.arrays["quarter_turns"].shape[1])
+            self.edges.append([(float(row), 0.0), (float(row), height)])
+            self.rec.log(BANDS, rr.LineStrips2D(self.edges, colors=[(255, 255, 255)],
+                                                radii=[0.6], draw_order=3.0), static=True)
+
+    def _info(self) -> None:
+        import rerun as rr
+
+        self.rec.log(ANALYSIS_INFO, rr.TextDocument("\n".join(self.lines),
+                                                    media_type=rr.MediaType.MARKDOWN),
+                     static=True)
+
+    def _fraction(self, key: str, fraction) -> None:
+        import rerun as rr
+
+        for eps, f in zip(self.eps, fraction.fraction, strict=True):
+            if not (f > 0 and math.isfinite(f)):  # log10: no point where none is uncertain
+                continue
+            self.rec.set_time(self.timeline, sequence=int(round(
+                round(math.log10(eps), 2) * 10.0 ** self.power)))
+            self.rec.log(f"{ANALYSIS_F}/{key}", rr.Scalars(math.log10(f)))
+
+    def band(self, index: int, rows: tuple[int, int], fraction) -> None:
+        """Band ``index`` (``rows`` of the first axis) and its f(eps), just measured."""
+        if self.rec is None:
+            return
+        self._edge(rows[0])
+        self._fraction(_region_key(index), fraction)
+        self.lines.append(f"- band {index + 1}: f(eps) measured")
+        self._info()
+
+    def result(self, analysis) -> None:
+        """The analysis done: the whole map's f(eps), every fit, and the measures."""
+        if self.rec is None:
+            return
+        import rerun as rr
+
+        regions = [(None, analysis.whole)] + list(enumerate(analysis.bands))
+        for index, region in regions:
+            key = _region_key(index)
+            if index is None and region.perturbation is not None:
+                self._fraction(key, region.perturbation)
+            fit = region.exponent
+            if fit is None or not math.isfinite(fit.alpha):
+                continue
+            for eps in (self.eps[0], self.eps[-1]):  # the line log f = alpha log eps + b
+                self.rec.set_time(self.timeline, sequence=int(round(
+                    round(math.log10(eps), 2) * 10.0 ** self.power)))
+                self.rec.log(f"{ANALYSIS_FIT}/{key}",
+                             rr.Scalars(fit.alpha * math.log10(eps) + fit.intercept / LN10))
+        self.lines = analysis_markdown(analysis)
+        self._info()
+
+    def __exit__(self, *exc):
+        if self._context is not None:
+            try:
+                self._context.__exit__(None, None, None)
+            except (OSError, RuntimeError) as error:
+                self.error = error
+        return False
+
+
+LN10 = math.log(10.0)
+
+
+def _number(value, spec: str = ".3f") -> str:
+    return "-" if value is None or not math.isfinite(value) else format(value, spec)
+
+
+def analysis_markdown(analysis) -> list[str]:
+    """The measures of an analysis as Markdown lines: a row a region."""
+    axis = analysis.axes[0]
+    conf = int(round(100 * analysis.options.confidence))
+    lines = ["# coin basin analyze", "",
+             f"Boxes of {analysis.options.box} x {analysis.options.box} cells; "
+             f"{analysis.trajectories:,} throws for f(eps) "
+             f"({'certain' if analysis.verified else 'settled'} labels only).", "",
+             f"| {axis['name']} ({axis['units']}) | S_b | S_bb | ball test | Wada | alpha "
+             f"({conf} %) | D |", "|---|---:|---:|---|---|---:|---:|"]
+    for region in (analysis.whole, *analysis.bands):
+        e, ft, x = region.entropy, region.fractal_test, region.exponent
+        name = ("whole map" if region is analysis.whole
+                else f"{region.span[0]:.3g} to {region.span[1]:.3g}")
+        alpha = "-" if x is None or not math.isfinite(x.alpha) else (
+            f"{x.alpha:.2f} ({_number(x.alpha_low, '.2f')} to {_number(x.alpha_high, '.2f')})")
+        lines.append(f"| {name} | {_number(e.basin_entropy)} | "
+                     f"{_number(e.boundary_basin_entropy)} | "
+                     f"{'-' if ft is None else ft.verdict} | "
+                     f"{'yes' if region.wada.is_wada else 'no'} | {alpha} | "
+                     f"{'-' if x is None else _number(x.boundary_dimension, '.2f')} |")
+    lines += ["", "f(eps): the share of throws whose label changes when the throw is moved by "
+              "eps (relative to each axis's range); alpha is the slope of log f against "
+              "log eps, D = 2 - alpha the boundary's dimension."]
+    return lines
+
+
+__all__ = ["AnalysisRecorder", "BasinStream", "Destination", "FractionsRecorder",
+           "analysis_markdown", "check_destination", "record_tiles", "show_basin"]
