@@ -174,7 +174,8 @@ def in_cli_words(exc: ParameterError) -> str:
     message = str(exc)
     for name in getattr(exc, "parameters", ()):
         option = "--" + name.replace("_", "-")
-        message = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])",
+        # a name after a dot is a file's suffix or an attribute, not the parameter
+        message = re.sub(rf"(?<![\w.-]){re.escape(name)}(?![\w-])",
                          lambda _, option=option: option, message)
     return message
 

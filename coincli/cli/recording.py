@@ -35,8 +35,6 @@ def destination(rrd: Path | None, spawn: bool, connect: str | None):
     from ..io.rrd import NO_DISPLAY, display_available
     from ..params import ParameterError
 
-    if rrd is not None and rrd.suffix != ".rrd":
-        raise fail(f"--rrd {rrd}: the file name must end in .rrd")
     no_viewer = spawn and not display_available()
     try:
         where = check_destination(rrd, spawn and not no_viewer, connect)

@@ -303,11 +303,10 @@ def check_destination(rrd=None, spawn: bool = False, connect: str | None = None
     from .rrd import NO_DISPLAY, display_available
 
     if rrd is not None:
-        rrd = Path(rrd)
+        rrd = check_rrd_path(rrd)
         if rrd.suffix != ".rrd":
             raise ParameterError(f"rrd must be a file name ending in .rrd, got '{rrd}'",
                                  parameters=("rrd",))
-        check_rrd_path(rrd)
     if connect is not None:
         try:
             probe_viewer(connect)
