@@ -412,7 +412,8 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
           threads: int | None = None, workers: int | None = None, scheduler: str | None = None,
           progress: Callable[[SweepProgress], None] | None = None, stop=None,
           mirror: bool = True, x0=None, y0=None, phi0=None, vx=None, vy=None, vphi=None,
-          rrd: str | os.PathLike | None = None, spawn: bool = False, connect: str | None = None):
+          rrd: str | os.PathLike | None = None, spawn: bool = False, connect: str | None = None,
+          notebook: bool = False):
     """The basin map of two initial conditions as an xarray Dataset.
 
     Swept axes are given as ``name=(lo, hi)`` (vy and vphi sweep (0.05, 2) m/s and (-20, 20)
@@ -429,13 +430,14 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
 
     ``rrd`` (an .rrd file), ``spawn`` (a new viewer) and ``connect`` (a running viewer's URL,
     ``rerun+http://host:port/proxy``) stream the map to Rerun as it fills in, as
-    `coin basin STORE --rrd FILE` does: the recording reads the tiles back from the store, so
-    it needs ``store``. A recording that fails (a full disk, a viewer gone) does not fail the
-    sweep: it is said in a RuntimeWarning."""
+    `coin basin STORE --rrd FILE` does; ``notebook`` (alone) shows it in the notebook's cell.
+    The recording reads the tiles back from the store, so it needs ``store``. A recording that
+    fails (a full disk, a viewer gone) does not fail the sweep: it is said in a
+    RuntimeWarning."""
     _check_progress(progress)
     plan = plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=mirror, x0=x0, y0=y0,
                       phi0=phi0, vx=vx, vy=vy, vphi=vphi)
-    where = _live(rrd, spawn, connect)
+    where = _live(rrd, spawn, connect, notebook)
     if where is not None and store is None:
         raise ParameterError("a live recording of a sweep reads its tiles from the store: give "
                              "store=PATH")
@@ -452,13 +454,13 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
     return _basin_in_memory(plan, threads, progress, stop)
 
 
-def _live(rrd, spawn: bool, connect):
+def _live(rrd, spawn: bool, connect, notebook: bool = False):
     """The checked destination of a live recording (None if none is asked for)."""
-    if rrd is None and not spawn and connect is None:
+    if rrd is None and not spawn and connect is None and not notebook:
         return None  # Rerun's code is not even imported
     from .io.live import check_destination
 
-    return check_destination(rrd, spawn, connect)
+    return check_destination(rrd, spawn, connect, notebook)
 
 
 def _both(first, second):
@@ -483,15 +485,21 @@ def _warn_if_failed(recorder) -> None:
 @contextlib.contextmanager
 def _recording_sweep(plan: SweepPlan, store, where, progress):
     """(the recorder or None, the progress callback to give the sweep): the live recording of
-    a sweep into ``store`` at ``where`` (:mod:`coincli.io.sweep_recording`), if any; a failed
+    a sweep into ``store`` at ``where``, if any: by a process of its own
+    (:mod:`coincli.io.sweep_recording`), or in this one for a notebook's cell; a failed
     recording is warned of once the sweep is done."""
     if where is None:
         yield None, progress
         return
-    from .io.sweep_recording import SweepRecorder
+    verified = plan.spec.ladder.verified
+    if where.notebook:  # the notebook's viewer belongs to this process
+        from .io.live import InlineSweep
 
-    recorder = SweepRecorder().start().record(store, plan.attrs, where,
-                                              verified=plan.spec.ladder.verified)
+        recorder = InlineSweep(store, plan.attrs, where, verified=verified)
+    else:
+        from .io.sweep_recording import SweepRecorder
+
+        recorder = SweepRecorder().start().record(store, plan.attrs, where, verified=verified)
     with recorder:
         yield recorder, _both(progress, recorder.progress)
     _warn_if_failed(recorder)
@@ -773,17 +781,18 @@ def render_basin(basin, out: str | os.PathLike | None = None, *, ax=None, field:
 
 
 def show_basin(basin, *, rrd: str | os.PathLike | None = None, spawn: bool = False,
-               connect: str | None = None) -> None:
+               connect: str | None = None, notebook: bool = False) -> None:
     """A basin (Dataset or store path, finished or partial) in Rerun's viewer, as
     `coin basin show`: n in the paper's colours, each class named, the uncertain, undecided,
     unsettled and non-finite cells over it, cells not computed (or damaged) marked; to the
-    .rrd file ``rrd``, a new viewer (``spawn``) and/or a running one (``connect``)."""
+    .rrd file ``rrd``, a new viewer (``spawn``) and/or a running one (``connect``), or alone
+    in the notebook's cell (``notebook``)."""
     from .io.live import show_basin as show
 
-    where = _live(rrd, spawn, connect)
+    where = _live(rrd, spawn, connect, notebook)
     if where is None:
-        raise ParameterError("show_basin() needs a destination: rrd=PATH, spawn=True or "
-                             "connect=URL")
+        raise ParameterError("show_basin() needs a destination: rrd=PATH, spawn=True, "
+                             "connect=URL or notebook=True")
     show(_as_basin(basin), where)
 
 
@@ -794,7 +803,7 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
             direction: str = "random", confidence: float = 0.95,
             progress: Callable[[str, int, int], None] | None = None, stop=None,
             on_band: Callable | None = None, rrd: str | os.PathLike | None = None,
-            spawn: bool = False, connect: str | None = None):
+            spawn: bool = False, connect: str | None = None, notebook: bool = False):
     """How fractal the boundaries of a basin (Dataset or store path) are, on the whole map and
     per band of its first swept axis: a :class:`coincli.analysis.BasinAnalysis`
     (``.whole``, ``.bands``; ``.to_dict()`` is what ``coin basin analyze --json`` prints).
@@ -811,13 +820,15 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
     :class:`coincli.boundary.UncertainFraction`) is measured, ``rows`` its first row and the
     one past its last along the first axis;
     ``stop`` (an Event) or Ctrl-C interrupts it (KeyboardInterrupt). ``rrd``, ``spawn`` and
-    ``connect`` record it for Rerun as it goes (as `coin basin analyze --rrd FILE`): the map
+    ``connect`` (or ``notebook``, alone: in the notebook's cell) record it for Rerun as it
+    goes (as `coin basin analyze --rrd FILE`): the map
     with its bands, each band's f(eps) as it is measured, the fits and the measures; a
     recording that fails is a RuntimeWarning, the analysis is returned all the same."""
     from .analysis import DEFAULT_POINTS, AnalysisOptions, analyze_basin
     from .io.runner import usable_cores
 
     _check_progress(progress)
+    where = _live(rrd, spawn, connect, notebook)
     view = _as_basin(basin)
     opts = AnalysisOptions(box=int(box), bands=int(bands),
                            points=DEFAULT_POINTS if points is None else int(points),
@@ -827,7 +838,6 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
                            confidence=float(confidence),
                            **({} if eps is None else {"eps": tuple(float(e) for e in eps)}))
     a = view.arrays
-    where = _live(rrd, spawn, connect)
     if on_band is not None and not callable(on_band):
         raise TypeError(f"on_band must be a function (or None), got {type(on_band).__name__}")
     if where is None:
@@ -870,7 +880,7 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
               scheduler: str | None = None, force: bool = False,
               progress: Callable[[FractionsProgress], None] | None = None,
               stop=None, rrd: str | os.PathLike | None = None, spawn: bool = False,
-              connect: str | None = None) -> Fractions:
+              connect: str | None = None, notebook: bool = False) -> Fractions:
     """The outcome probabilities of throws whose initial conditions are drawn at random.
 
     Each of ``y0, phi0, vx, vy, vphi`` is a fixed value, a uniform range ``(lo, hi)`` or
@@ -897,7 +907,7 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
     return _raise_if_interrupted(
         run_fractions(plan, store=store, overwrite=overwrite, threads=threads,
                       workers=workers, scheduler=scheduler, progress=progress, stop=stop,
-                      rrd=rrd, spawn=spawn, connect=connect), stop)
+                      rrd=rrd, spawn=spawn, connect=connect, notebook=notebook), stop)
 
 
 def _raise_if_interrupted(result, stop):
@@ -920,7 +930,7 @@ def fractions_over(scene: Scene, parameter: str, values, *, keep=(), **options) 
     :class:`coincli.montecarlo.FractionsOver`."""
     run_options = {k: options.pop(k) for k in ("store", "overwrite", "threads", "workers",
                                                "scheduler", "progress", "stop", "rrd",
-                                               "spawn", "connect")
+                                               "spawn", "connect", "notebook")
                    if k in options}
     plan = plan_fractions(scene, over=(parameter, values), keep=keep, **options)
     return _raise_if_interrupted(run_fractions(plan, **run_options), run_options.get("stop"))
@@ -931,21 +941,23 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                   workers: int | None = None, scheduler: str | None = None,
                   progress: Callable[[FractionsProgress], None] | None = None,
                   stop=None, rrd: str | os.PathLike | None = None, spawn: bool = False,
-                  connect: str | None = None) -> Fractions | FractionsOver:
+                  connect: str | None = None, notebook: bool = False
+                  ) -> Fractions | FractionsOver:
     """Run a Monte Carlo run planned by :func:`plan_fractions` (see :func:`fractions` for the
     options): a Fractions for a plain run, a FractionsOver for a continuation. Unlike
     :func:`fractions`, it does not raise on Ctrl-C: it returns what it has, with
     ``stopped=StopReason.INTERRUPTED`` (as :func:`sweep` returns a report).
 
     ``rrd`` (an .rrd file), ``spawn`` (a new viewer) and ``connect`` (a running viewer's URL)
-    stream the estimates to Rerun as the run goes, as `coin fractions --rrd FILE` does: each
+    stream the estimates to Rerun as the run goes, as `coin fractions --rrd FILE` does
+    (``notebook``, alone: in the notebook's cell): each
     probability with its 95 % band against the samples, or, over a parameter, against the
     parameter as each value finishes. A recording that fails does not fail the run: it is
     said in a RuntimeWarning."""
     from .io.fractions_run import run_fractions as run
 
     _check_progress(progress)
-    where = _live(rrd, spawn, connect)
+    where = _live(rrd, spawn, connect, notebook)
     if where is None:
         return run(plan, store=store, overwrite=overwrite, threads=threads, workers=workers,
                    scheduler=scheduler, progress=progress, stop=stop)
@@ -982,7 +994,9 @@ def estimate_fractions(plan: FractionsPlan, *, threads: int | None = None,
 
 
 def _held_samples(plan: FractionsPlan, store) -> list[int] | None:
-    """The samples a fractions store holds, per value (None if it holds another run)."""
+    """The samples of this run a fractions store holds, per value (None if it holds another
+    run): those of the batches the run can use that are whole in the store (a batch missing
+    or cut short is to compute, whatever the store holds beyond the run)."""
     from .io import fractions_store as fstore
 
     try:
@@ -993,7 +1007,9 @@ def _held_samples(plan: FractionsPlan, store) -> list[int] | None:
     if fstore.differences(stored, plan.attrs):
         return None
     rows = filled.reshape(len(plan.scenes), -1) if plan.parameter is not None else filled[None]
-    return [int(row.sum()) for row in rows]
+    goal, batch = plan.goal, plan.sampling.batch
+    uses = [goal.count(b, batch) for b in range(goal.batches(batch))]
+    return [sum(n for n, held in zip(uses, row, strict=False) if held >= n) for row in rows]
 
 
 def open_fractions(store: str | os.PathLike):

@@ -299,3 +299,16 @@ def test_a_second_interrupt_stops_the_batches_in_flight_at_once(tmp_path):
     # the other thread's batch of 65,536 throws (over a second) was stopped, not waited for
     assert time.perf_counter() - calls[0] < 0.5, time.perf_counter() - t0
     assert part.cost["computed"] == 65536
+
+
+def test_the_estimate_counts_only_whole_batches_of_the_run(tmp_path):
+    """A store of 5 batches, the second one lost: a run of 4 batches is not held whole (the
+    estimate pilots it and counts the lost batch to compute), whatever lies beyond the run."""
+    store = tmp_path / "f.zarr"
+    coincli.fractions(PAPER, samples=2560, batch=512, store=store, phi0="-pi:pi")
+    (store / "filled" / "c" / "1").unlink()
+    plan = coincli.plan_fractions(PAPER, samples=2048, batch=512, phi0="-pi:pi")
+    estimate = coincli.estimate_fractions(plan, store=store)
+    assert estimate.held == 1536 and estimate.samples == 512 and estimate.pilot_samples > 0
+    run = coincli.fractions(PAPER, samples=2048, batch=512, store=store, phi0="-pi:pi")
+    assert run.cost["computed"] == 512

@@ -500,3 +500,77 @@ def test_python_analyze_records_and_calls_on_band(tmp_path):
                                on_band=lambda i, band_rows, f: seen.append((i, band_rows)))
     assert seen == [(i, b.rows) for i, b in enumerate(analysis.bands)]
     assert ("/analysis/info", True) in rows(rrd)
+
+
+# -- in a notebook's cell -------------------------------------------------------------------------
+def test_a_sweep_in_a_notebook_draws_its_map_in_this_process(tmp_path, monkeypatch):
+    """notebook=True: the map is made in the kernel's process (its viewer belongs there), by
+    the same StoreMap as a recording process: the last map is the store's. (The notebook's
+    viewer is replaced by a file here; the next test sends to the viewer.)"""
+    import coincli
+    from coincli.io import rrd as rrd_io
+    from coincli.io.rrd import open_stream
+
+    pytest.importorskip("rerun_notebook")
+    inline = tmp_path / "inline.rrd"
+    monkeypatch.setattr(rrd_io, "in_notebook", lambda: True)
+    monkeypatch.setattr(live.Destination, "stream",
+                        lambda self, name: open_stream(name, rrd=inline))
+    monkeypatch.setattr(sweep_recording.SweepRecorder, "start",
+                        lambda self: pytest.fail("no recording process in a notebook"))
+    store = tmp_path / "s.zarr"
+    coincli.basin(coincli.load_preset("paper"), res=16, chunk=8, threads=1, store=store,
+                  notebook=True)
+    check_map(rows(inline), read_basin(store), static=False)
+
+
+def test_a_notebook_stream_waits_for_the_viewer_then_sends_to_it(monkeypatch):
+    pytest.importorskip("rerun_notebook")
+    from rerun.notebook import Viewer
+
+    from coincli.io.rrd import open_stream
+
+    shown, sent = [], []
+    monkeypatch.setattr(Viewer, "display", lambda self, **options: shown.append(options))
+    monkeypatch.setattr(Viewer, "_flush_hook", lambda self, data: sent.append(len(data)))
+    with open_stream("coin test", notebook=True) as rec:
+        assert shown == [{"block_until_ready": True}]  # before anything is logged
+        rec.log("x", rr.Scalars(1.0))
+    assert sum(sent) > 0
+
+
+def test_notebook_true_is_checked_before_any_work(tmp_path, monkeypatch):
+    import coincli
+    from coincli.io import rrd as rrd_io
+
+    pytest.importorskip("rerun_notebook")
+    base = coincli.load_preset("paper")
+    with pytest.raises(RuntimeError, match=r"notebook=True draws in a notebook .*rrd="):
+        coincli.fractions(base, samples=500, notebook=True)
+    monkeypatch.setattr(rrd_io, "in_notebook", lambda: True)
+    with pytest.raises(coincli.ParameterError, match="goes alone"):
+        coincli.analyze(tmp_path / "none.zarr", notebook=True, rrd=tmp_path / "a.rrd")
+    with pytest.raises(coincli.ParameterError, match="reads its tiles from the store"):
+        coincli.basin(base, res=8, notebook=True)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_fractions_live_in_a_real_notebook_kernel(tmp_path):
+    """Executed by a Jupyter kernel: the estimates go to Rerun's widget in the cell, no error
+    (without a browser the viewer never says it is ready: the cell waits Rerun's 10 s)."""
+    pytest.importorskip("rerun_notebook")
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    notebook = nbformat.v4.new_notebook()
+    notebook.cells = [nbformat.v4.new_code_cell(
+        "import coincli\n"
+        "r = coincli.fractions(coincli.load_preset('paper'), samples=1000, batch=500, "
+        "threads=1, notebook=True)\n"
+        "print(r.samples)")]
+    nbclient.NotebookClient(notebook, timeout=120, kernel_name="python3",
+                            resources={"metadata": {"path": str(tmp_path)}}).execute()
+    outputs = notebook.cells[0].outputs
+    assert not [o for o in outputs if o["output_type"] == "error"]
+    assert any("application/vnd.jupyter.widget-view+json" in o.get("data", {})
+               for o in outputs)
+    assert any(o.get("text", "").strip() == "1000" for o in outputs if o["output_type"] == "stream")

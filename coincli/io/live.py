@@ -281,26 +281,47 @@ class BasinStream:
 
 @dataclass
 class Destination:
-    """Where a recording goes: an .rrd file, a spawned viewer, a running viewer's URL."""
+    """Where a recording goes: an .rrd file, a spawned viewer, a running viewer's URL; or,
+    alone, a viewer in the notebook's cell."""
 
     rrd: Path | None = None
     spawn: bool = False
     connect: str | None = None
+    notebook: bool = False
 
     def __bool__(self) -> bool:
-        return self.rrd is not None or self.spawn or self.connect is not None
+        return self.rrd is not None or self.spawn or self.connect is not None or self.notebook
+
+    def stream(self, name: str):
+        """:func:`coincli.io.rrd.open_stream` to this destination."""
+        return open_stream(name, rrd=self.rrd, spawn=self.spawn, connect=self.connect,
+                           notebook=self.notebook)
 
 
-def check_destination(rrd=None, spawn: bool = False, connect: str | None = None
-                      ) -> Destination | None:
+# What to do outside a notebook instead of notebook=True, for the live recordings of the API.
+LIVE_ELSEWHERE = ("record it with rrd='FILE.rrd' and open it with `rerun FILE.rrd`, or stream "
+                  "it with spawn=True")
+
+
+def check_destination(rrd=None, spawn: bool = False, connect: str | None = None,
+                      notebook: bool = False) -> Destination | None:
     """The destination of a live recording (None if none is asked for), checked before any
-    work: ParameterError (naming ``rrd``, ``spawn`` or ``connect``) for an ``rrd`` whose name
-    does not end in .rrd, ``spawn`` without a display, a ``connect`` that is no viewer's URL;
-    OSError for an ``rrd`` that cannot be written, ConnectionError when no viewer answers at
-    ``connect``."""
+    work: ParameterError (naming ``rrd``, ``spawn``, ``connect`` or ``notebook``) for an
+    ``rrd`` whose name does not end in .rrd, ``spawn`` without a display, a ``connect`` that is
+    no viewer's URL, ``notebook`` with another destination; OSError for an ``rrd`` that cannot
+    be written, ConnectionError when no viewer answers at ``connect``; for ``notebook``,
+    ImportError without rerun-notebook and RuntimeError outside a notebook."""
     from ..params import ParameterError
     from .paths import DEFAULT_CONNECT_URL, check_rrd_path, probe_viewer
-    from .rrd import NO_DISPLAY, display_available
+    from .rrd import NO_DISPLAY, display_available, require_notebook
+
+    if notebook:
+        if rrd is not None or spawn or connect is not None:
+            raise ParameterError("notebook=True shows the recording in the cell, and goes "
+                                 "alone: record to a file (rrd=PATH) or a viewer in another "
+                                 "call", parameters=("notebook",))
+        require_notebook("notebook=True", LIVE_ELSEWHERE)
+        return Destination(notebook=True)
 
     if rrd is not None:
         rrd = check_rrd_path(rrd)
@@ -324,35 +345,70 @@ def check_destination(rrd=None, spawn: bool = False, connect: str | None = None
 def show_basin(basin: Basin, where: Destination) -> None:
     """A static recording of a basin store, finished or partial (`coin basin show`)."""
     shape = tuple(basin.arrays["quarter_turns"].shape)
-    with open_stream(f"coin basin show {basin.path or ''}".strip(), rrd=where.rrd,
-                     spawn=where.spawn, connect=where.connect) as rec:
+    with where.stream(f"coin basin show {basin.path or ''}".strip()) as rec:
         stream = BasinStream(rec, basin.attrs, shape, path=basin.path, verified=basin.verified,
                              live=False)
         stream.whole(basin)
 
 
+class StoreMap:
+    """The live map of a sweep into the store at ``path`` (a :class:`BasinStream` in ``rec``),
+    fed from the store: :meth:`update` with what the sweep did since (the tiles written, its
+    progress points), :meth:`end` once it has ended. The tiles are read back from the store,
+    verified, so that the map shown is the store's; the first look and the last take every
+    tile done and not drawn yet (a resumed store's, those of other processes)."""
+
+    def __init__(self, rec, path, attrs: dict, *, verified: bool, min_interval: float = 0.5):
+        from .store import grid_of
+
+        self.path, self.grid = Path(path), grid_of(attrs)
+        self.view = None
+        self.drawn: set[tuple[int, int]] = set()  # tiles read from the store, on the map
+        self.stream = BasinStream(rec, attrs, self.grid.shape, path=self.path,
+                                  verified=verified, live=True, min_interval=min_interval)
+
+    def _read(self, written, every: bool) -> dict:
+        from ..params import ParameterError
+        from .store import Tile, is_store, open_view, scan
+
+        if self.view is None and (written or every) and is_store(self.path):
+            with contextlib.suppress(ParameterError, OSError):  # a sweep that failed
+                self.view = open_view(self.path, self.grid)
+            every = True  # its first look: tiles done before (a resumed store)
+        wanted = ([tile for tile in np.ndindex(*self.grid.tile_grid) if tile not in self.drawn]
+                  if every else [tile for tile in written if tile not in self.drawn])
+        tiles = {}
+        if self.view is not None and wanted:
+            for tile, state, data, _ in scan(self.view, with_data=True, tiles=wanted):
+                if state is Tile.DONE:
+                    tiles[tile] = data
+                    self.drawn.add(tile)
+        return tiles
+
+    def update(self, written, points=()) -> None:
+        """The tiles ``written`` since (and the progress ``points``: (elapsed s, cells done))."""
+        self.stream.update(self._read([tuple(t) for t in written], False), self.grid,
+                           list(points))
+
+    def end(self, elapsed: float | None, points=()) -> None:
+        """The sweep has ended: every tile done, and the last map (the store's), sent now."""
+        self.stream.update(self._read((), True), self.grid, list(points), send=False)
+        self.stream.send(elapsed)
+
+
 def record_tiles(setup: dict, inbox) -> None:
-    """The live recording of a sweep into a store, from the messages in ``inbox`` (a queue;
-    None: the end) of :mod:`coincli.io.sweep_recording`: ``setup`` says what to record and
-    where, each message what the sweep did (elapsed seconds, cells done, the tiles written).
-    The tiles are read back from the store, verified, so that the map shown is the store's;
-    the last map is sent once the sweep has ended, with every tile done by then (those of
-    other processes too)."""
+    """The live recording of a sweep into a store (a :class:`StoreMap`), from the messages in
+    ``inbox`` (a queue; None: the end) of :mod:`coincli.io.sweep_recording`: ``setup`` says
+    what to record and where, each message what the sweep did (elapsed seconds, cells done,
+    the tiles written)."""
     import queue
 
-    from ..params import ParameterError
-    from .store import Tile, grid_of, is_store, open_view, scan
-
     path = Path(setup["path"])
-    grid = grid_of(setup["attrs"])
-    view = None
-    drawn: set[tuple[int, int]] = set()  # tiles read from the store and put on the map
     rrd = None if setup["rrd"] is None else Path(setup["rrd"])
     with open_stream(f"coin basin {path}", rrd=rrd, spawn=setup["spawn"],
                      connect=setup["connect"]) as rec:
-        stream = BasinStream(rec, setup["attrs"], grid.shape, path=path,
-                             verified=setup["verified"], live=True,
-                             min_interval=setup["min_interval"])
+        live_map = StoreMap(rec, path, setup["attrs"], verified=setup["verified"],
+                            min_interval=setup["min_interval"])
         ended, elapsed = False, None
         while not ended:
             messages = [inbox.get()]
@@ -368,25 +424,54 @@ def record_tiles(setup: dict, inbox) -> None:
                 if "cells_done" in message:
                     points.append((elapsed, message["cells_done"]))
                 written += [tuple(tile) for tile in message.get("written", ())]
-            wanted = [tile for tile in written if tile not in drawn]
-            if view is None or ended:
-                if view is None and (written or ended) and is_store(path):
-                    with contextlib.suppress(ParameterError, OSError):  # a sweep that failed
-                        view = open_view(path, grid)
-                # its first look (a resumed store's tiles done before) and its last (tiles
-                # written meanwhile by others): every tile not drawn yet
-                wanted = [tile for tile in np.ndindex(*grid.tile_grid) if tile not in drawn]
-            tiles = {}
-            if view is not None and wanted:
-                for tile, state, data, _ in scan(view, with_data=True, tiles=wanted):
-                    if state is Tile.DONE:
-                        tiles[tile] = data
-                        drawn.add(tile)
             if ended:
-                stream.update(tiles, grid, points, send=False)
-                stream.send(elapsed)  # the last map: the store's
+                live_map.end(elapsed, points)
             else:
-                stream.update(tiles, grid, points)
+                live_map.update(written, points)
+
+
+class InlineSweep:
+    """The live map of a sweep into the store at ``path`` in a notebook's cell: the same
+    :class:`StoreMap` as a sweep's recording process makes, here in this process (a notebook's
+    viewer belongs to its kernel); :meth:`progress` takes each SweepProgress. A map that
+    cannot be shown leaves ``error`` set and the sweep alone."""
+
+    def __init__(self, path, attrs: dict, where: Destination, *, verified: bool,
+                 min_interval: float = 0.5):
+        self.path, self.attrs, self.where = Path(path), attrs, where
+        self.verified, self.min_interval = verified, min_interval
+        self.error: Exception | None = None
+        self.map = self._context = None
+        self.elapsed: float | None = None
+
+    def __enter__(self):
+        try:
+            self._context = self.where.stream(f"coin basin {self.path}")
+            rec = self._context.__enter__()
+            self.map = StoreMap(rec, self.path, self.attrs, verified=self.verified,
+                                min_interval=self.min_interval)
+        except (OSError, RuntimeError, ValueError) as exc:
+            self.error, self.map = exc, None
+        return self
+
+    def progress(self, update) -> None:
+        if self.map is None:
+            return
+        self.elapsed = update.elapsed
+        self.map.update(update.written, [(update.elapsed, update.cells_done)])
+
+    def __exit__(self, *exc):
+        if self._context is None:
+            return False
+        try:
+            if self.map is not None:
+                self.map.end(self.elapsed)
+        finally:
+            try:
+                self._context.__exit__(None, None, None)
+            except (OSError, RuntimeError) as error:
+                self.error = error
+        return False
 
 
 # -- coin fractions ------------------------------------------------------------------------------
@@ -478,9 +563,8 @@ class FractionsRecorder:
         import rerun as rr
 
         try:
-            self._context = open_stream("coin fractions" + (
-                f" over {self.plan.parameter}" if self.plan.parameter else ""),
-                rrd=self.where.rrd, spawn=self.where.spawn, connect=self.where.connect)
+            self._context = self.where.stream("coin fractions" + (
+                f" over {self.plan.parameter}" if self.plan.parameter else ""))
             self.rec = self._context.__enter__()
         except (OSError, RuntimeError, ValueError) as exc:
             self.error, self.rec, self._context = exc, None, None
@@ -627,9 +711,7 @@ class AnalysisRecorder:
 
         basin = self.basin
         try:
-            self._context = open_stream(f"coin basin analyze {basin.path or ''}".strip(),
-                                        rrd=self.where.rrd, spawn=self.where.spawn,
-                                        connect=self.where.connect)
+            self._context = self.where.stream(f"coin basin analyze {basin.path or ''}".strip())
             self.rec = self._context.__enter__()
         except (OSError, RuntimeError, ValueError) as exc:
             self.error, self.rec, self._context = exc, None, None
@@ -753,5 +835,5 @@ def analysis_markdown(analysis) -> list[str]:
     return lines
 
 
-__all__ = ["AnalysisRecorder", "BasinStream", "Destination", "FractionsRecorder",
-           "analysis_markdown", "check_destination", "record_tiles", "show_basin"]
+__all__ = ["AnalysisRecorder", "BasinStream", "Destination", "FractionsRecorder", "InlineSweep",
+           "StoreMap", "analysis_markdown", "check_destination", "record_tiles", "show_basin"]

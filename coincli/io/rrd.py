@@ -206,15 +206,31 @@ def _sinks(rr, rec, rrd: Path | None, spawn: bool, connect: str | None, port: in
 
 @contextlib.contextmanager
 def open_stream(name: str, *, rrd: Path | None = None, spawn: bool = False,
-                connect: str | None = None, port: int = 9876, flush_timeout: float = 30.0):
+                connect: str | None = None, notebook: bool = False, width: int | None = None,
+                height: int | None = None, port: int = 9876, flush_timeout: float = 30.0):
     """A new Rerun recording stream named ``name``, sent to an ``.rrd`` file (written through
     a temporary file renamed into place on success: complete or absent, checked to read back),
     a spawned viewer and/or the viewer at ``connect``; flushed and closed on leaving. Shared by
     every command that records (simulate, basin, fractions). The paths and URL are taken as
     checked (:func:`check_rrd_path`, :func:`check_connect_url`); ``spawn`` without a display
-    raises RuntimeError (:func:`display_available`)."""
+    raises RuntimeError (:func:`display_available`).
+
+    ``notebook`` (alone): the stream goes to a Rerun viewer displayed in the notebook's cell
+    now (``width`` and ``height`` in pixels), which this waits for (up to Rerun's 10 s) so that
+    what is logged while the cell runs is shown as it comes, not when the cell ends."""
     import rerun as rr
 
+    if notebook:
+        viewer_class = _viewer_class()
+        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
+        viewer = viewer_class(width=width, height=height, recording=rec)
+        rec.send_recording_name(name)
+        viewer.display(block_until_ready=True)
+        try:
+            yield rec
+        finally:
+            rec.flush(timeout_sec=flush_timeout)
+        return
     if rrd is None and not spawn and connect is None:
         raise ValueError("a recording needs a destination: rrd, spawn or connect")
     if spawn and not display_available():
@@ -293,8 +309,8 @@ def _viewer_class():
         import rerun_notebook  # noqa: F401  (rerun.notebook imports without it, then fails)
         from rerun.notebook import Viewer
     except ImportError:
-        raise NotebookMissing(f"showing a throw in a notebook needs Rerun's notebook viewer: "
-                              f"{NOTEBOOK_EXTRA}") from None
+        raise NotebookMissing(f"showing a recording in a notebook needs Rerun's notebook "
+                              f"viewer: {NOTEBOOK_EXTRA}") from None
     return Viewer
 
 
@@ -309,15 +325,17 @@ def in_notebook() -> bool:
     return bool(widget is not None and widget.running_in_marimo())
 
 
-def require_notebook(what: str) -> None:
+THROW_ELSEWHERE = ("write it with coincli.record(run, rrd='throw.rrd') and open it with "
+                   "`rerun throw.rrd`, or coincli.record(run, spawn=True)")
+
+
+def require_notebook(what: str, instead: str = THROW_ELSEWHERE) -> None:
     """NotebookMissing without rerun-notebook (wherever this runs), then RuntimeError (one line,
-    naming what to do instead) outside a notebook: ``what`` is the call that needs one."""
+    naming what to do ``instead``) outside a notebook: ``what`` is the call that needs one."""
     _viewer_class()
     if not in_notebook():
-        raise RuntimeError(f"nothing to show the throw in: {what} draws in a notebook "
-                           "(Jupyter); here write it with coincli.record(run, rrd='throw.rrd') "
-                           "and open it with `rerun throw.rrd`, or coincli.record(run, "
-                           "spawn=True)")
+        raise RuntimeError(f"nothing to show it in: {what} draws in a notebook (Jupyter); "
+                           f"here {instead}")
 
 
 def inline_viewer(trajectory, *, width: int | None = None, height: int | None = None,
