@@ -95,7 +95,8 @@ def main() -> None:
             f"({median('quiet', 1):.2f} s CPU), with --rrd {median('rrd', 0):.2f} s "
             f"({median('rrd', 1):.2f} s CPU); ratio median {statistics.median(ratios):.3f} "
             f"(range {min(ratios):.3f}-{max(ratios):.3f}) over {options.pairs} alternating "
-            f"pairs: `python benchmarks/live_overhead.py`.")
+            f"pairs: `python benchmarks/live_overhead.py --pairs {options.pairs}"
+            f"{' -- ' + ' '.join(options.args) if options.args else ''}`.")
     print(line)
     if options.write:
         replace_between(PERFORMANCE, "live-overhead", line)

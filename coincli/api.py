@@ -412,8 +412,7 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
           threads: int | None = None, workers: int | None = None, scheduler: str | None = None,
           progress: Callable[[SweepProgress], None] | None = None, stop=None,
           mirror: bool = True, x0=None, y0=None, phi0=None, vx=None, vy=None, vphi=None,
-          rrd: str | os.PathLike | None = None, spawn: bool = False, connect: str | None = None,
-          notebook: bool = False):
+          rrd: str | os.PathLike | None = None, spawn: bool = False, connect: str | None = None):
     """The basin map of two initial conditions as an xarray Dataset.
 
     Swept axes are given as ``name=(lo, hi)`` (vy and vphi sweep (0.05, 2) m/s and (-20, 20)
@@ -430,19 +429,19 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
 
     ``rrd`` (an .rrd file), ``spawn`` (a new viewer) and ``connect`` (a running viewer's URL,
     ``rerun+http://host:port/proxy``) stream the map to Rerun as it fills in, as
-    `coin basin STORE --rrd FILE` does; ``notebook`` (alone) shows it in the notebook's cell.
-    The recording reads the tiles back from the store, so it needs ``store``. A recording that
-    fails (a full disk, a viewer gone) does not fail the sweep: it is said in a
-    RuntimeWarning."""
+    `coin basin STORE --rrd FILE` does (in a notebook: ``spawn``, a viewer beside it, or
+    :func:`show_basin` with ``notebook=True`` once it is done). The recording reads the tiles
+    back from the store, so it needs ``store``. A recording that fails (a full disk, a viewer
+    gone) does not fail the sweep: it is said in a RuntimeWarning."""
     _check_progress(progress)
     plan = plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=mirror, x0=x0, y0=y0,
                       phi0=phi0, vx=vx, vy=vy, vphi=vphi)
-    where = _live(rrd, spawn, connect, notebook)
+    where = _live(rrd, spawn, connect)
     if where is not None and store is None:
         raise ParameterError("a live recording of a sweep reads its tiles from the store: give "
                              "store=PATH")
     if store is not None:
-        with _recording_sweep(plan, store, where, progress) as (recorder, progress):
+        with _recording_sweep(plan, store, where, progress) as (_, progress):
             report = sweep(plan, store, overwrite=overwrite, threads=threads, workers=workers,
                            scheduler=scheduler, progress=progress, stop=stop)
         if report.interrupted:
@@ -472,34 +471,36 @@ def _both(first, second):
 
 
 def _warn_if_failed(recorder) -> None:
-    if recorder is not None and recorder.error is not None:
-        import warnings
+    """A RuntimeWarning if ``recorder``'s recording failed, attributed to the caller's line
+    (the first frame outside this package: the API is called from several depths)."""
+    if recorder is None or recorder.error is None:
+        return
+    import inspect
+    import warnings
 
-        from .io.paths import describe
+    from .io.paths import explain
 
-        error = recorder.error
-        why = describe(error) if isinstance(error, OSError) else str(error)
-        warnings.warn(f"the live recording failed: {why}", RuntimeWarning, stacklevel=3)
+    package = str(Path(__file__).parent)
+    frames = inspect.stack(context=0)
+    level = next((i for i, frame in enumerate(frames)
+                  if not frame.filename.startswith(package)
+                  and Path(frame.filename).name != "contextlib.py"), len(frames))
+    warnings.warn(f"the live recording failed: {explain(recorder.error)}", RuntimeWarning,
+                  stacklevel=level + 1)
 
 
 @contextlib.contextmanager
 def _recording_sweep(plan: SweepPlan, store, where, progress):
     """(the recorder or None, the progress callback to give the sweep): the live recording of
-    a sweep into ``store`` at ``where``, if any: by a process of its own
-    (:mod:`coincli.io.sweep_recording`), or in this one for a notebook's cell; a failed
+    a sweep into ``store`` at ``where`` (:mod:`coincli.io.sweep_recording`), if any; a failed
     recording is warned of once the sweep is done."""
     if where is None:
         yield None, progress
         return
-    verified = plan.spec.ladder.verified
-    if where.notebook:  # the notebook's viewer belongs to this process
-        from .io.live import InlineSweep
+    from .io.sweep_recording import SweepRecorder
 
-        recorder = InlineSweep(store, plan.attrs, where, verified=verified)
-    else:
-        from .io.sweep_recording import SweepRecorder
-
-        recorder = SweepRecorder().start().record(store, plan.attrs, where, verified=verified)
+    recorder = SweepRecorder().start().record(store, plan.attrs, where,
+                                              verified=plan.spec.ladder.verified)
     with recorder:
         yield recorder, _both(progress, recorder.progress)
     _warn_if_failed(recorder)
@@ -820,8 +821,8 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
     :class:`coincli.boundary.UncertainFraction`) is measured, ``rows`` its first row and the
     one past its last along the first axis;
     ``stop`` (an Event) or Ctrl-C interrupts it (KeyboardInterrupt). ``rrd``, ``spawn`` and
-    ``connect`` (or ``notebook``, alone: in the notebook's cell) record it for Rerun as it
-    goes (as `coin basin analyze --rrd FILE`): the map
+    ``connect`` (or ``notebook``, alone: in the notebook's cell, shown once the cell ends)
+    record it for Rerun as it goes (as `coin basin analyze --rrd FILE`): the map
     with its bands, each band's f(eps) as it is measured, the fits and the measures; a
     recording that fails is a RuntimeWarning, the analysis is returned all the same."""
     from .analysis import DEFAULT_POINTS, AnalysisOptions, analyze_basin
@@ -950,7 +951,7 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
 
     ``rrd`` (an .rrd file), ``spawn`` (a new viewer) and ``connect`` (a running viewer's URL)
     stream the estimates to Rerun as the run goes, as `coin fractions --rrd FILE` does
-    (``notebook``, alone: in the notebook's cell): each
+    (``notebook``, alone: in the notebook's cell, shown once the cell ends): each
     probability with its 95 % band against the samples, or, over a parameter, against the
     parameter as each value finishes. A recording that fails does not fail the run: it is
     said in a RuntimeWarning."""

@@ -194,10 +194,16 @@ class Scene:
     # -- conversions ----------------------------------------------------------------------------
     def to_dict(self) -> dict:
         """The nested plain-value form (as in a preset file, a store's or a recording's
-        attributes): y0 resolved, the method by name."""
+        attributes): y0 resolved, the method by name, every real quantity a float (k=400 and
+        k=400.0 are one scene, and must give one store digest)."""
         d = asdict(self)
         d["initial"]["y0"] = self.y0
         d["integration"]["method"] = self.integration.method.label
+        d["g"] = float(d["g"])
+        for group, names in REAL_FIELDS.items():
+            for name in names:
+                if d[group][name] is not None:
+                    d[group][name] = float(d[group][name])
         return d
 
     def with_overrides(self, **overrides) -> Scene:
@@ -226,6 +232,14 @@ class Scene:
         new = {name: replace(obj, **changes[name]) for name, obj in groups.items()}
         return replace(self, **new, **top)
 
+
+# The real quantities of each group of a scene (the others: a method, whole numbers, flags).
+REAL_FIELDS = {
+    "coin": ("diameter", "thickness", "mass", "inertia"),
+    "foundation": ("k", "c"),
+    "initial": ("x0", "y0", "phi0", "vx", "vy", "vphi"),
+    "integration": ("dt", "rtol", "t_end"),
+}
 
 FLAT_KEYS = {
     "coin": [f.name for f in fields(Coin)],

@@ -305,6 +305,7 @@ def test_the_early_guess_knows_the_commands_and_options_of_coin_basin():
     (["basin", "s.zarr", "--rrd", "s.rrd"], True),
     (["basin", "s.zarr", "--res", "64", "--rrd=s.rrd"], True),
     (["basin", "sweep", "s.zarr", "--spawn"], True),
+    (["basin", "--rrd", "s.rrd", "s.zarr"], True),  # options before the store
     (["basin", "s.zarr", "--connect", "rerun+http://127.0.0.1:9876/proxy"], True),
     (["basin", "s.zarr"], False),
     (["basin", "show", "s.zarr", "--rrd", "s.rrd"], False),
@@ -437,10 +438,11 @@ def test_a_python_recording_that_fails_warns_and_keeps_the_result(tmp_path, monk
                                                      "signal.SIGKILL)")
     store = tmp_path / "s.zarr"
     with pytest.warns(RuntimeWarning, match="the live recording failed: the recording "
-                                            "process ended before it was done"):
+                                            "process ended before it was done") as warned:
         ds = coincli.basin(coincli.load_preset("paper"), res=16, chunk=8, threads=1,
                            store=store, rrd=tmp_path / "s.rrd")
     assert ds.quarter_turns.shape == (16, 16) and read_basin(store).done.all()
+    assert warned[0].filename == __file__  # the caller's line, not the package's
 
 
 def test_python_show_basin_is_coin_basin_show(tmp_path):
@@ -503,28 +505,7 @@ def test_python_analyze_records_and_calls_on_band(tmp_path):
 
 
 # -- in a notebook's cell -------------------------------------------------------------------------
-def test_a_sweep_in_a_notebook_draws_its_map_in_this_process(tmp_path, monkeypatch):
-    """notebook=True: the map is made in the kernel's process (its viewer belongs there), by
-    the same StoreMap as a recording process: the last map is the store's. (The notebook's
-    viewer is replaced by a file here; the next test sends to the viewer.)"""
-    import coincli
-    from coincli.io import rrd as rrd_io
-    from coincli.io.rrd import open_stream
-
-    pytest.importorskip("rerun_notebook")
-    inline = tmp_path / "inline.rrd"
-    monkeypatch.setattr(rrd_io, "in_notebook", lambda: True)
-    monkeypatch.setattr(live.Destination, "stream",
-                        lambda self, name: open_stream(name, rrd=inline))
-    monkeypatch.setattr(sweep_recording.SweepRecorder, "start",
-                        lambda self: pytest.fail("no recording process in a notebook"))
-    store = tmp_path / "s.zarr"
-    coincli.basin(coincli.load_preset("paper"), res=16, chunk=8, threads=1, store=store,
-                  notebook=True)
-    check_map(rows(inline), read_basin(store), static=False)
-
-
-def test_a_notebook_stream_waits_for_the_viewer_then_sends_to_it(monkeypatch):
+def test_a_notebook_stream_shows_the_viewer_then_sends_to_it(monkeypatch):
     pytest.importorskip("rerun_notebook")
     from rerun.notebook import Viewer
 
@@ -534,7 +515,7 @@ def test_a_notebook_stream_waits_for_the_viewer_then_sends_to_it(monkeypatch):
     monkeypatch.setattr(Viewer, "display", lambda self, **options: shown.append(options))
     monkeypatch.setattr(Viewer, "_flush_hook", lambda self, data: sent.append(len(data)))
     with open_stream("coin test", notebook=True) as rec:
-        assert shown == [{"block_until_ready": True}]  # before anything is logged
+        assert shown == [{}]  # at once, not waited for (see open_stream)
         rec.log("x", rr.Scalars(1.0))
     assert sum(sent) > 0
 
@@ -550,14 +531,14 @@ def test_notebook_true_is_checked_before_any_work(tmp_path, monkeypatch):
     monkeypatch.setattr(rrd_io, "in_notebook", lambda: True)
     with pytest.raises(coincli.ParameterError, match="goes alone"):
         coincli.analyze(tmp_path / "none.zarr", notebook=True, rrd=tmp_path / "a.rrd")
-    with pytest.raises(coincli.ParameterError, match="reads its tiles from the store"):
-        coincli.basin(base, res=8, notebook=True)
+    with pytest.raises(coincli.ParameterError, match="goes alone"):
+        coincli.show_basin(tmp_path / "none.zarr", notebook=True, spawn=True)
     assert list(tmp_path.iterdir()) == []
 
 
 def test_fractions_live_in_a_real_notebook_kernel(tmp_path):
-    """Executed by a Jupyter kernel: the estimates go to Rerun's widget in the cell, no error
-    (without a browser the viewer never says it is ready: the cell waits Rerun's 10 s)."""
+    """Executed by a Jupyter kernel: the estimates go to Rerun's widget in the cell, no
+    error."""
     pytest.importorskip("rerun_notebook")
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
@@ -574,3 +555,46 @@ def test_fractions_live_in_a_real_notebook_kernel(tmp_path):
     assert any("application/vnd.jupyter.widget-view+json" in o.get("data", {})
                for o in outputs)
     assert any(o.get("text", "").strip() == "1000" for o in outputs if o["output_type"] == "stream")
+
+
+def test_a_sweep_refused_before_any_work_records_nothing(tmp_path):
+    """The recording process is told what to record with the sweep's first progress: a sweep
+    refused at once (a store of another sweep) writes no recording and opens no viewer."""
+    store, rrd = tmp_path / "s.zarr", tmp_path / "s.rrd"
+    assert runner.invoke(app, ["basin", str(store), *SMALL]).exit_code == 0
+    result = runner.invoke(app, ["basin", str(store), *SMALL, "--k", "999", "--rrd", str(rrd)],
+                           env={"COLUMNS": "400"})
+    assert result.exit_code == 2 and "holds a different sweep" in result.stderr, result.output
+    assert not rrd.exists() and list(tmp_path.glob("*.rrd")) == []
+
+
+def test_a_store_complete_already_is_still_recorded(tmp_path):
+    store, rrd = tmp_path / "s.zarr", tmp_path / "s.rrd"
+    assert runner.invoke(app, ["basin", str(store), *SMALL]).exit_code == 0
+    result = runner.invoke(app, ["basin", str(store), *SMALL, "--rrd", str(rrd)])
+    assert result.exit_code == 0 and "every tile is done already" in result.output
+    check_map(rows(rrd), read_basin(store), static=False)
+
+
+def test_the_answer_of_the_recording_process_does_not_wait_for_its_children():
+    """A viewer spawned by the recording process inherits its stdout: the answer goes to a
+    copy no child inherits, so reading it to its end does not wait for the viewer."""
+    code = ("import os, subprocess, sys\n"
+            "from coincli.io.sweep_recording import answer_line\n"
+            "out = answer_line()\n"
+            "subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(30)'])\n"
+            "out.write('{\"error\": null}\\n'); out.flush(); os._exit(0)")
+    start = time.monotonic()
+    done = subprocess.run([sys.executable, "-P", "-c", code], stdout=subprocess.PIPE,
+                          stderr=subprocess.DEVNULL, text=True, timeout=25)
+    assert done.stdout == '{"error": null}\n' and time.monotonic() - start < 10
+
+
+def test_api_errors_quoted_values_are_left_as_given():
+    from coincli.cli.common import in_cli_words
+    from coincli.params import ParameterError
+
+    error = ParameterError("rrd must be a file name ending in .rrd, got 'rrd/out.txt'",
+                           parameters=("rrd",))
+    assert in_cli_words(error) == ("--rrd must be a file name ending in .rrd, got "
+                                   "'rrd/out.txt'")

@@ -729,3 +729,14 @@ def test_a_tile_binds_the_parameters_it_was_computed_with(tmp_path, monkeypatch)
     api.sweep(theirs, reference, threads=1)
     assert np.array_equal(store.read_basin(path).arrays["quarter_turns"],
                           store.read_basin(reference).arrays["quarter_turns"])
+
+
+def test_a_number_written_as_an_int_or_a_float_is_one_sweep(tmp_path):
+    """k=400 and k=400.0 are the same scene: a store swept with the one is complete for the
+    other (one parameters digest), not damaged tile by tile."""
+    path = tmp_path / "s.zarr"
+    base = coincli.load_preset("paper")
+    api.sweep(api.plan_sweep(base.with_overrides(k=400), res=16, chunk=8), path, threads=1)
+    report = api.sweep(api.plan_sweep(base.with_overrides(k=400.0), res=16, chunk=8), path,
+                       threads=1)
+    assert report.tiles_before == report.tiles_total and not report.damaged

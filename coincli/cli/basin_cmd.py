@@ -264,6 +264,8 @@ def sweep_command(
             recorder.progress(update)
 
     def started(start) -> None:
+        if recorder is not None:  # the sweep passed its checks: the recording begins
+            recorder.begin()
         if start.repaired:
             say(err_console, f"[yellow]repaired:[/] {path}: {len(start.repaired)} metadata "
                              f"file(s) differed from the sweep's and were rewritten: "

@@ -171,13 +171,15 @@ def in_cli_words(exc: ParameterError) -> str:
     """The message of ``exc`` as the command line says it: each parameter the message names
     as an option's (``exc.parameters``: the raiser lists only names that are options where the
     API is called from the command line) by its option, ``t_end`` as ``--t-end``."""
-    message = str(exc)
+    # what is quoted ('out/rrd.txt') is the user's, said as given; a name after a dot is a
+    # file's suffix or an attribute, not the parameter
+    parts = re.split(r"((?<!\w)'[^']*'(?!\w))", str(exc))  # not the apostrophe of "store's"
     for name in getattr(exc, "parameters", ()):
         option = "--" + name.replace("_", "-")
-        # a name after a dot is a file's suffix or an attribute, not the parameter
-        message = re.sub(rf"(?<![\w.-]){re.escape(name)}(?![\w-])",
-                         lambda _, option=option: option, message)
-    return message
+        parts = [part if part.startswith("'") else
+                 re.sub(rf"(?<![\w.-]){re.escape(name)}(?![\w-])",
+                        lambda _, option=option: option, part) for part in parts]
+    return "".join(parts)
 
 
 @contextlib.contextmanager

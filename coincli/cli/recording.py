@@ -93,10 +93,9 @@ def finish(recorder, no_viewer: bool, exit_code: int | None = 1) -> None:
     ``exit_code`` (None: leave the exit to the caller) if it did, or if --spawn found no
     display."""
     if recorder is not None and recorder.error is not None:
-        from ..io.paths import describe
+        from ..io.paths import explain
 
-        error = recorder.error
-        why = describe(error) if isinstance(error, OSError) else str(error)
+        why = explain(recorder.error)
         if exit_code is None:
             say(err_console, f"[bold red]error:[/] could not write the recording: {escape(why)}")
             return

@@ -1,5 +1,5 @@
-"""Rerun streams of a basin sweep as it fills in, of a basin store (`coin basin show`), and of
-the running estimates of `coin fractions`.
+"""Rerun streams of a basin sweep as it fills in, of a basin store (`coin basin show`), of the
+running estimates of `coin fractions`, and of `coin basin analyze` as each band is measured.
 
 The map is two SegmentationImages over one AnnotationContext: ``basin/n`` the outcome n in the
 paper's colours (one class per n present, named "n = 7, standing", so that hovering a pixel
@@ -430,50 +430,6 @@ def record_tiles(setup: dict, inbox) -> None:
                 live_map.update(written, points)
 
 
-class InlineSweep:
-    """The live map of a sweep into the store at ``path`` in a notebook's cell: the same
-    :class:`StoreMap` as a sweep's recording process makes, here in this process (a notebook's
-    viewer belongs to its kernel); :meth:`progress` takes each SweepProgress. A map that
-    cannot be shown leaves ``error`` set and the sweep alone."""
-
-    def __init__(self, path, attrs: dict, where: Destination, *, verified: bool,
-                 min_interval: float = 0.5):
-        self.path, self.attrs, self.where = Path(path), attrs, where
-        self.verified, self.min_interval = verified, min_interval
-        self.error: Exception | None = None
-        self.map = self._context = None
-        self.elapsed: float | None = None
-
-    def __enter__(self):
-        try:
-            self._context = self.where.stream(f"coin basin {self.path}")
-            rec = self._context.__enter__()
-            self.map = StoreMap(rec, self.path, self.attrs, verified=self.verified,
-                                min_interval=self.min_interval)
-        except (OSError, RuntimeError, ValueError) as exc:
-            self.error, self.map = exc, None
-        return self
-
-    def progress(self, update) -> None:
-        if self.map is None:
-            return
-        self.elapsed = update.elapsed
-        self.map.update(update.written, [(update.elapsed, update.cells_done)])
-
-    def __exit__(self, *exc):
-        if self._context is None:
-            return False
-        try:
-            if self.map is not None:
-                self.map.end(self.elapsed)
-        finally:
-            try:
-                self._context.__exit__(None, None, None)
-            except (OSError, RuntimeError) as error:
-                self.error = error
-        return False
-
-
 # -- coin fractions ------------------------------------------------------------------------------
 ESTIMATE = "estimate"  # P(outcome) in % against the samples counted
 LEADING_N = "leading_n"
@@ -697,12 +653,11 @@ class AnalysisRecorder:
 
         self.basin, self.where = basin, where
         self.eps = np.asarray(eps, dtype=np.float64)
-        self.timeline, self.power = parameter_timeline(
-            "log10 eps", "", np.round(np.log10(self.eps), 2))
+        self.timeline, self.power = parameter_timeline("log10 eps", "", self._log_eps(self.eps))
         self.colours = [_rgb(c) for c in band_colours(bands)]
         self.error: Exception | None = None
         self.rec = self._context = None
-        self.edges: list = []  # the band edges drawn
+        self.edges: set[int] = set()  # the rows of the band edges drawn
         self.lines = ["# coin basin analyze", "", "Measuring: the map first, then f(eps) band "
                       "by band with the simulator."]
 
@@ -734,14 +689,26 @@ class AnalysisRecorder:
         self._info()
         return self
 
-    def _edge(self, row: int) -> None:
-        """A band's first row, a vertical line over the map (the first axis is horizontal)."""
+    @staticmethod
+    def _log_eps(eps) -> np.ndarray:
+        """log10 eps as the timeline counts it: to 1e-4 of a decade (Rerun's timelines are
+        whole numbers; eps 0.02 % apart would share a place)."""
+        return np.round(np.log10(np.asarray(eps, dtype=np.float64)), 4)
+
+    def _at(self, eps: float) -> None:
+        self.rec.set_time(self.timeline, sequence=int(round(
+            float(self._log_eps(eps)) * 10.0 ** self.power)))
+
+    def _edges(self, rows) -> None:
+        """The bands' first rows, vertical lines over the map (the first axis is horizontal)."""
         import rerun as rr
 
-        if row > 0:
+        new = {int(a) for a, _ in rows if a > 0} - self.edges
+        if new:
+            self.edges |= new
             height = float(self.basin.arrays["quarter_turns"].shape[1])
-            self.edges.append([(float(row), 0.0), (float(row), height)])
-            self.rec.log(BANDS, rr.LineStrips2D(self.edges, colors=[(255, 255, 255)],
+            strips = [[(float(a), 0.0), (float(a), height)] for a in sorted(self.edges)]
+            self.rec.log(BANDS, rr.LineStrips2D(strips, colors=[(255, 255, 255)],
                                                 radii=[0.6], draw_order=3.0), static=True)
 
     def _info(self) -> None:
@@ -754,18 +721,17 @@ class AnalysisRecorder:
     def _fraction(self, key: str, fraction) -> None:
         import rerun as rr
 
-        for eps, f in zip(self.eps, fraction.fraction, strict=True):
+        for eps, f in zip(fraction.eps, fraction.fraction, strict=True):
             if not (f > 0 and math.isfinite(f)):  # log10: no point where none is uncertain
                 continue
-            self.rec.set_time(self.timeline, sequence=int(round(
-                round(math.log10(eps), 2) * 10.0 ** self.power)))
+            self._at(eps)
             self.rec.log(f"{ANALYSIS_F}/{key}", rr.Scalars(math.log10(f)))
 
     def band(self, index: int, rows: tuple[int, int], fraction) -> None:
         """Band ``index`` (``rows`` of the first axis) and its f(eps), just measured."""
         if self.rec is None:
             return
-        self._edge(rows[0])
+        self._edges([rows])
         self._fraction(_region_key(index), fraction)
         self.lines.append(f"- band {index + 1}: f(eps) measured")
         self._info()
@@ -776,6 +742,7 @@ class AnalysisRecorder:
             return
         import rerun as rr
 
+        self._edges([band.rows for band in analysis.bands])  # those not measured too
         regions = [(None, analysis.whole)] + list(enumerate(analysis.bands))
         for index, region in regions:
             key = _region_key(index)
@@ -784,9 +751,9 @@ class AnalysisRecorder:
             fit = region.exponent
             if fit is None or not math.isfinite(fit.alpha):
                 continue
-            for eps in (self.eps[0], self.eps[-1]):  # the line log f = alpha log eps + b
-                self.rec.set_time(self.timeline, sequence=int(round(
-                    round(math.log10(eps), 2) * 10.0 ** self.power)))
+            # the fitted line, log f = alpha log eps + c (c in natural logs), across the eps
+            for eps in (self.eps.min(), self.eps.max()):
+                self._at(eps)
                 self.rec.log(f"{ANALYSIS_FIT}/{key}",
                              rr.Scalars(fit.alpha * math.log10(eps) + fit.intercept / LN10))
         self.lines = analysis_markdown(analysis)
@@ -835,5 +802,5 @@ def analysis_markdown(analysis) -> list[str]:
     return lines
 
 
-__all__ = ["AnalysisRecorder", "BasinStream", "Destination", "FractionsRecorder", "InlineSweep",
-           "StoreMap", "analysis_markdown", "check_destination", "record_tiles", "show_basin"]
+__all__ = ["AnalysisRecorder", "BasinStream", "Destination", "FractionsRecorder", "StoreMap",
+           "analysis_markdown", "check_destination", "record_tiles", "show_basin"]

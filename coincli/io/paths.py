@@ -116,6 +116,12 @@ def check_writable(path: str | os.PathLike, *, what: str = "output",
     return p
 
 
+def explain(exc: BaseException) -> str:
+    """Why something failed, in one line: :func:`describe` for an OSError, else its message
+    (or its kind, if it has none)."""
+    return describe(exc) if isinstance(exc, OSError) else (str(exc) or type(exc).__name__)
+
+
 def check_rrd_path(path: str | os.PathLike) -> Path:
     """:func:`check_writable` for a recording."""
     return check_writable(path, what="recording path")
@@ -188,5 +194,6 @@ def probe_viewer(url: str, timeout: float = 2.0) -> None:
 
 __all__ = ["DEFAULT_CONNECT_URL", "DISK_ERRORS", "FIGURE_FORMATS", "NotWritable", "atomic_output",
            "check_figure_path", "save_figure",
-           "check_connect_url", "check_rrd_path", "check_writable", "describe", "probe_name",
+           "check_connect_url", "check_rrd_path", "check_writable", "describe", "explain",
+           "probe_name",
            "probe_viewer"]

@@ -216,8 +216,9 @@ def open_stream(name: str, *, rrd: Path | None = None, spawn: bool = False,
     raises RuntimeError (:func:`display_available`).
 
     ``notebook`` (alone): the stream goes to a Rerun viewer displayed in the notebook's cell
-    now (``width`` and ``height`` in pixels), which this waits for (up to Rerun's 10 s) so that
-    what is logged while the cell runs is shown as it comes, not when the cell ends."""
+    now (``width`` and ``height`` in pixels). It shows what was logged once the cell has ended:
+    Jupyter hands the kernel the viewer's "ready" only between cells (Rerun's wait for it,
+    ``block_until_ready``, timed out in JupyterLab 4 with ipykernel 7 in a real browser)."""
     import rerun as rr
 
     if notebook:
@@ -225,7 +226,7 @@ def open_stream(name: str, *, rrd: Path | None = None, spawn: bool = False,
         rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
         viewer = viewer_class(width=width, height=height, recording=rec)
         rec.send_recording_name(name)
-        viewer.display(block_until_ready=True)
+        viewer.display()
         try:
             yield rec
         finally:

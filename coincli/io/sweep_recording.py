@@ -44,8 +44,11 @@ class SweepRecorder:
     to record with :meth:`record`, then use it as a context manager around the sweep, whose
     :meth:`progress` takes the sweep's SweepProgress (in the thread that runs the sweep).
 
-    On entering, the process is told the store, its attributes and where to record; on
-    leaving, its input is closed: it reads any tile done that it has not drawn (those of other
+    The process is told the store, its attributes and where to record by :meth:`begin`, when
+    the sweep starts its work (its ``on_start``, else its first progress; or on leaving, if
+    there was neither: a store complete already), not before: a sweep refused before any work
+    (a store of another sweep, one too long) records nothing and opens no viewer. On leaving,
+    its input is closed: it reads any tile done that it has not drawn (those of other
     processes too), sends the last map, the store's, closes the recording and says how it
     went; leaving waits for that. A recording that cannot be made (no viewer, no file) leaves
     ``error`` set and the sweep alone. A process started for a recording that will not be
@@ -62,14 +65,15 @@ class SweepRecorder:
         self.error: Exception | None = None  # why the recording failed (the sweep goes on)
         self._process: subprocess.Popen | None = None
         self._setup: dict | None = None
+        self._told = False  # whether the process was told what to record
         self._started: float | None = None  # the sweep's start, on this process's clock
 
     def start(self) -> SweepRecorder:
         """Start the recording process (it imports Rerun meanwhile); returns self."""
         if self._process is None and self.error is None:
             try:
-                self._process = subprocess.Popen(
-                    [sys.executable, "-c", RECORDER], stdin=subprocess.PIPE,
+                self._process = subprocess.Popen(  # -P: no module of the current folder
+                    [sys.executable, "-P", "-c", RECORDER], stdin=subprocess.PIPE,
                     stdout=subprocess.PIPE, text=True, start_new_session=True)
             except OSError as exc:
                 self.error = exc
@@ -90,20 +94,26 @@ class SweepRecorder:
         when its input closes before it was told what to record."""
         if self._process is None:
             return
-        with contextlib.suppress(OSError):
-            self._process.stdin.close()
-        self._process.wait()
-        self._process.stdout.close()
-        self._process = None
+        process, self._process = self._process, None
+        try:
+            with contextlib.suppress(OSError):
+                process.stdin.close()
+        finally:
+            process.wait()
+            process.stdout.close()
 
     def __enter__(self):
         if self._setup is None:
             raise ValueError("record(path, attrs, where, verified=...) says what to record "
                              "before the recording begins")
-        self.start()
-        if self._process is not None:
+        return self.start()
+
+    def begin(self) -> None:
+        """Tell the process what to record (once): the sweep has passed its checks (its
+        ``on_start``), or made its first progress."""
+        if not self._told:
+            self._told = True
             self._tell(self._setup)
-        return self
 
     def _tell(self, message: dict) -> None:
         """One line to the recording process (if it is gone, its answer says why)."""
@@ -120,23 +130,30 @@ class SweepRecorder:
     def progress(self, update) -> None:
         if self._process is None:
             return
+        self.begin()
         self._started = time.perf_counter() - update.elapsed
         self._tell({"elapsed": update.elapsed, "cells_done": update.cells_done,
                     "written": [list(tile) for tile in update.written]})
 
-    def __exit__(self, *exc):
+    def __exit__(self, exc_type, *exc):
         if self._process is None:
             return False
+        if exc_type is not None and not self._told:  # refused before any work: no recording
+            self.cancel()
+            return False
+        self.begin()  # a sweep with nothing to do: the store's map all the same
         if self._started is not None:  # the time of the last map
             self._tell({"elapsed": time.perf_counter() - self._started})
-        with contextlib.suppress(OSError):
-            self._process.stdin.close()
-        answer = self._process.stdout.read().strip().splitlines()
-        self._process.stdout.close()
-        code = self._process.wait()
-        self._process = None
+        process, self._process = self._process, None
         try:
-            why = json.loads(answer[-1])["error"]
+            with contextlib.suppress(OSError):
+                process.stdin.close()
+            answer = process.stdout.readline().strip()
+        finally:  # a Ctrl-C meanwhile still leaves no pipe open nor a process unwaited for
+            process.stdout.close()
+            code = process.wait()
+        try:
+            why = json.loads(answer)["error"]
         except (IndexError, ValueError, KeyError, TypeError):
             how = (f"killed by {signal.Signals(-code).name}" if -code in signal.valid_signals()
                    else f"exit code {code}")
@@ -158,7 +175,7 @@ def sweep_recording_asked(args: list[str]) -> bool:
         return False
     if args[1] in BASIN_COMMANDS - {"sweep"}:
         return False
-    return any(arg.split("=", 1)[0] in RECORDING_OPTIONS for arg in args[2:])
+    return any(arg.split("=", 1)[0] in RECORDING_OPTIONS for arg in args[1:])
 
 
 def start_early(args: list[str]) -> None:
@@ -214,7 +231,7 @@ def record_sweep(lines=None, out=None, *, inbox: queue.SimpleQueue | None = None
     where, each further one what the sweep did (elapsed seconds, cells done, the tiles
     written), the last one the time of the last map; their end, that the sweep ended. Writes
     one JSON line to ``out`` (default stdout) when done: ``{"error": null}``, or why the
-    recording failed."""
+    recording failed; nothing if the lines ended before the first (nothing was recorded)."""
     out = sys.stdout if out is None else out
     if inbox is None:
         inbox = _inbox(sys.stdin if lines is None else lines)
@@ -227,11 +244,22 @@ def record_sweep(lines=None, out=None, *, inbox: queue.SimpleQueue | None = None
         record_tiles(setup, inbox)
         why = None
     except Exception as exc:  # noqa: BLE001 - any failure is said in one line, not a traceback
-        from .paths import describe
+        from .paths import explain
 
-        why = describe(exc) if isinstance(exc, OSError) else (str(exc) or type(exc).__name__)
+        why = explain(exc)
     out.write(json.dumps({"error": why}) + "\n")
     out.flush()
+
+
+def answer_line():
+    """This process's stdout as a file only it writes to; stdout itself now goes nowhere. A
+    viewer spawned for the recording inherits stdout: the sweep's command, which reads this
+    process's answer up to its end, would otherwise wait for the viewer to be closed."""
+    answer = os.fdopen(os.dup(1), "w")  # a duplicate is not inherited by children
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, 1)
+    os.close(null)
+    return answer
 
 
 def recording_process() -> None:
@@ -245,13 +273,16 @@ def recording_process() -> None:
     # when its input does
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     inbox = _inbox(sys.stdin, end_without_setup=True)
+    answer = answer_line()
+    import rerun as rr
     import rerun.blueprint  # noqa: F401 - imported before they are needed: see above
 
     from . import live, store  # noqa: F401
-    record_sweep(inbox=inbox)
+    rr.Scalars(0.0)  # pyarrow's first conversion imports pandas (0.15 s): here, not mid-sweep
+    record_sweep(inbox=inbox, out=answer)
     os._exit(0)
 
 
 __all__ = ["BASIN_COMMANDS", "RECORDER", "RECORDING_OPTIONS", "RecordingFailed", "SweepRecorder",
-           "record_sweep", "recorder_for", "recording_process", "start_early",
+           "answer_line", "record_sweep", "recorder_for", "recording_process", "start_early",
            "sweep_recording_asked"]
