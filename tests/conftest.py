@@ -99,3 +99,23 @@ def strict_rerun():
     rr.set_strict_mode(True)
     yield
     rr.set_strict_mode(before)
+
+
+def outputs_in_a_kernel(source: str, folder) -> list:
+    """The outputs of one code cell ``source`` executed by a real Jupyter kernel in ``folder``
+    (skips without rerun-notebook, nbformat or nbclient)."""
+    pytest.importorskip("rerun_notebook")
+    nbformat = pytest.importorskip("nbformat")
+    nbclient = pytest.importorskip("nbclient")
+    notebook = nbformat.v4.new_notebook()
+    notebook.cells = [nbformat.v4.new_code_cell(source)]
+    nbclient.NotebookClient(notebook, timeout=120, kernel_name="python3",
+                            resources={"metadata": {"path": str(folder)}}).execute()
+    return notebook.cells[0].outputs
+
+
+def shows_a_widget(outputs: list) -> bool:
+    """Whether cell ``outputs`` have no error and display a widget (Rerun's viewer)."""
+    return (not [o for o in outputs if o["output_type"] == "error"]
+            and any("application/vnd.jupyter.widget-view+json" in o.get("data", {})
+                    for o in outputs))

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 import pytest
-from conftest import reset_sigint
+from conftest import outputs_in_a_kernel, reset_sigint, shows_a_widget
 from typer.testing import CliRunner
 
 from coincli.cli import app
@@ -539,21 +539,12 @@ def test_notebook_true_is_checked_before_any_work(tmp_path, monkeypatch):
 def test_fractions_live_in_a_real_notebook_kernel(tmp_path):
     """Executed by a Jupyter kernel: the estimates go to Rerun's widget in the cell, no
     error."""
-    pytest.importorskip("rerun_notebook")
-    nbformat = pytest.importorskip("nbformat")
-    nbclient = pytest.importorskip("nbclient")
-    notebook = nbformat.v4.new_notebook()
-    notebook.cells = [nbformat.v4.new_code_cell(
+    outputs = outputs_in_a_kernel(
         "import coincli\n"
         "r = coincli.fractions(coincli.load_preset('paper'), samples=1000, batch=500, "
         "threads=1, notebook=True)\n"
-        "print(r.samples)")]
-    nbclient.NotebookClient(notebook, timeout=120, kernel_name="python3",
-                            resources={"metadata": {"path": str(tmp_path)}}).execute()
-    outputs = notebook.cells[0].outputs
-    assert not [o for o in outputs if o["output_type"] == "error"]
-    assert any("application/vnd.jupyter.widget-view+json" in o.get("data", {})
-               for o in outputs)
+        "print(r.samples)", tmp_path)
+    assert shows_a_widget(outputs)
     assert any(o.get("text", "").strip() == "1000" for o in outputs if o["output_type"] == "stream")
 
 

@@ -10,6 +10,7 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import outputs_in_a_kernel, shows_a_widget
 
 import coincli
 from coincli.defaults import DEFAULT_LOG_EVERY
@@ -207,20 +208,11 @@ def test_inline_viewer_receives_the_recording(run, monkeypatch):
 
 def test_show_in_a_real_notebook_kernel(tmp_path):
     """Executed by a Jupyter kernel: run.show() displays Rerun's widget, no error."""
-    pytest.importorskip("rerun_notebook")
-    nbformat = pytest.importorskip("nbformat")
-    nbclient = pytest.importorskip("nbclient")
-    notebook = nbformat.v4.new_notebook()
-    notebook.cells = [nbformat.v4.new_code_cell(
+    outputs = outputs_in_a_kernel(
         "import coincli\n"
         f"run = coincli.simulate(coincli.load_preset('paper').with_overrides(**{FIG2!r}))\n"
-        "run.show(width=500, height=300)")]
-    nbclient.NotebookClient(notebook, timeout=120, kernel_name="python3",
-                            resources={"metadata": {"path": str(tmp_path)}}).execute()
-    outputs = notebook.cells[0].outputs
-    assert not [o for o in outputs if o["output_type"] == "error"]
-    assert any("application/vnd.jupyter.widget-view+json" in o.get("data", {})
-               for o in outputs)
+        "run.show(width=500, height=300)", tmp_path)
+    assert shows_a_widget(outputs)
 
 
 # -- reprs ---------------------------------------------------------------------------------------

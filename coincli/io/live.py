@@ -495,7 +495,33 @@ def _estimates(tally, verified: bool) -> dict:
     return out, (None if leading is None else int(leading["n"]))
 
 
-class FractionsRecorder:
+class InProcessRecording:
+    """A recording made in this process to ``self.where`` (a :class:`Destination`):
+    :meth:`_open` opens the stream (``rec``); one that cannot be opened leaves ``error`` set
+    and ``rec`` None, and the work goes on without it. Leaving closes the stream."""
+
+    where: Destination
+    error: Exception | None = None
+    rec = _context = None
+
+    def _open(self, name: str) -> bool:
+        try:
+            self._context = self.where.stream(name)
+            self.rec = self._context.__enter__()
+        except (OSError, RuntimeError, ValueError) as exc:
+            self.error, self.rec, self._context = exc, None, None
+        return self.rec is not None
+
+    def __exit__(self, *exc):
+        if self._context is not None:
+            try:
+                self._context.__exit__(None, None, None)
+            except (OSError, RuntimeError) as error:
+                self.error = error
+        return False
+
+
+class FractionsRecorder(InProcessRecording):
     """The live recording of a `coin fractions` run: :meth:`progress` takes each
     FractionsProgress; :meth:`result` the run's result (a continuation's values are sent as
     they finish, and all of them again from the result, which is what counts). A recording
@@ -507,8 +533,6 @@ class FractionsRecorder:
 
         self.plan, self.where = plan, where
         self.verified = ladder_of(plan.scene.integration).verified
-        self.error: Exception | None = None
-        self.rec = self._context = None
         self.sent: set[int] = set()  # values of a continuation sent
         self.values_done = 0
         if plan.parameter is not None:
@@ -518,12 +542,8 @@ class FractionsRecorder:
     def __enter__(self):
         import rerun as rr
 
-        try:
-            self._context = self.where.stream("coin fractions" + (
-                f" over {self.plan.parameter}" if self.plan.parameter else ""))
-            self.rec = self._context.__enter__()
-        except (OSError, RuntimeError, ValueError) as exc:
-            self.error, self.rec, self._context = exc, None, None
+        if not self._open("coin fractions" + (f" over {self.plan.parameter}"
+                                               if self.plan.parameter else "")):
             return self
         rec = self.rec
         rec.send_blueprint(fractions_blueprint(self.plan.parameter), make_active=True,
@@ -598,14 +618,6 @@ class FractionsRecorder:
                                              ("probability", "low", "high"))
                                  for name in ("standing", "lying", "uncertain")})
 
-    def __exit__(self, *exc):
-        if self._context is not None:
-            try:
-                self._context.__exit__(None, None, None)
-            except (OSError, RuntimeError) as error:
-                self.error = error
-        return False
-
 
 # -- coin basin analyze ---------------------------------------------------------------------------
 ANALYSIS_F = "analysis/f"  # log10 f(eps) of each region, against log10 eps
@@ -642,7 +654,7 @@ def analysis_blueprint(attrs: dict, timeline: str):
         rrb.TimePanel(state="collapsed", timeline=timeline))
 
 
-class AnalysisRecorder:
+class AnalysisRecorder(InProcessRecording):
     """The live recording of `coin basin analyze`: the map analysed with its bands, each
     region's uncertain fraction f(eps) as it is measured (:meth:`band`, then the whole map's
     with the fits from :meth:`result`) against log10 eps, and the measures as text. A
@@ -655,8 +667,6 @@ class AnalysisRecorder:
         self.eps = np.asarray(eps, dtype=np.float64)
         self.timeline, self.power = parameter_timeline("log10 eps", "", self._log_eps(self.eps))
         self.colours = [_rgb(c) for c in band_colours(bands)]
-        self.error: Exception | None = None
-        self.rec = self._context = None
         self.edges: set[int] = set()  # the rows of the band edges drawn
         self.lines = ["# coin basin analyze", "", "Measuring: the map first, then f(eps) band "
                       "by band with the simulator."]
@@ -665,11 +675,7 @@ class AnalysisRecorder:
         import rerun as rr
 
         basin = self.basin
-        try:
-            self._context = self.where.stream(f"coin basin analyze {basin.path or ''}".strip())
-            self.rec = self._context.__enter__()
-        except (OSError, RuntimeError, ValueError) as exc:
-            self.error, self.rec, self._context = exc, None, None
+        if not self._open(f"coin basin analyze {basin.path or ''}".strip()):
             return self
         rec = self.rec
         rec.send_blueprint(analysis_blueprint(basin.attrs, self.timeline), make_active=True,
@@ -759,14 +765,6 @@ class AnalysisRecorder:
         self.lines = analysis_markdown(analysis)
         self._info()
 
-    def __exit__(self, *exc):
-        if self._context is not None:
-            try:
-                self._context.__exit__(None, None, None)
-            except (OSError, RuntimeError) as error:
-                self.error = error
-        return False
-
 
 LN10 = math.log(10.0)
 
@@ -802,5 +800,6 @@ def analysis_markdown(analysis) -> list[str]:
     return lines
 
 
-__all__ = ["AnalysisRecorder", "BasinStream", "Destination", "FractionsRecorder", "StoreMap",
+__all__ = ["AnalysisRecorder", "BasinStream", "Destination", "FractionsRecorder",
+           "InProcessRecording", "StoreMap",
            "analysis_markdown", "check_destination", "record_tiles", "show_basin"]
