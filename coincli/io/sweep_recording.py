@@ -111,7 +111,7 @@ class SweepRecorder:
     def begin(self) -> None:
         """Tell the process what to record (once): the sweep has passed its checks (its
         ``on_start``), or made its first progress."""
-        if not self._told:
+        if self._process is not None and not self._told:  # (no process: it could not start)
             self._told = True
             self._tell(self._setup)
 
