@@ -2,7 +2,7 @@
 running estimates of `coin fractions`, and of `coin basin analyze` as each band is measured.
 
 The map is two SegmentationImages over one AnnotationContext: ``basin/n`` the outcome n in the
-paper's colours (one class per n present, named "n = 7, standing", so that hovering a pixel
+paper's colours (one class per n, named "n = 7, standing", so that hovering a pixel
 says what it is), ``basin/certainty`` over it: uncertain grey, unsettled purple, non-finite
 magenta (certain cells transparent); cells not computed are transparent in both, over the
 view's light grey background. The first swept axis is horizontal (growing to the right), the
@@ -52,6 +52,7 @@ SWEEP_TIME = "sweep_time"
 # and NO_LABEL, -32768, never a label, so ids run 1 to 65535 in a uint16 image).
 NO_N = 0
 N_BIAS = 32768
+N_CLASSES = 128  # the n named from the start, -N_CLASSES to N_CLASSES (the paper's map: 46)
 # Class ids of the certainty layer.
 CERTAIN, UNCERTAIN_ID, UNSETTLED_ID, NONFINITE_ID, NOT_COMPUTED_ID = 0, 1, 2, 3, 4
 UNDECIDED_ID = 5
@@ -192,8 +193,12 @@ class BasinStream:
         self.shape = tuple(shape)
         self.n_ids = np.zeros(self.shape[::-1], dtype=np.uint16)  # image: rows x columns
         self.certainty_ids = np.full(self.shape[::-1], NOT_COMPUTED_ID, dtype=np.uint8)
-        self.known: set[int] = set()  # class ids of the n on the map
-        self.classes_sent: set[int] = set()  # ... and of those in the context sent
+        # class ids of the n on the map, and of those in the context sent: every |n| up to
+        # N_CLASSES from the start, so that the context need not grow as n come in (with a
+        # growing context, Rerun 0.41's web viewer, in a notebook or a browser, drew a live
+        # map in its default colours; the native viewer did not)
+        self.known: set[int] = {n + N_BIAS for n in range(-N_CLASSES, N_CLASSES + 1)}
+        self.classes_sent = set(self.known)
         self.min_interval = min_interval
         self.points: list[tuple[float, int]] = []  # (s, cells done) not sent yet
         self.last_sent = -math.inf
@@ -204,7 +209,8 @@ class BasinStream:
                                make_default=True)
         rec.log(BASIN_CERTAINTY, rr.AnnotationContext(certainty_classes(rr, verified)),
                 static=True)
-        rec.log(BASIN_N, rr.AnnotationContext(n_classes(rr, ())), static=True)
+        rec.log(BASIN_N, rr.AnnotationContext(
+            n_classes(rr, [i - N_BIAS for i in self.known])), static=True)
         rec.log(INFO, rr.TextDocument(_info_markdown(attrs, path, self.shape),
                                       media_type=rr.MediaType.MARKDOWN), static=True)
         if live:
@@ -219,8 +225,8 @@ class BasinStream:
         rows = slice(self.shape[1] - s1.stop, self.shape[1] - s1.start)
         self.n_ids[rows, s0] = _image(n_ids)
         self.certainty_ids[rows, s0] = _image(certainty_ids)
-        # one class per n present: the context grows as new outcomes come in (sent with the
-        # map, once for all the tiles since the last)
+        # an n beyond those named from the start gets a class too (the context, sent with the
+        # map, grows then: once for all the tiles since the last)
         self.known |= set(np.unique(n_ids).tolist()) - {NO_N}
 
     def update(self, tiles: dict, grid, points=(), send: bool = True) -> None:
