@@ -23,7 +23,7 @@ _API = ("Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan", "F
         "fractions", "fractions_over", "load_preset", "open_basin", "open_fractions",
         "plan_fractions", "plan_sweep", "record", "render_analysis", "render_basin",
         "render_fractions", "run_fractions", "show_basin", "simulate", "stability", "sweep",
-        "verify_basin")  # = coincli.api.__all__ (tested)
+        "verify_basin", "viewer")  # = coincli.api.__all__ (tested)
 
 __all__ = ["__version__", *_API]
 

@@ -412,7 +412,8 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
           threads: int | None = None, workers: int | None = None, scheduler: str | None = None,
           progress: Callable[[SweepProgress], None] | None = None, stop=None,
           mirror: bool = True, x0=None, y0=None, phi0=None, vx=None, vy=None, vphi=None,
-          rrd: str | os.PathLike | None = None, spawn: bool = False, connect: str | None = None):
+          rrd: str | os.PathLike | None = None, spawn: bool = False, connect: str | None = None,
+          notebook=False):
     """The basin map of two initial conditions as an xarray Dataset.
 
     Swept axes are given as ``name=(lo, hi)`` (vy and vphi sweep (0.05, 2) m/s and (-20, 20)
@@ -429,14 +430,15 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
 
     ``rrd`` (an .rrd file), ``spawn`` (a new viewer) and ``connect`` (a running viewer's URL,
     ``rerun+http://host:port/proxy``) stream the map to Rerun as it fills in, as
-    `coin basin STORE --rrd FILE` does (in a notebook: ``spawn``, a viewer beside it, or
-    :func:`show_basin` with ``notebook=True`` once it is done). The recording reads the tiles
-    back from the store, so it needs ``store``. A recording that fails (a full disk, a viewer
-    gone) does not fail the sweep: it is said in a RuntimeWarning."""
+    `coin basin STORE --rrd FILE` does; in a notebook, ``notebook`` (alone): a viewer of
+    :func:`viewer` shown in an earlier cell, which fills in live, or True, a viewer in this
+    cell that shows the map once the cell has run. The recording reads the tiles back from the
+    store, so it needs ``store``. A recording that fails (a full disk, a viewer gone) does not
+    fail the sweep: it is said in a RuntimeWarning."""
     _check_progress(progress)
     plan = plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=mirror, x0=x0, y0=y0,
                       phi0=phi0, vx=vx, vy=vy, vphi=vphi)
-    where = _live(rrd, spawn, connect)
+    where = _live(rrd, spawn, connect, notebook)
     if where is not None and store is None:
         raise ParameterError("a live recording of a sweep reads its tiles from the store: give "
                              "store=PATH")
@@ -453,9 +455,9 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
     return _basin_in_memory(plan, threads, progress, stop)
 
 
-def _live(rrd, spawn: bool, connect, notebook: bool = False):
+def _live(rrd, spawn: bool, connect, notebook=False):
     """The checked destination of a live recording (None if none is asked for)."""
-    if rrd is None and not spawn and connect is None and not notebook:
+    if rrd is None and not spawn and connect is None and notebook is False:
         return None  # Rerun's code is not even imported
     from .io.live import check_destination
 
@@ -492,15 +494,21 @@ def _warn_if_failed(recorder) -> None:
 @contextlib.contextmanager
 def _recording_sweep(plan: SweepPlan, store, where, progress):
     """(the recorder or None, the progress callback to give the sweep): the live recording of
-    a sweep into ``store`` at ``where`` (:mod:`coincli.io.sweep_recording`), if any; a failed
+    a sweep into ``store`` at ``where``, if any: by a process of its own
+    (:mod:`coincli.io.sweep_recording`), or in this one for a notebook's viewer; a failed
     recording is warned of once the sweep is done."""
     if where is None:
         yield None, progress
         return
-    from .io.sweep_recording import SweepRecorder
+    verified = plan.spec.ladder.verified
+    if where.notebook is not False:  # a notebook's viewer belongs to this process
+        from .io.live import InlineSweep
 
-    recorder = SweepRecorder().start().record(store, plan.attrs, where,
-                                              verified=plan.spec.ladder.verified)
+        recorder = InlineSweep(store, plan.attrs, where, verified=verified)
+    else:
+        from .io.sweep_recording import SweepRecorder
+
+        recorder = SweepRecorder().start().record(store, plan.attrs, where, verified=verified)
     with recorder:
         yield recorder, _both(progress, recorder.progress)
     _warn_if_failed(recorder)
@@ -781,8 +789,19 @@ def render_basin(basin, out: str | os.PathLike | None = None, *, ax=None, field:
         raise ParameterError(str(exc)) from None
 
 
+def viewer(*, width: int | None = None, height: int | None = None):
+    """A Rerun viewer shown in the notebook's cell now (``width`` and ``height`` in pixels),
+    for the work of later cells: ``coincli.basin(..., store=..., notebook=v)``,
+    ``fractions(..., notebook=v)``, ``analyze(..., notebook=v)``, ``show_basin(ds,
+    notebook=v)`` show in it as they run (a viewer made in the cell that runs the work is
+    ready only once the cell has run: Jupyter hands the kernel its "ready" between cells)."""
+    from .io.rrd import notebook_viewer
+
+    return notebook_viewer(width=width, height=height)
+
+
 def show_basin(basin, *, rrd: str | os.PathLike | None = None, spawn: bool = False,
-               connect: str | None = None, notebook: bool = False) -> None:
+               connect: str | None = None, notebook=False) -> None:
     """A basin (Dataset or store path, finished or partial) in Rerun's viewer, as
     `coin basin show`: n in the paper's colours, each class named, the uncertain, undecided,
     unsettled and non-finite cells over it, cells not computed (or damaged) marked; to the
@@ -804,7 +823,7 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
             direction: str = "random", confidence: float = 0.95,
             progress: Callable[[str, int, int], None] | None = None, stop=None,
             on_band: Callable | None = None, rrd: str | os.PathLike | None = None,
-            spawn: bool = False, connect: str | None = None, notebook: bool = False):
+            spawn: bool = False, connect: str | None = None, notebook=False):
     """How fractal the boundaries of a basin (Dataset or store path) are, on the whole map and
     per band of its first swept axis: a :class:`coincli.analysis.BasinAnalysis`
     (``.whole``, ``.bands``; ``.to_dict()`` is what ``coin basin analyze --json`` prints).
@@ -881,7 +900,7 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
               scheduler: str | None = None, force: bool = False,
               progress: Callable[[FractionsProgress], None] | None = None,
               stop=None, rrd: str | os.PathLike | None = None, spawn: bool = False,
-              connect: str | None = None, notebook: bool = False) -> Fractions:
+              connect: str | None = None, notebook=False) -> Fractions:
     """The outcome probabilities of throws whose initial conditions are drawn at random.
 
     Each of ``y0, phi0, vx, vy, vphi`` is a fixed value, a uniform range ``(lo, hi)`` or
@@ -942,7 +961,7 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                   workers: int | None = None, scheduler: str | None = None,
                   progress: Callable[[FractionsProgress], None] | None = None,
                   stop=None, rrd: str | os.PathLike | None = None, spawn: bool = False,
-                  connect: str | None = None, notebook: bool = False
+                  connect: str | None = None, notebook=False
                   ) -> Fractions | FractionsOver:
     """Run a Monte Carlo run planned by :func:`plan_fractions` (see :func:`fractions` for the
     options): a Fractions for a plain run, a FractionsOver for a continuation. Unlike
@@ -1049,4 +1068,4 @@ __all__ = ["Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
            "export_basin", "fractions", "fractions_over", "load_preset", "open_basin",
            "open_fractions", "plan_fractions", "plan_sweep", "record", "render_analysis",
            "render_basin", "render_fractions", "run_fractions", "show_basin", "simulate",
-           "stability", "sweep", "verify_basin"]
+           "stability", "sweep", "verify_basin", "viewer"]

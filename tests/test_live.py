@@ -505,6 +505,50 @@ def test_python_analyze_records_and_calls_on_band(tmp_path):
 
 
 # -- in a notebook's cell -------------------------------------------------------------------------
+def test_a_sweep_in_a_notebook_draws_its_map_in_this_process(tmp_path, monkeypatch):
+    """notebook=: the map is made in the kernel's process (its viewer belongs there), by the
+    same StoreMap as a recording process: the last map is the store's. (The notebook's viewer
+    is replaced by a file here; the next tests send to a viewer.)"""
+    import coincli
+    from coincli.io import rrd as rrd_io
+    from coincli.io.rrd import open_stream
+
+    pytest.importorskip("rerun_notebook")
+    inline = tmp_path / "inline.rrd"
+    monkeypatch.setattr(rrd_io, "in_notebook", lambda: True)
+    monkeypatch.setattr(live.Destination, "stream",
+                        lambda self, name: open_stream(name, rrd=inline))
+    monkeypatch.setattr(sweep_recording.SweepRecorder, "start",
+                        lambda self: pytest.fail("no recording process in a notebook"))
+    store = tmp_path / "s.zarr"
+    coincli.basin(coincli.load_preset("paper"), res=16, chunk=8, threads=1, store=store,
+                  notebook=True)
+    check_map(rows(inline), read_basin(store), static=False)
+
+
+def test_a_viewer_of_an_earlier_cell_receives_the_work_of_a_later_one(tmp_path, monkeypatch):
+    """coincli.viewer() shows a viewer at once; notebook=viewer sends to it (no new viewer):
+    by the time a later cell runs, it is ready and shows the work as it comes."""
+    import coincli
+    from coincli.io import rrd as rrd_io
+
+    pytest.importorskip("rerun_notebook")
+    from rerun.notebook import Viewer
+
+    shown, sent = [], []
+    monkeypatch.setattr(rrd_io, "in_notebook", lambda: True)
+    monkeypatch.setattr(Viewer, "display", lambda self, **options: shown.append(self))
+    monkeypatch.setattr(Viewer, "_flush_hook", lambda self, data: sent.append((self, len(data))))
+    viewer = coincli.viewer(width=600, height=400)
+    assert shown == [viewer]
+    store = tmp_path / "s.zarr"
+    coincli.basin(coincli.load_preset("paper"), res=16, chunk=8, threads=1, store=store,
+                  notebook=viewer)
+    assert shown == [viewer] and sum(n for v, n in sent if v is viewer) > 10_000
+    with pytest.raises(coincli.ParameterError, match="notebook must be True or a viewer"):
+        coincli.show_basin(store, notebook="cell")
+
+
 def test_a_notebook_stream_shows_the_viewer_then_sends_to_it(monkeypatch):
     pytest.importorskip("rerun_notebook")
     from rerun.notebook import Viewer

@@ -44,4 +44,7 @@ def test_the_notebook_runs_and_shows_what_it_says(tmp_path):
     assert "image/png" in output_kinds(cell_with(nb, 'throw["phi"].plot'))
     assert "text/html" in output_kinds(cell_with(nb, "run.events_table()"))
     assert "image/png" in output_kinds(cell_with(nb, "render_basin(paper, ax=left"))
+    assert "application/vnd.jupyter.widget-view+json" in output_kinds(
+        cell_with(nb, "coincli.viewer("))  # the viewer a later cell's sweep is shown in
+    assert (tmp_path / "live.zarr" / "zarr.json").is_file()
     assert (tmp_path / "paper-basin.nc").stat().st_size > 0

@@ -293,10 +293,11 @@ class Destination:
     rrd: Path | None = None
     spawn: bool = False
     connect: str | None = None
-    notebook: bool = False
+    notebook: object = False  # True (a new viewer in the cell), or a viewer shown before
 
     def __bool__(self) -> bool:
-        return self.rrd is not None or self.spawn or self.connect is not None or self.notebook
+        return (self.rrd is not None or self.spawn or self.connect is not None
+                or self.notebook is not False)
 
     def stream(self, name: str):
         """:func:`coincli.io.rrd.open_stream` to this destination."""
@@ -304,13 +305,8 @@ class Destination:
                            notebook=self.notebook)
 
 
-# What to do outside a notebook instead of notebook=True, for the live recordings of the API.
-LIVE_ELSEWHERE = ("record it with rrd='FILE.rrd' and open it with `rerun FILE.rrd`, or stream "
-                  "it with spawn=True")
-
-
 def check_destination(rrd=None, spawn: bool = False, connect: str | None = None,
-                      notebook: bool = False) -> Destination | None:
+                      notebook=False) -> Destination | None:
     """The destination of a live recording (None if none is asked for), checked before any
     work: ParameterError (naming ``rrd``, ``spawn``, ``connect`` or ``notebook``) for an
     ``rrd`` whose name does not end in .rrd, ``spawn`` without a display, a ``connect`` that is
@@ -319,15 +315,18 @@ def check_destination(rrd=None, spawn: bool = False, connect: str | None = None,
     ImportError without rerun-notebook and RuntimeError outside a notebook."""
     from ..params import ParameterError
     from .paths import DEFAULT_CONNECT_URL, check_rrd_path, probe_viewer
-    from .rrd import NO_DISPLAY, display_available, require_notebook
+    from .rrd import LIVE_ELSEWHERE, NO_DISPLAY, display_available, require_notebook
 
-    if notebook:
+    if notebook is not False and notebook is not None:
         if rrd is not None or spawn or connect is not None:
             raise ParameterError("notebook=True shows the recording in the cell, and goes "
                                  "alone: record to a file (rrd=PATH) or a viewer in another "
                                  "call", parameters=("notebook",))
         require_notebook("notebook=True", LIVE_ELSEWHERE)
-        return Destination(notebook=True)
+        if notebook is not True and not hasattr(notebook, "add_recording"):
+            raise ParameterError(f"notebook must be True or a viewer of coincli.viewer(), got "
+                                 f"{type(notebook).__name__}", parameters=("notebook",))
+        return Destination(notebook=notebook)
 
     if rrd is not None:
         rrd = check_rrd_path(rrd)
@@ -434,6 +433,59 @@ def record_tiles(setup: dict, inbox) -> None:
                 live_map.end(elapsed, points)
             else:
                 live_map.update(written, points)
+
+
+class InlineSweep:
+    """The live map of a sweep into the store at ``path`` in a notebook's viewer: the same
+    :class:`StoreMap` as a sweep's recording process makes, here in this process (a notebook's
+    viewer belongs to its kernel); :meth:`progress` takes each SweepProgress. The map is
+    opened with the first progress (or on leaving, if there was none: a store complete
+    already), not for a sweep refused before any work. A map that cannot be shown leaves
+    ``error`` set and the sweep alone."""
+
+    def __init__(self, path, attrs: dict, where: Destination, *, verified: bool,
+                 min_interval: float = 0.5):
+        self.path, self.attrs, self.where = Path(path), attrs, where
+        self.verified, self.min_interval = verified, min_interval
+        self.error: Exception | None = None
+        self.map = self._context = None
+        self.elapsed: float | None = None
+
+    def __enter__(self):
+        return self
+
+    def _open(self) -> None:
+        if self._context is not None or self.error is not None:
+            return
+        try:
+            self._context = self.where.stream(f"coin basin {self.path}")
+            rec = self._context.__enter__()
+            self.map = StoreMap(rec, self.path, self.attrs, verified=self.verified,
+                                min_interval=self.min_interval)
+        except (OSError, RuntimeError, ValueError) as exc:
+            self.error, self.map, self._context = exc, None, None
+
+    def progress(self, update) -> None:
+        self._open()
+        if self.map is None:
+            return
+        self.elapsed = update.elapsed
+        self.map.update(update.written, [(update.elapsed, update.cells_done)])
+
+    def __exit__(self, exc_type, *exc):
+        if exc_type is None:
+            self._open()
+        if self._context is None:
+            return False
+        try:
+            if self.map is not None:
+                self.map.end(self.elapsed)
+        finally:
+            try:
+                self._context.__exit__(None, None, None)
+            except (OSError, RuntimeError) as error:
+                self.error = error
+        return False
 
 
 # -- coin fractions ------------------------------------------------------------------------------
@@ -807,5 +859,5 @@ def analysis_markdown(analysis) -> list[str]:
 
 
 __all__ = ["AnalysisRecorder", "BasinStream", "Destination", "FractionsRecorder",
-           "InProcessRecording", "StoreMap",
+           "InProcessRecording", "InlineSweep", "StoreMap",
            "analysis_markdown", "check_destination", "record_tiles", "show_basin"]

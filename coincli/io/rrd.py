@@ -215,18 +215,22 @@ def open_stream(name: str, *, rrd: Path | None = None, spawn: bool = False,
     checked (:func:`check_rrd_path`, :func:`check_connect_url`); ``spawn`` without a display
     raises RuntimeError (:func:`display_available`).
 
-    ``notebook`` (alone): the stream goes to a Rerun viewer displayed in the notebook's cell
-    now (``width`` and ``height`` in pixels). It shows what was logged once the cell has ended:
-    Jupyter hands the kernel the viewer's "ready" only between cells (Rerun's wait for it,
-    ``block_until_ready``, timed out in JupyterLab 4 with ipykernel 7 in a real browser)."""
+    ``notebook`` (alone): True, the stream goes to a Rerun viewer displayed in the notebook's
+    cell now (``width`` and ``height`` in pixels); it shows what was logged once the cell has
+    ended: Jupyter hands the kernel the viewer's "ready" only between cells (Rerun's wait for
+    it, ``block_until_ready``, timed out in JupyterLab 4 with ipykernel 7 in a real browser).
+    Or a viewer shown in an earlier cell (:func:`notebook_viewer`): it is ready, and shows
+    what is logged as it comes."""
     import rerun as rr
 
-    if notebook:
+    if notebook is not False:
         viewer_class = _viewer_class()
         rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
-        viewer = viewer_class(width=width, height=height, recording=rec)
+        if notebook is True:
+            viewer_class(width=width, height=height, recording=rec).display()
+        else:  # a viewer shown in an earlier cell (notebook_viewer): ready, so live
+            notebook.add_recording(rec)
         rec.send_recording_name(name)
-        viewer.display()
         try:
             yield rec
         finally:
@@ -326,6 +330,9 @@ def in_notebook() -> bool:
     return bool(widget is not None and widget.running_in_marimo())
 
 
+# What to do outside a notebook instead of notebook=True, for the live recordings of the API.
+LIVE_ELSEWHERE = ("record it with rrd='FILE.rrd' and open it with `rerun FILE.rrd`, or stream "
+                  "it with spawn=True")
 THROW_ELSEWHERE = ("write it with coincli.record(run, rrd='throw.rrd') and open it with "
                    "`rerun throw.rrd`, or coincli.record(run, spawn=True)")
 
@@ -337,6 +344,16 @@ def require_notebook(what: str, instead: str = THROW_ELSEWHERE) -> None:
     if not in_notebook():
         raise RuntimeError(f"nothing to show it in: {what} draws in a notebook (Jupyter); "
                            f"here {instead}")
+
+
+def notebook_viewer(*, width: int | None = None, height: int | None = None):
+    """A Rerun viewer displayed in the notebook's cell now, for the recordings of later cells
+    (``notebook=viewer``): by the time they run it is ready, and shows them live. Outside a
+    notebook RuntimeError, without rerun-notebook NotebookMissing (one line each)."""
+    require_notebook("coincli.viewer()", LIVE_ELSEWHERE)
+    viewer = _viewer_class()(width=width, height=height, use_global_recording=False)
+    viewer.display()
+    return viewer
 
 
 def inline_viewer(trajectory, *, width: int | None = None, height: int | None = None,
