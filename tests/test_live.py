@@ -23,7 +23,7 @@ from coincli.cli import app
 from coincli.enums import Certainty, Status
 from coincli.integrators import NO_LABEL
 from coincli.io import live, sweep_recording
-from coincli.io.basin_render import _ramp_colours, n_range
+from coincli.io.basin_render import n_range, ramp_colours
 from coincli.io.store import read_basin
 
 rr = pytest.importorskip("rerun")
@@ -220,7 +220,7 @@ def test_an_unwritable_recording_is_refused_before_any_work(tmp_path):
 
 def test_the_written_out_colours_are_those_of_coin_basin_render():
     assert live.RAMP == {n: live._rgb(colour)
-                         for n, colour in _ramp_colours(n_range(None)).items()}
+                         for n, colour in ramp_colours(n_range(None)).items()}
 
 
 def test_a_recording_process_that_dies_is_said_and_the_sweep_goes_on(tmp_path, monkeypatch):

@@ -39,7 +39,7 @@ DEFAULT_N_MAX = 24  # the colour scale's end: the same colours on every map, par
 MIN_MARK_PX = 2.0  # standing and uncertain cells are drawn at least this many pixels wide
 
 
-def _ramp_colours(n_max_even: int):
+def ramp_colours(n_max_even: int):
     """Colours of the even n in -n_max..n_max (n_max even, >= 2), as {n: rgba}: clockwise
     yellow to red, counter-clockwise green to blue as in the paper, spaced by the square root of
     |n| so that the common small counts stay far apart and visible against white."""
@@ -91,7 +91,7 @@ def basin_rgba(basin: Basin, n_max: int | None = None) -> tuple[np.ndarray, dict
     cells = cell_classes(basin.arrays, basin.verified)
     labelled = cells["labelled"]
     top = n_range(basin, n_max)
-    colours = _ramp_colours(top)
+    colours = ramp_colours(top)
     rgba = np.zeros(q.shape + (4,), dtype=float)  # transparent = not computed
     even = labelled & (q % 2 == 0)
     clipped = np.clip(q, -top, top)
@@ -261,7 +261,7 @@ def _n_colour_bar(fig, ax, n_max: int, short: bool = False) -> None:
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
-    colours = _ramp_colours(n_max)
+    colours = ramp_colours(n_max)
     evens = list(range(-n_max, n_max + 1, 2))
     cmap = ListedColormap([colours[n] for n in evens])
     norm = BoundaryNorm([n - 1 for n in evens] + [n_max + 1], cmap.N)

@@ -84,7 +84,7 @@ def class_ids(arrays: dict, verified: bool) -> tuple[np.ndarray, np.ndarray]:
     return n_ids, certainty_ids
 
 
-# The even n's colours of `coin basin render` (basin_render._ramp_colours(n_range(None)) as
+# The even n's colours of `coin basin render` (basin_render.ramp_colours(n_range(None)) as
 # 8-bit RGB), written out because computing them imports matplotlib: 0.2 s of CPU, a tenth of
 # the default sweep, in every recording (tests/test_live.py checks they are still the same).
 RAMP = {
@@ -198,7 +198,7 @@ class BasinStream:
         # growing context, Rerun 0.41's web viewer, in a notebook or a browser, drew a live
         # map in its default colours; the native viewer did not)
         self.known: set[int] = {n + N_BIAS for n in range(-N_CLASSES, N_CLASSES + 1)}
-        self.classes_sent = set(self.known)
+        self.classes_sent: set[int] = set()
         self.min_interval = min_interval
         self.points: list[tuple[float, int]] = []  # (s, cells done) not sent yet
         self.last_sent = -math.inf
@@ -209,8 +209,7 @@ class BasinStream:
                                make_default=True)
         rec.log(BASIN_CERTAINTY, rr.AnnotationContext(certainty_classes(rr, verified)),
                 static=True)
-        rec.log(BASIN_N, rr.AnnotationContext(
-            n_classes(rr, [i - N_BIAS for i in self.known])), static=True)
+        self._log_classes()
         rec.log(INFO, rr.TextDocument(_info_markdown(attrs, path, self.shape),
                                       media_type=rr.MediaType.MARKDOWN), static=True)
         if live:
@@ -218,6 +217,12 @@ class BasinStream:
                     static=True)
             rec.log(PROGRESS_RATE, rr.SeriesLines(names=["cells/s"], widths=[2.0],
                                                   colors=[(255, 127, 14)]), static=True)
+
+    def _log_classes(self) -> None:
+        """The n layer's context: one class per n known."""
+        self.rec.log(BASIN_N, self.rr.AnnotationContext(
+            n_classes(self.rr, [i - N_BIAS for i in self.known])), static=True)
+        self.classes_sent = set(self.known)
 
     def _put(self, s0: slice, s1: slice, arrays: dict) -> None:
         """Cells [s0, s1] of the map (s0 along the first axis, s1 along the second)."""
@@ -273,9 +278,7 @@ class BasinStream:
         if self.live:
             self._time(time.perf_counter() - self.start if elapsed is None else elapsed)
         if self.known != self.classes_sent:
-            self.rec.log(BASIN_N, rr.AnnotationContext(
-                n_classes(rr, [i - N_BIAS for i in self.known])), static=True)
-            self.classes_sent = set(self.known)
+            self._log_classes()
         if self.pending or static:
             self.rec.log(BASIN_N, rr.SegmentationImage(self.n_ids, draw_order=1.0),
                          static=static)
@@ -409,9 +412,9 @@ def record_tiles(setup: dict, inbox) -> None:
     import queue
 
     path = Path(setup["path"])
-    rrd = None if setup["rrd"] is None else Path(setup["rrd"])
-    with open_stream(f"coin basin {path}", rrd=rrd, spawn=setup["spawn"],
-                     connect=setup["connect"]) as rec:
+    where = Destination(None if setup["rrd"] is None else Path(setup["rrd"]), setup["spawn"],
+                        setup["connect"])
+    with where.stream(f"coin basin {path}") as rec:
         live_map = StoreMap(rec, path, setup["attrs"], verified=setup["verified"],
                             min_interval=setup["min_interval"])
         ended, elapsed = False, None
@@ -433,59 +436,6 @@ def record_tiles(setup: dict, inbox) -> None:
                 live_map.end(elapsed, points)
             else:
                 live_map.update(written, points)
-
-
-class InlineSweep:
-    """The live map of a sweep into the store at ``path`` in a notebook's viewer: the same
-    :class:`StoreMap` as a sweep's recording process makes, here in this process (a notebook's
-    viewer belongs to its kernel); :meth:`progress` takes each SweepProgress. The map is
-    opened with the first progress (or on leaving, if there was none: a store complete
-    already), not for a sweep refused before any work. A map that cannot be shown leaves
-    ``error`` set and the sweep alone."""
-
-    def __init__(self, path, attrs: dict, where: Destination, *, verified: bool,
-                 min_interval: float = 0.5):
-        self.path, self.attrs, self.where = Path(path), attrs, where
-        self.verified, self.min_interval = verified, min_interval
-        self.error: Exception | None = None
-        self.map = self._context = None
-        self.elapsed: float | None = None
-
-    def __enter__(self):
-        return self
-
-    def _open(self) -> None:
-        if self._context is not None or self.error is not None:
-            return
-        try:
-            self._context = self.where.stream(f"coin basin {self.path}")
-            rec = self._context.__enter__()
-            self.map = StoreMap(rec, self.path, self.attrs, verified=self.verified,
-                                min_interval=self.min_interval)
-        except (OSError, RuntimeError, ValueError) as exc:
-            self.error, self.map, self._context = exc, None, None
-
-    def progress(self, update) -> None:
-        self._open()
-        if self.map is None:
-            return
-        self.elapsed = update.elapsed
-        self.map.update(update.written, [(update.elapsed, update.cells_done)])
-
-    def __exit__(self, exc_type, *exc):
-        if exc_type is None:
-            self._open()
-        if self._context is None:
-            return False
-        try:
-            if self.map is not None:
-                self.map.end(self.elapsed)
-        finally:
-            try:
-                self._context.__exit__(None, None, None)
-            except (OSError, RuntimeError) as error:
-                self.error = error
-        return False
 
 
 # -- coin fractions ------------------------------------------------------------------------------
@@ -576,6 +526,48 @@ class InProcessRecording:
                 self._context.__exit__(None, None, None)
             except (OSError, RuntimeError) as error:
                 self.error = error
+        return False
+
+
+class InlineSweep(InProcessRecording):
+    """The live map of a sweep into the store at ``path`` in a notebook's viewer: the same
+    :class:`StoreMap` as a sweep's recording process makes, here in this process (a notebook's
+    viewer belongs to its kernel); :meth:`progress` takes each SweepProgress. The map is
+    opened with the first progress (or on leaving, if there was none: a store complete
+    already), not for a sweep refused before any work. A map that cannot be shown leaves
+    ``error`` set and the sweep alone."""
+
+    def __init__(self, path, attrs: dict, where: Destination, *, verified: bool,
+                 min_interval: float = 0.5):
+        self.path, self.attrs, self.where = Path(path), attrs, where
+        self.verified, self.min_interval = verified, min_interval
+        self.map: StoreMap | None = None
+        self.elapsed: float | None = None
+
+    def __enter__(self):
+        return self
+
+    def _start(self) -> None:
+        if (self.map is None and self.error is None and self._context is None
+                and self._open(f"coin basin {self.path}")):
+            self.map = StoreMap(self.rec, self.path, self.attrs, verified=self.verified,
+                                min_interval=self.min_interval)
+
+    def progress(self, update) -> None:
+        self._start()
+        if self.map is None:
+            return
+        self.elapsed = update.elapsed
+        self.map.update(update.written, [(update.elapsed, update.cells_done)])
+
+    def __exit__(self, exc_type, *exc):
+        if exc_type is None:
+            self._start()
+        try:
+            if self.map is not None:
+                self.map.end(self.elapsed)
+        finally:
+            super().__exit__(exc_type, *exc)
         return False
 
 
