@@ -127,3 +127,22 @@ def test_standing_rest_below_k_cr_follows_the_exact_energies(k, stays):
     out = words(invoke("stability", "--k", str(k)).stdout)
     assert "a standing coin cannot be at rest" in out
     assert ("shallow standing well" in out) is stays
+
+
+def test_k_cr_is_labelled_as_the_papers_and_the_models():
+    """docs/model.md, section 9: the paper's printed k_cr (eq. 13) is twice the threshold the
+    model uses. Both are printed, each labelled, in the table, the JSON and the report."""
+    out = words(invoke("stability").stdout)
+    assert "k_cr (paper, eq. 13) │ 308.96 N/m" in out and "twice too high" in out
+    assert "k_cr / 2 (model) │ 154.48 N/m" in out
+    data = json.loads(invoke("stability", "--k", "250", "--json").stdout)
+    assert data["k_cr"] == data["k_cr_paper"] == pytest.approx(308.96, abs=0.005)
+    assert data["k_cr_model"] == data["k_stand_exact"] == pytest.approx(data["k_cr"] / 2)
+    assert data["standing_static"] is False and data["standing_static_model"] is True
+    assert "twice too high" in data["k_cr_note"] and "k_cr_model" in data["k_cr_note"]
+    out = words(invoke("stability", "--k", "250").stdout)
+    assert "standing (phi = pi/2): static in the model (k > k_cr / 2), not by the paper's" in out
+    assert "below the paper's k_cr = 308.96 N/m" in out
+    report = analyse(load("paper").scene.with_overrides(verify=False, k=250.0))
+    assert "standing (k > k_cr / 2; not by the paper's k_cr)" in repr(report)
+    assert "k_cr / 2 (model)" in repr(report) and "k_cr (paper, eq. 13)" in repr(report)

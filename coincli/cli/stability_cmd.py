@@ -1,10 +1,13 @@
-"""`coin stability`: the static energy table and the critical stiffnesses (paper, section 3)."""
+"""`coin stability`: the static energy table and the critical stiffnesses (paper, section 3),
+and with ``--shock`` the minimal shocks that take a coin at rest out of its well."""
 
+from typing import Annotated
 
+import typer
 from rich.table import Table
 
 from ..version import __version__
-from . import app
+from .app import app
 from .common import (
     COpt,
     DiameterOpt,
@@ -16,6 +19,7 @@ from .common import (
     PresetOpt,
     ThicknessOpt,
     build_scene,
+    compile_first,
     console,
     print_json,
     user_errors,
@@ -27,17 +31,38 @@ from .text import say
 def stability_command(
     preset: PresetOpt = "paper", diameter: DiameterOpt = None, thickness: ThicknessOpt = None,
     mass: MassOpt = None, inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None,
-    g: GOpt = None, json_out: JsonOpt = False,
+    g: GOpt = None,
+    shock: Annotated[bool, typer.Option(
+        "--shock", metavar="", help="Also find the minimal shocks: the smallest kick (vphi, vx "
+        "or vy) that takes a coin at rest, lying or standing, to another well, beside the kick "
+        "the energy barrier alone asks (a few seconds).")] = False,
+    json_out: JsonOpt = False,
 ) -> None:
-    """Static states, the energy each needs to lose stability, k_min, k_cr and E_crit."""
+    """Static states, the energy each needs to lose stability, k_min, k_cr and E_crit.
+
+    With --shock, the smallest kicks that topple a standing coin or turn a lying one over, beside the kicks the static energy barrier alone asks.
+    """  # noqa: E501 (typer keeps a docstring's line breaks)
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
                             inertia=inertia, k=k, c=c, g=g)
     from .. import api
 
     report = api.stability(scene)
+    shocks = None
+    if shock:
+        compile_first(quiet=json_out)
+        with user_errors():
+            shocks = {state: {kind: api.minimal_shock(scene, state, kind) for kind in KICKS}
+                      for state in STATES}
     if json_out:
-        print_json({"version": __version__, "parameters": scene.to_dict(), **report.to_dict()})
+        extra = {} if shocks is None else {
+            "shocks": {state: {kind: found.value for kind, found in row.items()}
+                       for state, row in shocks.items()},
+            "shock_units": {kind: found.unit for kind, found in shocks[STATES[0]].items()},
+            "shock_details": {state: {kind: found.to_dict() for kind, found in row.items()}
+                              for state, row in shocks.items()}}
+        print_json({"version": __version__, "parameters": scene.to_dict(), **report.to_dict(),
+                    **extra})
         return
     from ..statics import MJ as mj
     from ..statics import critical_rows, energy_rows
@@ -59,15 +84,19 @@ def stability_command(
     states = ["lying (phi = 0): static"]
     if report.standing_static:
         states.append("standing (phi = pi/2): static")
+    elif report.standing_static_model:
+        states.append("standing (phi = pi/2): static in the model (k > k_cr / 2), not by the "
+                      "paper's k_cr")
     say(console, "Static states for k = {:g} N/m: {}.".format(report.k, "; ".join(states)))
     if not report.standing_static:
         if report.standing_well_depth > 0:
             say(console,
-                f"[bold yellow]k = {report.k:g} N/m is below k_cr = {report.k_cr:.2f} N/m: by the "
-                "paper's criterion (eq. 13) a standing coin cannot be at rest.[/] Counting the "
-                "foundation's elastic energy, a shallow standing well of "
+                f"[bold yellow]k = {report.k:g} N/m is below the paper's k_cr = "
+                f"{report.k_cr:.2f} N/m: by its criterion (eq. 13) a standing coin cannot be at "
+                "rest.[/] Counting the foundation's elastic energy, a shallow standing well of "
                 f"{report.standing_well_depth * mj:.3g} mJ remains down to k = "
-                f"{report.k_stand_exact:.1f} N/m, so a coin may still end standing.")
+                f"{report.k_stand_exact:.1f} N/m (k_cr / 2, the model's threshold), so a coin "
+                "may still end standing.")
         elif report.k > report.k_rock:
             say(console,
                 f"[bold yellow]k = {report.k:g} N/m is below k_cr / 2 = "
@@ -76,10 +105,60 @@ def stability_command(
                 "rim turns unstable), but its energy is above E_crit, so a throw that ends "
                 "there is never certified: it stays unsettled.")
         else:
-            say(console, f"[bold yellow]k = {report.k:g} N/m is below k_cr = {report.k_cr:.2f} "
-                         f"N/m and below {report.k_rock:.1f} N/m, where rocking on the rim "
+            say(console, f"[bold yellow]k = {report.k:g} N/m is below the paper's k_cr = "
+                         f"{report.k_cr:.2f} N/m and below {report.k_rock:.1f} N/m, where "
+                         "rocking on the rim "
                          "turns unstable: a standing coin cannot be at rest (by the paper's "
                          "criterion and by the exact energies); every coin ends lying.[/]")
     if not report.single_corner_contact:
         say(console, f"[yellow]k is below k_min = {report.k_min:.1f} N/m: a coin at phi_cr "
                      "sinks onto a second corner (eq. 10 does not hold).[/]")
+    if shocks is not None:
+        print_shocks(shocks)
+
+
+STATES = ("standing", "lying")
+SIGNS = {True: "agree", False: "differ", None: "one"}  # do the two signs' values agree
+KICKS = ("vphi", "vx", "vy")  # coincli.shock.Kick, named here without loading the kernels
+
+
+def print_shocks(shocks: dict) -> None:
+    """The minimal shocks as a table, with what each value means below it."""
+    from ..statics import MJ as mj
+
+    table = Table(title="Minimal shocks: the smallest kick to another well",
+                  title_justify="left")
+    for name in ("state", "kick"):
+        table.add_column(name)
+    for name in ("minimal shock", "static kick", "ratio"):
+        table.add_column(name, justify="right")
+    table.add_column("signs")
+    notes: list[str] = []
+    throws = seconds = 0
+    for state, row in shocks.items():
+        for kind, found in row.items():
+            throws, seconds = throws + found.throws, seconds + found.seconds
+            mark = ""
+            for text in (found.reason, found.note):
+                if text:
+                    if text not in notes:
+                        notes.append(text)
+                    mark += f" ({notes.index(text) + 1})"
+            static = "-" if found.static_kick is None else f"{found.static_kick:#.5g} {found.unit}"
+            if found.value is None:
+                table.add_row(state, kind, "none" + mark, static, "", "")
+            else:
+                table.add_row(state, kind, f"{found.value:#.5g} {found.unit}{mark}", static,
+                              f"{found.ratio:.3f}", SIGNS[found.signs_agree])
+            state = ""
+    console.print(table)
+    depth = {state: next(iter(row.values())).depth for state, row in shocks.items()}
+    say(console, "A coin at rest on two corners is kicked once: vphi about its centroid, vx or vy "
+                 "of its centroid, each sign searched; the minimal shock is the smallest kick "
+                 "verified to take it to another well (0.01 % bisection). The static kick is "
+                 "what the energy barrier alone asks, sqrt(2 dV / I) for vphi and sqrt(2 dV / m) "
+                 "for vx and vy, with dV = E_crit minus the energy at rest, springs counted: "
+                 + ", ".join(f"{dv * mj:.5g} mJ {state}" for state, dv in depth.items()) + ".")
+    for i, text in enumerate(notes, 1):
+        say(console, f"({i}) {text}.", indent=4)
+    say(console, f"[dim]{throws:,} throws in {seconds:.1f} s (docs/stability.md).[/]")
