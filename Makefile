@@ -74,6 +74,7 @@ docs-build: install
 # <!-- long --> (tests/test_docs.py).
 docs: install
 	$(BIN)/python benchmarks/docs_tables.py
+	$(BIN)/python benchmarks/docs_notebook.py
 	COIN_DOCS_LONG=1 $(BIN)/python -m pytest -q -n 0 tests/test_docs.py
 	$(COIN) accuracy --res 32 -o docs/accuracy.png --table docs/accuracy.json
 	$(COIN) accuracy --preset thick --res 24 -o docs/accuracy-thick.png \

@@ -8,8 +8,8 @@ benchmarks/peers.json, each with the version, the machine and the date in one li
     python benchmarks/docs_tables.py --render      # rewrites the tables from bench.json only
 
 The tables go between marker comments (``<!-- bench-table:start -->`` ... ``:end -->``) in
-docs/performance.md and README.md, so that the pages hold no figure typed by hand. `make docs`
-runs the first form.
+docs/performance.md, so that the page holds no figure typed by hand; the README links the page
+rather than copying figures that would outlive their version. `make docs` runs the first form.
 """
 
 from __future__ import annotations
@@ -29,7 +29,6 @@ REPO = HERE.parent
 BENCH = HERE / "bench.json"
 PEERS = HERE / "peers.json"
 PERFORMANCE = REPO / "docs" / "performance.md"
-README = REPO / "README.md"
 
 
 def machine() -> str:
@@ -95,27 +94,6 @@ def bench_table(bench: dict) -> str:
     return "\n".join(lines)
 
 
-def headline_table(bench: dict) -> str:
-    """The README's few figures."""
-    default = next(r for r in bench["rows"] if r["verified"] and r["name"].endswith("(default)"))
-    paper = next(r for r in bench["rows"] if r["full_run"])
-    robust = bench["robust_cells"]
-    rows = ["| figure | value |", "|---|---:|",
-            f"| a verified label, one thread | {default['ms_per_trajectory']:.3g} ms |",
-            f"| the paper's method (symplectic Euler, h = 1e-6 s, 2 s) | "
-            f"{paper['ms_per_trajectory']:.3g} ms |",
-            f"| right on {robust} robust cells: verified default, paper's method | "
-            f"{100 * default['label_agreement_robust']:.2f} %, "
-            f"{100 * paper['label_agreement_robust']:.2f} % |"]
-    basin = bench["basin"]
-    if basin:
-        rows.append(f"| the default {basin['res']} x {basin['res']} basin, whole command, "
-                    f"{basin['threads']} threads | {basin['wall_seconds']:.1f} s |")
-    rows.append(f"| `coin --help` | {bench['startup']['help_seconds']:.2f} s |")
-    return "\n".join([provenance(bench["measured"]) + " How each is measured: "
-                      "[Performance](docs/performance.md).", "", *rows])
-
-
 def peers_table(peers: dict) -> str:
     """benchmarks/peers.py's results: the same throws with scipy and diffrax."""
     versions, machine_info = peers["versions"], peers["machine"]
@@ -160,8 +138,7 @@ def main(argv=None) -> int:
         BENCH.write_text(json.dumps(bench, indent=1) + "\n")
     replace_between(PERFORMANCE, "bench-table", bench_table(bench))
     replace_between(PERFORMANCE, "peers-table", peers_table(json.loads(PEERS.read_text())))
-    replace_between(README, "bench-headline", headline_table(bench))
-    print(f"wrote the tables of {PERFORMANCE.relative_to(REPO)} and {README.name}")
+    print(f"wrote the tables of {PERFORMANCE.relative_to(REPO)}")
     return 0
 
 

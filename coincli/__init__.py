@@ -14,16 +14,16 @@ Names load on first use, so ``import coincli`` (and ``coin --help``) stays cheap
 
 from .version import __version__
 
-_API = ("Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan", "FractionsProgress",
-        "Method", "Outcome", "ParameterError", "Scene", "Status", "StopReason", "SweepEstimate",
-        "SweepPlan", "SweepProgress", "SweepReport", "SweepStart", "SweepTooLong", "Trajectory",
-        "analyze", "basin", "basin_attrs", "basin_stats", "cell_scene", "classify",
-        "compile_kernels",
-        "estimate_fractions", "estimate_sweep", "export_basin",
-        "fractions", "fractions_over", "load_preset", "open_basin", "open_fractions",
-        "plan_fractions", "plan_sweep", "record", "render_analysis", "render_basin",
-        "render_fractions", "run_fractions", "show_basin", "simulate", "stability", "sweep",
-        "verify_basin", "viewer")  # = coincli.api.__all__ (tested)
+_API = ("BasinStats", "Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
+        "FractionsProgress", "Method", "MinimalShock", "Outcome", "ParameterError", "Scene",
+        "Status", "StopReason", "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport",
+        "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin", "basin_attrs",
+        "basin_stats", "cell_scene", "classify", "compile_kernels", "estimate_fractions",
+        "estimate_sweep", "export_basin", "fractions", "fractions_over", "load_preset",
+        "minimal_shock", "open_basin", "open_fractions", "plan_fractions", "plan_sweep",
+        "record", "render_analysis", "render_basin", "render_fractions", "run_fractions",
+        "show_basin", "simulate", "stability", "sweep", "verify_basin", "viewer")
+# = coincli.api.__all__ (tested)
 
 __all__ = ["__version__", *_API]
 

@@ -56,71 +56,33 @@ from .params import (
     RunSettings,
     Scene,
     model_params,
-    parse_number,
     parse_whole,
     run_settings,
     shown,
     state_array,
     step_budget,
 )
+from .quantities import parse_span, resolve_span
 
 MAX_CELLS_PER_AXIS = 1 << 16
 MIRROR_ODD = ("phi0", "vx", "vphi")  # the initial conditions the mirror negates (see above)
 
 
 # -- parsing ------------------------------------------------------------------------------------
-def _parse_float(name: str, text) -> float:
-    """A finite number from option text (:func:`coincli.params.parse_number`: ASCII only) or
-    a Python number."""
-    if isinstance(text, bool) or not isinstance(text, str | int | float):
-        raise ParameterError(f"{name}: {shown(text)} is not a number or a LO:HI range",
-                             parameters=(name,))
-    if isinstance(text, str):
-        try:
-            return parse_number(text)
-        except ParameterError as exc:
-            raise ParameterError(f"{name}: {exc}", parameters=(name,)) from None
-    try:
-        value = float(text)
-    except OverflowError:  # an int past 1.8e308
-        value = math.inf
-    if not math.isfinite(value):
-        raise ParameterError(f"{name} must be finite, got {shown(text)}", parameters=(name,))
-    return value
-
-
 def format_range(lo: float, hi: float) -> str:
     return f"{lo:g}:{hi:g}"
 
 
-def parse_range(name: str, value) -> float | tuple[float, float]:
+def parse_range(name: str, value, r: float | None = None) -> float | tuple[float, float]:
     """``'0:2'`` or ``(0, 2)`` -> (0.0, 2.0), a swept axis; ``'1.5'`` or ``1.5`` -> 1.5, a fixed
-    value."""
-    if isinstance(value, tuple | list):
-        if len(value) != 2:
-            raise ParameterError(f"{name}: a range is (LO, HI), got {shown(value)}",
-                                 parameters=(name,))
-        lo, hi = (_parse_float(name, v) for v in value)
-        text = f"{lo!r}:{hi!r}"
-    elif isinstance(value, str):
-        text = value.strip()
-        if ":" not in text:
-            return _parse_float(name, text)
-        parts = text.split(":")
-        if len(parts) != 2 or not parts[0].strip() or not parts[1].strip():
-            raise ParameterError(f"{name}: '{shown(text)}' is not a LO:HI range",
-                                 parameters=(name,))
-        lo, hi = (_parse_float(name, part) for part in parts)
-    else:
-        return _parse_float(name, value)
-    if not lo < hi:
-        raise ParameterError(f"{name} {shown(text)}: empty range (LO must be below HI)",
+    value (:mod:`coincli.quantities`: ``'-pi:pi'``, ``'r:5r'``, ...); multiples of r in metres
+    for a coin of half diagonal ``r``."""
+    span = parse_span(name, value)
+    ends = span if isinstance(span, tuple) else (span,)
+    if r is None and any(end.per_r for end in ends):
+        raise ParameterError(f"{name}: multiples of r need a coin: give the value in metres",
                              parameters=(name,))
-    if not math.isfinite(hi - lo):  # its cell centres would be NaN
-        raise ParameterError(f"{name} {shown(text)}: the range is too wide to divide into "
-                             "cells (HI - LO is past the largest float, 1.8e308); narrow it",
-                             parameters=(name,))
-    return lo, hi
+    return resolve_span(span, math.nan if r is None else r)
 
 
 def parse_pair(option: str, text, minimum: int = 1) -> tuple[int, int]:
@@ -304,9 +266,11 @@ class Grid:
                 "mirror": self.mirror_dims or None}
 
 
-def split_options(options: dict) -> tuple[dict[str, tuple[float, float]], dict[str, float]]:
+def split_options(options: dict, r: float) -> tuple[dict[str, tuple[float, float]],
+                                                   dict[str, float]]:
     """Initial-condition options (name -> 'LO:HI' | (lo, hi) | value | None) -> (swept ranges,
-    fixed values). vy and vphi sweep their default ranges unless given."""
+    fixed values), in SI units for a coin of half diagonal ``r``. vy and vphi sweep their
+    default ranges unless given."""
     unknown = set(options) - set(IC_NAMES)
     if unknown:
         raise ParameterError(f"unknown initial condition(s) {sorted(unknown)}; "
@@ -319,7 +283,7 @@ def split_options(options: dict) -> tuple[dict[str, tuple[float, float]], dict[s
             if name in DEFAULT_RANGES:
                 ranges[name] = DEFAULT_RANGES[name]
             continue
-        value = parse_range(name, text)
+        value = parse_range(name, text, r)
         if isinstance(value, tuple):
             ranges[name] = value
         else:

@@ -208,6 +208,8 @@ class Scene:
 
     def with_overrides(self, **overrides) -> Scene:
         """Return a copy with flat overrides such as ``mass=...``, ``vy=...``, ``method=...``.
+        An initial condition may be given as text (:mod:`coincli.quantities`: ``phi0="pi/2"``,
+        ``y0="2r"``, a multiple of the half diagonal of the coin with its overrides).
 
         None values are ignored, so CLI options that were not given leave the preset alone.
         """
@@ -229,6 +231,16 @@ class Scene:
                 known = ", ".join(["g", *(f.name for obj in groups.values()
                                           for f in fields(obj))])
                 raise ParameterError(f"unknown parameter '{key}'; known: {known}")
+        written = {key: value for key, value in changes["initial"].items()
+                   if not isinstance(value, numbers.Real)}
+        if written:  # text or a Quantity: in SI units, for the coin as overridden
+            from .quantities import parse_quantity
+
+            coin = replace(self.coin, **changes["coin"])
+            for key, value in written.items():
+                quantity = parse_quantity(key, value)
+                changes["initial"][key] = quantity.resolve(coin.r) if quantity.per_r \
+                    else quantity.value
         new = {name: replace(obj, **changes[name]) for name, obj in groups.items()}
         return replace(self, **new, **top)
 
@@ -247,6 +259,8 @@ FLAT_KEYS = {
     "initial": [f.name for f in fields(InitialState)],
     "integration": [f.name for f in fields(Integration)],
 }
+# Every flat name Scene.with_overrides takes.
+OVERRIDE_KEYS = ("g", *(name for names in FLAT_KEYS.values() for name in names))
 
 
 def scene_from_dict(data: dict) -> Scene:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -161,4 +162,96 @@ def cost_summary(cells: int, tile_seconds: np.ndarray, done: np.ndarray, runs: l
     return cost
 
 
-__all__ = ["BasinCounts", "basin_stats", "cost_summary", "outcome_rows", "proportion", "wilson"]
+class BasinStats(Mapping):
+    """The statistics of a basin (``coincli.basin_stats``): outcome counts and fractions,
+    P(standing) with its 95 % Wilson interval, the cells without a label, the certain and
+    uncertain cells of a verified sweep, the tiles (done, damaged) and the cost. The figures
+    most asked for are attributes (``stats.standing["probability"]``, ``stats.outcomes``);
+    :meth:`to_dict` gives everything as plain values (``coin basin stats --json``: a value that
+    cannot be known is None), and the object reads as that mapping too
+    (``stats["standing"]``)."""
+
+    def __init__(self, counts: BasinCounts, done: np.ndarray, damaged,
+                 tile_seconds: np.ndarray, runs: list[dict], metadata_damaged=(),
+                 parameters_changed=()):
+        from .jsonable import jsonable
+
+        out = counts.summary()
+        out.update({"tiles_total": int(np.size(done)),
+                    "tiles_done": int(np.count_nonzero(done)),
+                    "tiles_damaged": [list(map(int, t)) for t in sorted(damaged)]})
+        out["cost"] = cost_summary(out["computed"], tile_seconds, done, runs)
+        out["metadata_damaged"] = list(metadata_damaged)
+        out["parameters_changed"] = list(parameters_changed)
+        out["warnings"] = stats_warnings(out)
+        self._values = jsonable(out)
+
+    def to_dict(self) -> dict:
+        import copy
+
+        return copy.deepcopy(self._values)
+
+    def __getitem__(self, key: str):
+        return self._values[key]
+
+    def __iter__(self):
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    @property
+    def outcomes(self) -> list[dict]:
+        return self._values["outcomes"]
+
+    @property
+    def standing(self) -> dict:
+        return self._values["standing"]
+
+    @property
+    def standing_certain(self) -> dict | None:
+        return self._values.get("standing_certain")
+
+    @property
+    def uncertain(self) -> dict | None:
+        return self._values.get("uncertain")
+
+    @property
+    def warnings(self) -> list[str]:
+        return self._values["warnings"]
+
+    @property
+    def complete(self) -> bool:
+        return self._values["tiles_done"] == self._values["tiles_total"]
+
+    def __repr__(self) -> str:
+        p = self.standing
+        return (f"BasinStats({self._values['cells']:,} cells, {self._values['computed']:,} "
+                f"computed; P(standing) = {p['probability']:.4g} "
+                f"[{p['low']:.4g}, {p['high']:.4g}])" if p["probability"] is not None
+                else f"BasinStats({self._values['cells']:,} cells, nothing labelled)")
+
+
+def stats_warnings(stats: dict) -> list[str]:
+    """What the numbers of a basin's statistics do not say: a partial store's fractions are of
+    the tiles computed so far, which are no random sample of the map (a sweep computes the
+    highest-energy tiles first); changed parameters and damaged metadata (what verifying the
+    store finds)."""
+    out = []
+    done, total = stats["tiles_done"], stats["tiles_total"]
+    if done < total:
+        out.append(f"partial store: {done} of {total} tiles computed "
+                   f"({100 * done / total:.1f} %); the fractions and intervals are over the "
+                   "computed cells only, which are no random sample of the map: they need not "
+                   "hold for the whole map")
+    out += [f"parameters changed in {problem}" for problem in stats.get("parameters_changed", [])]
+    metadata = stats.get("metadata_damaged", [])
+    if metadata:
+        out.append(f"{len(metadata)} metadata file{'s' if len(metadata) > 1 else ''} damaged "
+                   f"({', '.join(metadata[:4])}{' ...' if len(metadata) > 4 else ''}): "
+                   "verifying the store lists them, resuming the sweep rewrites them")
+    return out
+
+
+__all__ = ["BasinCounts", "BasinStats", "basin_stats", "cost_summary", "outcome_rows",
+           "proportion", "stats_warnings", "wilson"]

@@ -1,6 +1,6 @@
 """One trajectory: run a scene, return its outcome as plain data (no printing, no files).
 
-:func:`simulate` returns a :class:`Trajectory` (outcome, status, certainty, final state,
+:func:`simulate` returns a :class:`Throw` (outcome, status, certainty, final state,
 energies, and on request the samples at a display rate and every contact event);
 :func:`classify` only the :class:`Outcome` of one initial condition, as Attractors.jl classifies
 one initial condition. Both climb the ladder of settings (:mod:`coincli.integrators.ladder`)
@@ -40,16 +40,18 @@ from .integrators.ladder import ladder_of
 from .jit import compiled, is_active, python
 from .model import energies, horizon_text, rounded_quarter_turns, scene_horizon
 from .params import (
+    OVERRIDE_KEYS,
     STATE_NAMES,
     ParameterError,
     Scene,
     model_params,
+    require_scene,
     run_settings,
     state_array,
     validate,
 )
 
-# The columns of ``Trajectory.samples`` and ``Trajectory.events``, named once: every table,
+# The columns of ``Throw.samples`` and ``Throw.events``, named once: every table,
 # Dataset, CSV header and recording of a throw takes its names from here, its units and
 # descriptions from QUANTITIES.
 SAMPLE_NAMES = ("t", *STATE_NAMES)
@@ -107,12 +109,14 @@ class Rung(NamedTuple):
 
 
 @dataclass
-class Trajectory:
-    """Outcome of one throw. ``quarter_turns`` is the final count (the well holding the coin
-    once its energy fell below E_crit) when ``settled``, else round(2 phi / pi) at the end time;
-    ``rounded_quarter_turns`` is always the paper's round(2 phi / pi) at the end. ``certainty``
-    says whether it converged on the ladder (``rungs``: every run made, coarse to fine; the
-    trajectory's own numbers are the last one's)."""
+class Throw:
+    """Outcome of one throw (:func:`coincli.simulate` gives it as a :class:`coincli.Trajectory`,
+    with its views: a Dataset, a table, an animation, a viewer). ``quarter_turns`` is the
+    final count (the well holding the coin once its energy fell below E_crit) when
+    ``settled``, else round(2 phi / pi) at the end time; ``rounded_quarter_turns`` is always
+    the paper's round(2 phi / pi) at the end. ``certainty`` says whether it converged on the
+    ladder (``rungs``: every run made, coarse to fine; the throw's own numbers are the last
+    one's)."""
 
     scene: Scene
     status: Status
@@ -142,42 +146,6 @@ class Trajectory:
         """The final state by name (``final_state`` is the same as an array)."""
         return State(*map(float, self.final_state))
 
-    # The views below draw on the io layer, above this one: imported when called, so that a
-    # throw computed without them costs none of their libraries (the layering test allows
-    # exactly these imports, inside functions only).
-    def to_dataset(self):
-        """The samples as an ``xarray.Dataset``: time ``t`` as the coordinate, the state and
-        the energies as variables with ``units`` and ``long_name``, the outcome and the scene's
-        parameters as flat attributes (``ds.to_netcdf()`` works). Needs ``sample_dt``."""
-        from .io.timeseries import trajectory_dataset
-
-        return trajectory_dataset(self)
-
-    def events_table(self):
-        """Every contact onset and lift-off as a ``pandas.DataFrame``, one row per event, columns
-        EVENT_NAMES (``kind`` as "onset" or "lift-off"); units in ``.attrs["units"]``. Needs
-        ``record_events=True``."""
-        from .io.timeseries import events_table
-
-        return events_table(self)
-
-    def show(self, *, width: int | None = None, height: int | None = None):
-        """Show the throw in the notebook's cell now, in Rerun's viewer (``width`` and
-        ``height`` in pixels; needs the extra ``coincli[notebook]``). Outside a notebook a
-        one-line RuntimeError says what to do instead (:func:`coincli.record`). A throw that
-        kept no samples or events is simulated again keeping them (every DEFAULT_LOG_EVERY s);
-        ``coincli.record(run, notebook=True)`` also gives the viewer object."""
-        from .io.rrd import show_inline
-
-        return show_inline(self, width=width, height=height)
-
-    def animate(self, path, *, fps: int | None = None, seconds: float | None = None):
-        """Write an animation of the throw (``.gif``; ``.mp4`` with ffmpeg) drawn with
-        matplotlib; returns its path. See :func:`coincli.io.animation.animate`."""
-        from .io.animation import animate
-
-        return animate(self, path, fps=fps, seconds=seconds)
-
     def __repr__(self) -> str:  # one line in a notebook; everything: summary()
         n = "no count" if self.quarter_turns is None else \
             f"n = {self.quarter_turns} ({self.pose})"
@@ -190,7 +158,7 @@ class Trajectory:
             kept.append(f"{len(self.samples):,} samples")
         if self.events is not None and len(self.events):
             kept.append(f"{len(self.events):,} events")
-        return (f"Trajectory({n}, {self.status}{when}, {self.certainty}{rung}, "
+        return (f"{type(self).__name__}({n}, {self.status}{when}, {self.certainty}{rung}, "
                 f"{self.steps:,} step{'s' * (self.steps != 1)}"
                 f"{''.join(', ' + k for k in kept)})")
 
@@ -252,15 +220,24 @@ def pose_of(quarter_turns: int | None) -> str:
     return "standing" if quarter_turns % 2 else "lying"
 
 
+def with_keywords(scene: Scene, overrides: dict, function: str) -> Scene:
+    """``scene`` with the keyword ``overrides`` of a call of ``function``; an unknown keyword
+    is a TypeError, as Python says it of any function."""
+    require_scene(scene)
+    if not overrides:
+        return scene
+    unknown = sorted(set(overrides) - set(OVERRIDE_KEYS))
+    if unknown:
+        raise TypeError(f"{function}() got an unexpected keyword argument {unknown[0]!r}; a "
+                        f"scene's values are: {', '.join(OVERRIDE_KEYS)}")
+    return scene.with_overrides(**overrides)
+
+
 def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: bool = False,
-             force: bool = False, engine: Engine = Engine.AUTO, control=None) -> Trajectory:
-    """Integrate one throw, verified on the ladder of settings unless ``verify=False``. With
-    ``sample_dt`` the state is kept every ``sample_dt`` seconds of simulated time (exact times
-    for the adaptive methods); with ``record_events`` every contact onset and lift-off is kept
-    with its state. ``force`` allows a fixed step beyond the method's stable step. ``engine``
-    chooses what runs the kernel (the same result to rounding: compiled code fuses multiplies
-    and adds, :mod:`coincli.jit`); ``control`` (from
-    :func:`coincli.integrators.new_control`) lets another thread stop it."""
+             force: bool = False, engine: Engine = Engine.AUTO, control=None,
+             **overrides) -> Throw:
+    """One throw, as :func:`coincli.simulate` describes (which gives it with its views)."""
+    scene = with_keywords(scene, overrides, "simulate")
     validate(scene)
     method = check_step(scene, force=force)
     integ = scene.integration
@@ -358,7 +335,7 @@ def _run(p, settings, state0, samples, events, final, control, engine: Engine):
 
 
 def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, record_events,
-                wall, certainty, rungs, budget) -> Trajectory:
+                wall, certainty, rungs, budget) -> Throw:
     integ = scene.integration
     status = Status(result.status)
     t = result.t
@@ -403,7 +380,7 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
     with np.errstate(over="ignore", invalid="ignore"):  # a state past FINITE_BOUND: inf
         e0 = sum(energies(p, state0))
     e1 = sum(energies(p, final)) if status != Status.NONFINITE else math.nan
-    return Trajectory(
+    return Throw(
         scene=scene, status=status, t_final=float(t), final_state=final.copy(),
         steps=int(sum(r.steps for r in rungs)), settle_time=float(settle_time),
         quarter_turns=quarter_turns, rounded_quarter_turns=rounded, energy_initial=float(e0),
@@ -413,7 +390,8 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
         certainty=certainty, rungs=rungs, sample_dt=float(sample_dt) if sample_dt else None)
 
 
-def classify(scene: Scene, *, force: bool = False) -> Outcome:
-    """The outcome of the scene's initial condition (nothing recorded on the way)."""
-    run = simulate(scene, force=force)
+def classify(scene: Scene, *, force: bool = False, **overrides) -> Outcome:
+    """The outcome of the scene's initial condition (nothing recorded on the way);
+    ``overrides`` as :func:`simulate` takes them."""
+    run = simulate(with_keywords(scene, overrides, "classify"), force=force)
     return Outcome(run.quarter_turns, run.status, run.settle_time, run.certainty)

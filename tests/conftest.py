@@ -4,6 +4,8 @@ contract (ModelParams and RunSettings in, a RunResult and the final state out)."
 from __future__ import annotations
 
 import contextlib
+import io
+import os
 import signal
 from typing import NamedTuple
 
@@ -21,7 +23,18 @@ from coincli.presets import load
 def pytest_configure(config):
     """Compile the kernels once, here, before pytest-xdist starts its workers, which on a cold
     cache would each compile all of them at the same time (warm_up compiles its two drivers in
-    two processes: one core each)."""
+    two processes: one core each).
+
+    And first, before any test module imports it, the command line: its consoles
+    (coincli.cli.common) are created then, as they would be with the output piped (no
+    terminal, so no colour codes, whatever terminal the suite runs in: rich decides a console's
+    colours once, when it is made) and with no COLUMNS in the environment (so that they read
+    the width at every print, and the width the tests give, :func:`terminal_width` or a test's
+    own env={"COLUMNS": ...}, is the one they print at)."""
+    for name in ("COLUMNS", "LINES"):
+        os.environ.pop(name, None)
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        import coincli.cli  # noqa: F401
     from coincli.jit import kernels_cached
 
     if hasattr(config, "workerinput") or kernels_cached():
@@ -32,6 +45,19 @@ def pytest_configure(config):
     scene = load("paper").scene
     warm_up(model_params(scene), run_settings(scene.integration),
             np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+
+
+TEST_COLUMNS = "80"  # the width every command prints at in the tests, as CI has it
+
+
+@pytest.fixture(autouse=True)
+def terminal_width(monkeypatch):
+    """Every command a test runs (in this process or as a child) prints for TEST_COLUMNS
+    columns, whatever the terminal the suite runs in: tables laid out alike everywhere.
+    Paragraphs are never broken when the output is no terminal (coincli.cli.text.say), so
+    that a long temporary path changes no line a test reads."""
+    monkeypatch.setenv("COLUMNS", TEST_COLUMNS)
+    monkeypatch.delenv("LINES", raising=False)
 
 
 # The scenes of the integrator and model tests run a single pass (verify=False): they test one

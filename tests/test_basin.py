@@ -24,11 +24,11 @@ import coincli
 from coincli.cli import app
 from coincli.grid import compute_tile, make_grid, make_spec, parse_pair, parse_range
 from coincli.integrators import NO_LABEL, info
-from coincli.io import store
-from coincli.io.runner import run_tile_task
-from coincli.io.schema import basin_attrs
+from coincli.io.basin_store import BasinStore
 from coincli.params import ParameterError, Scene
 from coincli.stats import basin_stats, wilson
+from coincli.sweeps.engine import run_tile_task
+from coincli.sweeps.schema import basin_attrs
 
 runner = CliRunner()
 SMALL = ["--res", "8", "--chunk", "4", "-q"]
@@ -158,14 +158,14 @@ def test_store_layout_and_xarray(tmp_path):
     assert group["settle_time"].dtype == np.float32
     assert group["quarter_turns"].chunks == (4, 4) and group["done"].chunks == (1, 1)
     assert group["done"].dtype == np.uint32 and (group["done"][:] != 0).all()  # digests
-    assert store.check(path).intact
+    assert BasinStore.open(path).check().intact
     attrs = dict(group.attrs)
     assert attrs["sweep"]["dims"] == ["vy", "vphi"]
     assert attrs["parameters"]["foundation"]["k"] == 1e4
     assert attrs["parameters"]["initial"]["vy"] is None  # swept
     assert attrs["method"]["name"] == "event" and attrs["version"]
-    assert "runs" not in attrs and len(store.read_basin(path).runs) == 1
-    assert np.isfinite(store.read_basin(path).tile_seconds).all()
+    assert "runs" not in attrs and len(BasinStore.open(path).read().runs) == 1
+    assert np.isfinite(BasinStore.open(path).read().tile_seconds).all()
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no consolidated-metadata fallback warning
         ds = xr.open_zarr(path)
@@ -184,13 +184,14 @@ def test_tile_equal_to_fill_value_is_written(tmp_path):
     path = tmp_path / "s.zarr"
     grid = make_grid(Scene(), {"vy": (0.1, 0.2), "vphi": (0.0, 1.0)}, (4, 4), (2, 2))
     spec = make_spec(Scene(), grid)
-    store.prepare(path, {"coin_basin": {}, "version": "t"}, spec)
+    store = BasinStore(path)
+    store.create_or_resume({"coin_basin": {}, "version": "t"}, spec.grid)
     result = compute_tile(spec, (0, 0))
     result.arrays["quarter_turns"][:] = NO_LABEL
     result.arrays["status"][:] = 255
     result.arrays["settle_time"][:] = np.nan
     result.arrays["steps"][:] = -1
-    store.write_tile(path, spec, result)
+    store.write_tile(result)
     for name in ("quarter_turns", "status", "settle_time", "steps", "done"):
         assert (path / name / "c" / "0" / "0").is_file(), name
 
@@ -211,7 +212,7 @@ def test_parameter_mismatch_is_refused(tmp_path):
     # the same command resumes (nothing left to do); --overwrite replaces
     assert "done already" in coin_ok(path, *SMALL).output
     coin_ok(path, *SMALL, "--k", "5000", "--overwrite")
-    assert store.read_basin(path).attrs["parameters"]["foundation"]["k"] == 5000
+    assert BasinStore.open(path).read().attrs["parameters"]["foundation"]["k"] == 5000
     (tmp_path / "other").mkdir()
     (tmp_path / "other" / "keep.txt").write_text("x")
     result = coin(str(tmp_path / "other"), *SMALL, "--overwrite")
@@ -255,14 +256,14 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
     out, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err.decode()
     assert b"Traceback" not in err and b"resume" in err
-    basin = store.read_basin(path)
+    basin = BasinStore.open(path).read()
     assert 3 <= basin.done.sum() < basin.done.size
     # every flagged tile is complete
     assert (basin.arrays["status"][basin.computed] != 255).all()
     runs = basin.runs
     assert runs[-1]["interrupted"] is True
     coin_ok(str(path), *KILL_ARGS)
-    assert store.read_basin(path).done.all()
+    assert BasinStore.open(path).read().done.all()
 
 
 # -- distributed ---------------------------------------------------------------------------------
@@ -275,7 +276,7 @@ def test_dask_runs_give_the_same_store(tmp_path):
     workers = tmp_path / "workers.zarr"
     coin_ok(str(workers), *args, "--workers", "2")  # a 2-process LocalCluster
     assert_same_store(local, workers)
-    assert store.read_basin(workers).runs[0]["mode"] == "dask"
+    assert BasinStore.open(workers).read().runs[0]["mode"] == "dask"
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
                       dashboard_address=None) as cluster:
         remote = tmp_path / "remote.zarr"
@@ -287,13 +288,14 @@ def test_task_function_is_importable_and_writes_its_tile(tmp_path):
     path = tmp_path / "s.zarr"
     grid = make_grid(Scene(), {"vy": (0.1, 0.5), "vphi": (-5.0, 5.0)}, (4, 4), (2, 2))
     spec = make_spec(Scene(), grid)
-    store.prepare(path, basin_attrs(Scene(), info("event"), spec), spec)
-    done = run_tile_task(str(path), spec, (1, 0))
+    BasinStore(path).create_or_resume(basin_attrs(Scene(), info("event"), spec), spec.grid)
+    store = BasinStore.open(path)
+    done = run_tile_task(store, spec, store.parameters, (1, 0))
     assert done.tile == (1, 0) and done.cpu_seconds >= 0 and done.written
     assert done.compute_seconds > 0 and done.write_seconds > 0
     # vphi sweeps -5:5 in whole tiles: the task writes tile (1, 0) and its mirror image (1, 1)
     assert done.tiles == 2 and done.cells == 8
-    done_flags = store.read_done(path)
+    done_flags = BasinStore.open(path).check().done.astype(np.uint8)
     assert (done_flags[0] == 0).all() and (done_flags[1] != 0).all()
 
 
@@ -306,9 +308,10 @@ def _partial_store(tmp_path, verify=True) -> Path:
                      use_mirror=False)
     spec = make_spec(scene, grid)
     attrs = basin_attrs(scene, info("event"), spec)
-    store.prepare(path, attrs, spec)
+    BasinStore(path).create_or_resume(attrs, spec.grid)
+    store = BasinStore.open(path)
     for tile in ((0, 0), (1, 1)):
-        run_tile_task(str(path), spec, tile)
+        run_tile_task(store, spec, store.parameters, tile)
     return path
 
 
@@ -330,7 +333,7 @@ def test_render_and_stats_on_a_partial_store(tmp_path, verify):
     assert stats["verified"] is verify
     text = coin_ok("stats", str(path)).output
     assert "not computed" in text and "standing" in text
-    basin = store.read_basin(path)
+    basin = BasinStore.open(path).read()
     assert (basin.arrays["status"][~basin.computed] == 255).all()
 
 
@@ -355,7 +358,7 @@ def test_render_and_stats_of_an_empty_store(tmp_path):
     path = tmp_path / "empty.zarr"
     grid = make_grid(Scene(), {"vy": (0.1, 0.5), "vphi": (-5.0, 5.0)}, (4, 4), (2, 2))
     spec = make_spec(Scene(), grid)
-    store.prepare(path, basin_attrs(Scene(), info("event"), spec), spec)
+    BasinStore(path).create_or_resume(basin_attrs(Scene(), info("event"), spec), spec.grid)
     coin_ok("render", str(path), "-o", str(tmp_path / "e.png"), "--dpi", "40")
     stats = json.loads(coin_ok("stats", str(path), "--json").output)  # valid JSON: no NaN
     assert stats["computed"] == 0 and stats["standing"]["probability"] is None
@@ -401,7 +404,7 @@ def test_verified_labels_of_the_thick_coin_are_those_of_tight_runs(tmp_path):
 
     path = tmp_path / "thick.zarr"
     coin_ok(str(path), "--preset", "thick", "--vy", "0.8:2", "--res", "12", "--chunk", "6", "-q")
-    basin = store.read_basin(path)
+    basin = BasinStore.open(path).read()
     certain = basin.arrays["certainty"] == 1
     assert certain.mean() > 0.5  # a hard region: vy0 up to 2 m/s on the thick coin
     deep = basin.arrays["rung"] > 3  # rung 3 is rtol 1e-10 (1e-6, 1e-8, 1e-9, 1e-10, ... 1e-12)

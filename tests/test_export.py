@@ -18,10 +18,11 @@ from coincli.cli import app
 from coincli.enums import Status
 from coincli.grid import make_grid, make_spec
 from coincli.integrators import NO_LABEL, info
-from coincli.io import export, store
-from coincli.io.runner import run_tile_task
-from coincli.io.schema import basin_attrs
+from coincli.io import export
+from coincli.io.basin_store import BasinStore
 from coincli.params import ParameterError, Scene
+from coincli.sweeps.engine import run_tile_task
+from coincli.sweeps.schema import basin_attrs
 
 runner = CliRunner()
 RANGES = {"vy": (0.3, 1.9), "vphi": (-15.0, 15.0)}
@@ -34,9 +35,10 @@ def partial(tmp_path_factory):
     scene = Scene()
     grid = make_grid(scene, RANGES, (8, 8), (4, 4), use_mirror=False)
     spec = make_spec(scene, grid)
-    store.prepare(path, basin_attrs(scene, info("event"), spec), spec)
+    BasinStore(path).create_or_resume(basin_attrs(scene, info("event"), spec), spec.grid)
+    store = BasinStore.open(path)
     for tile in ((0, 0), (0, 1)):
-        run_tile_task(str(path), spec, tile)
+        run_tile_task(store, spec, store.parameters, tile)
     return path
 
 

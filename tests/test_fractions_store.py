@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 
 import coincli
 from coincli.cli import app
-from coincli.io import fractions_store as fstore
+from coincli.io.fractions_store import FractionsStore
 from coincli.montecarlo.tally import Tally, samples_needed
 
 PAPER = coincli.load_preset("paper")
@@ -29,18 +29,13 @@ def _files(path: Path) -> dict[str, bytes]:
             if f.is_file()}
 
 
-def _layout(store: Path) -> fstore.Layout:
-    ds = coincli.open_fractions(store)
-    return fstore.Layout(ds.attrs["sampling"]["batch"], ds.sizes["batch"])
-
-
 def _remove_batch(store: Path, batch: int) -> None:
     """A batch that never made it to disk (its files gone, ``filled`` first)."""
-    assert fstore.trim(store, _layout(store), 0, batch, lambda v, b: b != batch) == 1
+    assert FractionsStore.open(store).trim(0, batch, lambda v, b: b != batch) == 1
 
 
 def _computed(store: Path) -> list[int]:
-    return [run["samples"] for run in fstore.read_runs(store)]
+    return [run["samples"] for run in FractionsStore(store).runs()]
 
 
 @pytest.fixture(scope="module")
@@ -58,7 +53,7 @@ def test_a_gap_in_the_batches_is_filled_and_nothing_after_it_is_lost(tmp_path, w
     store = tmp_path / "gap.zarr"
     coincli.fractions(PAPER, samples=6144, store=store, **RUN)
     _remove_batch(store, 14)
-    assert int((fstore.read_filled(store) > 0).sum()) == 23
+    assert int((FractionsStore(store).read_filled() > 0).sum()) == 23
     resumed = coincli.fractions(PAPER, samples=6144, store=store, **RUN)
     assert resumed.cost["computed"] == 256 and resumed.cost["from_store"] == 23 * 256
     assert resumed.outcomes == reference.outcomes and resumed.standing == reference.standing
@@ -80,7 +75,7 @@ def test_batches_beyond_the_stop_are_kept_until_the_goal_is_met_then_removed(tmp
     store = tmp_path / "more.zarr"
     coincli.fractions(PAPER, samples=256 * (used + 6), max_samples=16384, store=store,
                       phi0="-pi:pi", batch=256)
-    assert int((fstore.read_filled(store) > 0).sum()) == used + 6
+    assert int((FractionsStore(store).read_filled() > 0).sum()) == used + 6
     _remove_batch(store, used // 2)  # and a gap below the stop
     resumed = coincli.fractions(PAPER, store=store, threads=1, **kw)
     assert resumed.cost["computed"] == 256  # the gap; on one thread, nothing past the stop
@@ -101,7 +96,7 @@ def test_an_interrupted_precision_run_keeps_every_batch_it_computed(tmp_path):
     part = coincli.fractions(PAPER, precision=0.004, of="standing", store=store, threads=2,
                              progress=halt, stop=stop, **RUN)
     assert part.stopped == "interrupted"
-    written = int((fstore.read_filled(store) > 0).sum())
+    written = int((FractionsStore(store).read_filled() > 0).sum())
     assert written * 256 == part.cost["computed"]  # the batches in flight were written too
     resumed = coincli.fractions(PAPER, precision=0.004, of="standing", store=store, **RUN)
     clean = coincli.fractions(PAPER, precision=0.004, of="standing",
@@ -129,7 +124,7 @@ def test_several_writers_started_at_once_share_the_batches(tmp_path, whole):
         assert data["samples"] == 6144
     assert sum(_computed(store)) == 6144  # each batch once
     assert not list(store.parent.glob(f".{store.name}.creating-*"))
-    assert not (fstore.claims_dir(store)).exists()
+    assert not FractionsStore(store).claims_dir.exists()
     assert _files(store) == _files(clean)
 
 
@@ -241,7 +236,7 @@ def test_fewer_samples_from_a_store_of_more_is_complete_and_keeps_them(tmp_path)
     assert fewer.samples == 1000 and fewer.cost["computed"] == 0
     assert fewer.standing == coincli.fractions(PAPER, samples=1000, batch=512,
                                                phi0="-pi:pi").standing
-    assert int((fstore.read_filled(store) > 0).sum()) == 4
+    assert int((FractionsStore(store).read_filled() > 0).sum()) == 4
     # the estimate before such a run needs no pilot: the store holds the whole run
     plan = coincli.plan_fractions(PAPER, samples=1000, batch=512, phi0="-pi:pi")
     held = coincli.estimate_fractions(plan, store=store)
@@ -254,7 +249,7 @@ def test_a_looser_precision_keeps_what_a_tighter_one_computed(tmp_path):
     tight = coincli.fractions(PAPER, precision=0.004, of="standing", store=store, **RUN)
     loose = coincli.fractions(PAPER, precision=0.03, of="standing", store=store, **RUN)
     assert loose.samples < tight.samples and loose.cost["computed"] == 0
-    assert int((fstore.read_filled(store) > 0).sum()) * 256 == tight.samples
+    assert int((FractionsStore(store).read_filled() > 0).sum()) * 256 == tight.samples
 
 
 @pytest.mark.parametrize("array", ["quarter_turns", "certainty", "filled"])

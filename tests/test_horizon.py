@@ -119,7 +119,7 @@ def test_fractions_report_the_decided_estimate_and_the_causes():
 def test_an_old_store_is_refused_with_a_clear_message(tmp_path):
     import json
 
-    from coincli.io.schema import FORMAT
+    from coincli.sweeps.schema import FORMAT
 
     scene = coincli.load_preset("paper")
     store = tmp_path / "b.zarr"

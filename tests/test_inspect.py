@@ -104,7 +104,7 @@ def test_nearest_cell_by_value_and_the_text_output(stores):
     (["--cell", "3,16"], "cell index 16 along vphi is outside the grid: 0 to 15"),
     (["--cell", "3"], "a cell index is I,J"),
     (["--cell", "1,1", "--vy", "1"], "by its index or by its values, not both"),
-    (["--vy", "abc", "--vphi", "1"], "'abc' is not a valid number"),
+    (["--vy", "abc", "--vphi", "1"], "'abc' is not a number"),
 ])
 def test_bad_cells_are_one_line_errors(stores, args, message):
     path, _ = stores["paper"]

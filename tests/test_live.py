@@ -1,6 +1,7 @@
-"""Rerun streams of sweeps and estimates (coincli.io.live; `coin basin --rrd`, `coin basin show`,
-`coin fractions --rrd`): the recordings are read back with Rerun's own reader and compared with
-the store and the printed result; --spawn without a display."""
+"""Rerun streams of sweeps, stores and estimates (coincli.io.basin_view, fractions_view,
+analysis_view; `coin basin --rrd`, `coin basin show`, `coin fractions --rrd`): the recordings
+are read back with Rerun's own reader and compared with the store and the printed result;
+--spawn without a display."""
 
 from __future__ import annotations
 
@@ -22,9 +23,9 @@ from typer.testing import CliRunner
 from coincli.cli import app
 from coincli.enums import Certainty, Status
 from coincli.integrators import NO_LABEL
-from coincli.io import live, sweep_recording
+from coincli.io import basin_view, rerun_stream, sweep_recording
 from coincli.io.basin_render import n_range, ramp_colours
-from coincli.io.store import read_basin
+from coincli.io.basin_store import BasinStore
 
 rr = pytest.importorskip("rerun")
 from rerun.chunk import RrdReader  # noqa: E402
@@ -41,6 +42,10 @@ pytestmark = pytest.mark.usefixtures("strict_rerun")  # conftest.py
 def strict_recording_process(monkeypatch):
     """A sweep's recording process is as strict as this one (Rerun reads RERUN_STRICT)."""
     monkeypatch.setenv("RERUN_STRICT", "1")
+
+
+def read_basin(path):
+    return BasinStore.open(path).read()
 
 
 def rows(path) -> dict:
@@ -219,7 +224,7 @@ def test_an_unwritable_recording_is_refused_before_any_work(tmp_path):
 
 
 def test_the_written_out_colours_are_those_of_coin_basin_render():
-    assert live.RAMP == {n: live._rgb(colour)
+    assert basin_view.RAMP == {n: basin_view.rgb(colour)
                          for n, colour in ramp_colours(n_range(None)).items()}
 
 
@@ -287,61 +292,7 @@ def test_a_sweep_ended_by_a_signal_leaves_the_recording_of_its_store(tmp_path, h
     check_map(rows(rrd), basin, static=False)
 
 
-# -- the recording's process started by `coin` itself, before the command line is parsed ------
-def test_the_early_guess_knows_the_commands_and_options_of_coin_basin():
-    import typer.main
-
-    from coincli.cli.basin_cmd import basin_app
-    from coincli.cli.recording import REC
-
-    group = typer.main.get_group(basin_app)
-    assert sweep_recording.BASIN_COMMANDS == set(group.commands)
-    recording = {opt for p in group.commands["sweep"].params
-                 if getattr(p, "rich_help_panel", None) == REC for opt in p.opts}
-    assert recording == set(sweep_recording.RECORDING_OPTIONS)
-
-
-@pytest.mark.parametrize("args, asked", [
-    (["basin", "s.zarr", "--rrd", "s.rrd"], True),
-    (["basin", "s.zarr", "--res", "64", "--rrd=s.rrd"], True),
-    (["basin", "sweep", "s.zarr", "--spawn"], True),
-    (["basin", "--rrd", "s.rrd", "s.zarr"], True),  # options before the store
-    (["basin", "s.zarr", "--connect", "rerun+http://127.0.0.1:9876/proxy"], True),
-    (["basin", "s.zarr"], False),
-    (["basin", "show", "s.zarr", "--rrd", "s.rrd"], False),
-    (["basin", "inspect", "s.zarr", "--cell", "1,2", "--spawn"], False),
-    (["basin", "s.zarr", "--rrd", "s.rrd", "--help"], False),
-    (["simulate", "--rrd", "s.rrd"], False),
-    (["fractions", "--spawn"], False),
-    (["basin"], False),
-    ([], False),
-])
-def test_the_early_guess_of_a_sweep_with_a_recording(args, asked):
-    assert sweep_recording.sweep_recording_asked(args) is asked
-
-
-def test_a_process_started_on_a_wrong_guess_ends_at_once():
-    """Started for what looked like a recorded sweep, then not wanted (the command line said
-    otherwise, or failed): the process ends as soon as its input closes, without a word,
-    whatever it was importing."""
-    sweep_recording.start_early(["basin", "s.zarr", "--rrd", "s.rrd"])
-    process = sweep_recording._started_early._process
-    assert process.poll() is None
-    assert sweep_recording.recorder_for(False) is None
-    assert process.returncode == 0
-    assert sweep_recording._started_early is None
-
-
-def test_the_sweep_takes_the_process_started_early():
-    sweep_recording.start_early(["basin", "sweep", "s.zarr", "--spawn"])
-    early = sweep_recording._started_early
-    try:
-        assert sweep_recording.recorder_for(True) is early
-        assert sweep_recording._started_early is None
-    finally:
-        early.cancel()
-
-
+# -- the recording's process ends with its command -----------------------------------------
 def _processes_marked(mark: str) -> list:
     import psutil
 
@@ -356,11 +307,10 @@ def _processes_marked(mark: str) -> list:
 
 
 @pytest.mark.parametrize("case", ["recorded", "bad option", "unparsable"])
-def test_coin_starts_the_recording_first_and_leaves_no_process(tmp_path, case):
-    """`python -m coincli` (as the `coin` script) starts a recorded sweep's process before it
-    parses the command line: the recording is the store's, cell for cell; a command that
-    fails first (an option refused by the sweep, or by the parser) leaves no process
-    behind."""
+def test_a_recorded_sweep_leaves_no_process(tmp_path, case):
+    """`python -m coincli` (as the `coin` script): the recording is the store's, cell for cell;
+    a command that fails first (an option refused by the sweep, or by the parser) leaves no
+    process behind."""
     store, rrd = tmp_path / "s.zarr", tmp_path / "s.rrd"
     args = {"recorded": [*SMALL, "--rrd", str(rrd)],
             "bad option": [*SMALL, "--res", "1", "--rrd", str(rrd)],
@@ -510,13 +460,12 @@ def test_a_sweep_in_a_notebook_draws_its_map_in_this_process(tmp_path, monkeypat
     same StoreMap as a recording process: the last map is the store's. (The notebook's viewer
     is replaced by a file here; the next tests send to a viewer.)"""
     import coincli
-    from coincli.io import rrd as rrd_io
-    from coincli.io.rrd import open_stream
+    from coincli.io.rerun_stream import open_stream
 
     pytest.importorskip("rerun_notebook")
     inline = tmp_path / "inline.rrd"
-    monkeypatch.setattr(rrd_io, "in_notebook", lambda: True)
-    monkeypatch.setattr(live.Destination, "stream",
+    monkeypatch.setattr(rerun_stream, "in_notebook", lambda: True)
+    monkeypatch.setattr(rerun_stream.Destination, "stream",
                         lambda self, name: open_stream(name, rrd=inline))
     monkeypatch.setattr(sweep_recording.SweepRecorder, "start",
                         lambda self: pytest.fail("no recording process in a notebook"))
@@ -530,13 +479,12 @@ def test_a_viewer_of_an_earlier_cell_receives_the_work_of_a_later_one(tmp_path, 
     """coincli.viewer() shows a viewer at once; notebook=viewer sends to it (no new viewer):
     by the time a later cell runs, it is ready and shows the work as it comes."""
     import coincli
-    from coincli.io import rrd as rrd_io
 
     pytest.importorskip("rerun_notebook")
     from rerun.notebook import Viewer
 
     shown, sent = [], []
-    monkeypatch.setattr(rrd_io, "in_notebook", lambda: True)
+    monkeypatch.setattr(rerun_stream, "in_notebook", lambda: True)
     monkeypatch.setattr(Viewer, "display", lambda self, **options: shown.append(self))
     monkeypatch.setattr(Viewer, "_flush_hook", lambda self, data: sent.append((self, len(data))))
     viewer = coincli.viewer(width=600, height=400)
@@ -553,7 +501,7 @@ def test_a_notebook_stream_shows_the_viewer_then_sends_to_it(monkeypatch):
     pytest.importorskip("rerun_notebook")
     from rerun.notebook import Viewer
 
-    from coincli.io.rrd import open_stream
+    from coincli.io.rerun_stream import open_stream
 
     shown, sent = [], []
     monkeypatch.setattr(Viewer, "display", lambda self, **options: shown.append(options))
@@ -566,13 +514,12 @@ def test_a_notebook_stream_shows_the_viewer_then_sends_to_it(monkeypatch):
 
 def test_notebook_true_is_checked_before_any_work(tmp_path, monkeypatch):
     import coincli
-    from coincli.io import rrd as rrd_io
 
     pytest.importorskip("rerun_notebook")
     base = coincli.load_preset("paper")
     with pytest.raises(RuntimeError, match=r"notebook=True draws in a notebook .*rrd="):
         coincli.fractions(base, samples=500, notebook=True)
-    monkeypatch.setattr(rrd_io, "in_notebook", lambda: True)
+    monkeypatch.setattr(rerun_stream, "in_notebook", lambda: True)
     with pytest.raises(coincli.ParameterError, match="goes alone"):
         coincli.analyze(tmp_path / "none.zarr", notebook=True, rrd=tmp_path / "a.rrd")
     with pytest.raises(coincli.ParameterError, match="goes alone"):

@@ -15,6 +15,7 @@ from conftest import outputs_in_a_kernel, shows_a_widget
 import coincli
 from coincli.defaults import DEFAULT_LOG_EVERY
 from coincli.integrators.common import EVENT_COLUMNS, LIFTOFF, ONSET, SAMPLE_COLUMNS
+from coincli.io import rerun_stream
 from coincli.io import rrd as rrd_io
 from coincli.io.frames import build_frames
 from coincli.jit import python
@@ -200,7 +201,7 @@ def test_inline_viewer_receives_the_recording(run, monkeypatch):
     assert isinstance(viewer, Viewer)
     assert sum(map(len, sent)) > 10_000  # the blueprint, scene, plots and log
 
-    monkeypatch.setattr(rrd_io, "in_notebook", lambda: True)
+    monkeypatch.setattr(rerun_stream, "in_notebook", lambda: True)
     monkeypatch.setattr(Viewer, "display", lambda self, **_: shown.append(self))
     assert run.show() is None
     assert len(shown) == 1

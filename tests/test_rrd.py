@@ -163,12 +163,12 @@ def test_timeline_is_a_duration(fig2):
 
 def test_logged_angle_is_the_simulated_one(fig2):
     tr, frames, _, rec = fig2
-    angles = np.array([row[0]["angle"] for row in
-                       rec.column("/scene/world/coin", "Transform3D:rotation_axis_angle")])
-    axes = {tuple(row[0]["axis"]) for row in
-            rec.column("/scene/world/coin", "Transform3D:rotation_axis_angle")}
-    assert axes == {(0.0, 0.0, 1.0)}
-    np.testing.assert_allclose(angles, frames.state[:, 2], rtol=1e-6, atol=1e-6)  # float32
+    q = np.array([row[0] for row in rec.column("/scene/world/coin", "Transform3D:quaternion")])
+    assert not q[:, :2].any()  # about z: (0, 0, sin(phi / 2), cos(phi / 2))
+    angles = 2 * np.arctan2(q[:, 2], q[:, 3])  # phi modulo a whole turn
+    turns = np.round((frames.state[:, 2] - angles) / (2 * np.pi))
+    np.testing.assert_allclose(angles + 2 * np.pi * turns, frames.state[:, 2], rtol=0,
+                               atol=1e-6)  # float32
     # the plotted 2 phi / pi is float64: exact, and at the sample times it is the sample's phi
     quarter = rec.scalars("/plots/angle/quarter_turns")
     at_samples = np.searchsorted(frames.t, tr.samples[:, 0])
@@ -315,7 +315,9 @@ def test_a_full_disk_leaves_no_recording_and_says_so(tmp_path, monkeypatch):
     """Rerun's file sink does not report a failed write; the recording is read back before it
     is renamed into place, so a file cut short (as on a full disk) is a one-line error and
     leaves neither a truncated .rrd nor a temporary file."""
-    check = rrd_io._check_complete
+    from coincli.io import rerun_stream
+
+    check = rerun_stream._check_complete
 
     def cut_short(path):
         data = path.read_bytes()
@@ -323,7 +325,7 @@ def test_a_full_disk_leaves_no_recording_and_says_so(tmp_path, monkeypatch):
         check(path)
 
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(rrd_io, "_check_complete", cut_short)
+    monkeypatch.setattr(rerun_stream, "_check_complete", cut_short)
     result = runner.invoke(app, ["simulate", "--vy", "1.197", "--vphi", "3.508"])
     assert result.exit_code == 2
     err = result.stderr.strip()
@@ -360,6 +362,37 @@ def test_cli_bad_recording_options_fail_in_one_line(tmp_path, monkeypatch, args,
     err = result.stderr.strip()
     assert len(err.splitlines()) == 1 and fragment in err, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_too_many_frames_names_no_rrd_and_the_smallest_log_every(tmp_path, monkeypatch):
+    """The horizon of --t-end 2000 makes 2e6 frames of 1 ms: the message offers --no-rrd (the
+    numbers only) and the smallest --log-every that fits, and following either works."""
+    monkeypatch.chdir(tmp_path)
+    result = runner.invoke(app, ["simulate", "--t-end", "2000"])
+    assert result.exit_code == 2, (result.stdout, result.stderr)
+    err = result.stderr.strip()
+    assert len(err.splitlines()) == 1, err
+    assert "--no-rrd to write no recording" in err and "--log-every 0.002 or more" in err, err
+    assert list(tmp_path.iterdir()) == []
+    assert runner.invoke(app, ["simulate", "--t-end", "2000", "--no-rrd"]).exit_code == 0
+    assert list(tmp_path.iterdir()) == []
+    assert runner.invoke(app, ["simulate", "--t-end", "2000", "--log-every", "0.002"]
+                         ).exit_code == 0
+    assert (tmp_path / "coin.rrd").is_file()
+    # where the file is not all that asks for frames, --no-rrd would not do
+    err = runner.invoke(app, ["simulate", "--t-end", "2000", "--no-rrd", "--csv", "t.csv"]
+                        ).stderr
+    assert "--log-every 0.002 or more" in err and "--no-rrd" not in err, err
+
+
+@pytest.mark.parametrize("horizon", [2000.0, 2.79801, 0.3, 7.0, 12.5, 1e-3, 0.14999999])
+def test_the_smallest_log_every_said_fits_and_is_the_smallest_of_two_digits(horizon):
+    from coincli.cli.recording import MAX_FRAMES, smallest_log_every
+
+    said = float(smallest_log_every(horizon))
+    assert horizon / said <= MAX_FRAMES
+    unit = 10.0 ** (math.floor(math.log10(said)) - 1)  # one in its second significant digit
+    assert horizon / (said - unit) > MAX_FRAMES
 
 
 def test_rerun_is_not_imported_by_the_model():

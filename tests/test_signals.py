@@ -18,8 +18,8 @@ import pytest
 from test_basin import KILL_ARGS, assert_same_store, coin_ok, start_sweep, wait_for_tiles
 
 from coincli.cli import interruptions
-from coincli.io import store
-from coincli.io.runner import SchedulerLost
+from coincli.io.basin_store import BasinStore
+from coincli.sweeps.executors import SchedulerLost
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +36,7 @@ def runs(path: Path) -> list[dict]:
 
 
 def claims_left(path: Path) -> list[str]:
-    folder = store.claims_dir(path)
+    folder = BasinStore(path).claims_dir
     return sorted(p.name for p in Path(folder).iterdir()) if Path(folder).exists() else []
 
 
@@ -52,7 +52,7 @@ def test_termination_signal_stops_like_ctrl_c(tmp_path, clean, signum, code):
     assert proc.returncode == code, err
     assert "Traceback" not in err
     assert f"stopped: {signum.name}: " in err and "resume" in err
-    assert 3 <= store.read_basin(path).done.sum() < store.read_basin(path).done.size
+    assert 3 <= BasinStore.open(path).read().done.sum() < BasinStore.open(path).read().done.size
     assert runs(path)[-1]["interrupted"] is True
     assert claims_left(path) == []  # another host need not wait for them to go stale
     coin_ok(str(path), *KILL_ARGS)  # resume
@@ -69,7 +69,7 @@ def test_sigterm_mid_fractions_records_and_resumes(tmp_path):
     import numpy as np
 
     from coincli import api
-    from coincli.io import fractions_store
+    from coincli.io.fractions_store import FractionsStore
 
     def coin(path: Path) -> subprocess.Popen:
         return subprocess.Popen([sys.executable, "-m", "coincli", *FRACTIONS, "--store",
@@ -88,7 +88,7 @@ def test_sigterm_mid_fractions_records_and_resumes(tmp_path):
     assert b"Traceback" not in err
     assert runs(path)[-1]["interrupted"] is True
     assert 0 < runs(path)[-1]["samples"] < 60000
-    assert not fractions_store.claims_dir(path).exists()
+    assert not FractionsStore(path).claims_dir.exists()
     for target in (path, tmp_path / "clean.zarr"):  # resume; an uninterrupted run
         proc = coin(target)
         _, err = proc.communicate(timeout=60)  # its JSON is larger than a pipe holds
@@ -99,10 +99,10 @@ def test_sigterm_mid_fractions_records_and_resumes(tmp_path):
 
 
 def batches_written(path: Path) -> bool:
-    from coincli.io import fractions_store
+    from coincli.io.fractions_store import FractionsStore
 
     try:
-        return bool(fractions_store.read_filled(path).any())
+        return bool(FractionsStore(path).read_filled().any())
     except Exception:  # noqa: BLE001 - not created yet, or being created
         return False
 
@@ -193,26 +193,25 @@ def test_scheduler_killed_mid_sweep_is_one_line_and_resumes(tmp_path, clean):
     assert record["interrupted"] is True and record["mode"] == "dask"
     assert record["workers"] == 1  # the cluster's, not 0
     assert claims_left(path) == []
-    assert 3 <= store.read_basin(path).done.sum() < store.read_basin(path).done.size
+    assert 3 <= BasinStore.open(path).read().done.sum() < BasinStore.open(path).read().done.size
     coin_ok(str(path), *KILL_ARGS)  # resumed on threads: the same store wherever it runs
     assert_same_store(path, clean)
 
 
-def test_run_dask_tasks_reports_a_lost_scheduler_and_the_workers():
-    from coincli.io.dask_tasks import run_dask_tasks
+def test_dask_executor_reports_a_lost_scheduler_and_the_workers():
+    from coincli.sweeps.executors import Dask, ItemQueue
 
-    seen: list[int] = []
     with dask_cluster() as (address, scheduler):
-        tasks = run_dask_tasks(time.sleep, ((0.05,) for _ in range(400)),
-                               key=lambda item: "coin-test-sleep", scheduler=address,
-                               on_workers=seen.append)
+        executor = Dask(scheduler=address)
+        tasks = executor.run(time.sleep, ItemQueue(0.05 for _ in range(400)),
+                             name=lambda item: "test-sleep")
         with pytest.raises(SchedulerLost, match=f"lost the Dask scheduler at {address}"):
             for done, _ in enumerate(tasks):
                 if done == 3:
                     scheduler.kill()
                     killed = time.monotonic()
         assert time.monotonic() - killed < 5
-    assert seen and set(seen) == {1}
+    assert executor.seen and set(executor.seen) == {1}
 
 
 def test_a_call_that_meets_the_scheduler_gone_is_cut_short():
@@ -221,7 +220,7 @@ def test_a_call_that_meets_the_scheduler_gone_is_cut_short():
     scheduler killed during one is reported in seconds (a CI run once took 20 s here)."""
     from distributed import Client
 
-    from coincli.io.runner import (
+    from coincli.sweeps.executors import (
         SCHEDULER_CALL_TIMEOUT,
         close_dask,
         cluster_window,
@@ -259,7 +258,7 @@ def test_a_call_that_meets_the_scheduler_gone_is_cut_short():
 def test_a_claim_made_as_a_signal_came_is_released_too(tmp_path):
     """A signal between a claim file's creation and its record as held (the window of
     Claims.try_claim) must not leave the claim for other hosts to wait out."""
-    from coincli.io.claims import Claims
+    from coincli.sweeps.claims import Claims
 
     claims = Claims(tmp_path / "claims", heartbeat=3600)
     assert claims.try_claim((0, 1)) and claims.try_claim((2, 3))
@@ -273,7 +272,7 @@ def test_a_claim_made_as_a_signal_came_is_released_too(tmp_path):
     assert not (tmp_path / "claims").exists()
 
 
-def _die(code: int) -> None:
+def _die(code: int, control=None) -> None:
     import os
 
     os._exit(code)  # a worker killed by its task (out of memory, a crash)
@@ -282,10 +281,9 @@ def _die(code: int) -> None:
 def test_workers_that_keep_dying_are_one_error_not_a_traceback():
     import dask
 
-    from coincli.io.dask_tasks import run_dask_tasks
-    from coincli.io.runner import WorkersLost
+    from coincli.sweeps.executors import Dask, ItemQueue, WorkersLost
 
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
-        tasks = run_dask_tasks(_die, iter([(3,)]), key=lambda item: "coin-test-die", workers=1)
+        tasks = Dask(workers=1).run(_die, ItemQueue([3]), name=lambda item: "test-die")
         with pytest.raises(WorkersLost, match="the Dask workers kept dying on a task"):
             list(tasks)

@@ -35,8 +35,11 @@ import coincli
 from coincli import api
 from coincli.cli import app
 from coincli.integrators import NO_LABEL
-from coincli.io import claims as claims_io
-from coincli.io import schema, store
+from coincli.io import basin_store, zarr_v3
+from coincli.io.basin_store import BasinStore, cost_dir
+from coincli.sweeps import claims as claims_io
+from coincli.sweeps import engine, schema
+from coincli.sweeps.plan import pilot_cells
 
 runner = CliRunner()
 # 4 tiles of 16 cells, each computed (these tests are about tiles; mirrored sweeps: see the end)
@@ -61,6 +64,10 @@ def one_line_error(result, code: int = 2) -> str:
     err = result.stderr.strip()
     assert err.startswith("error:") and len(err.splitlines()) == 1, err
     return err
+
+
+def read_basin(path: Path):
+    return BasinStore.open(path).read()
 
 
 def files_of(path: Path) -> dict[str, bytes]:
@@ -92,7 +99,7 @@ def clean(tmp_path_factory) -> Path:
 
 def copy_store(src: Path, dst: Path) -> Path:
     shutil.copytree(src, dst)
-    shutil.copytree(store.cost_dir(src), store.cost_dir(dst))
+    shutil.copytree(cost_dir(src), cost_dir(dst))
     return dst
 
 
@@ -212,7 +219,7 @@ def test_tiles_are_written_as_zarr_writes_them(tmp_path):
     import zarr
 
     group = zarr.open_group(str(path), mode="r+")
-    for name in (*store.ARRAY_NAMES, "done"):
+    for name in (*basin_store.ARRAY_NAMES, "done"):
         arr = group[name].with_config({"write_empty_chunks": True})
         values = arr[:]
         shutil.rmtree(path / name / "c")
@@ -224,7 +231,7 @@ def test_tiles_are_written_as_zarr_writes_them(tmp_path):
 
 def test_a_partial_store_verifies_and_a_dead_writers_partial_file_goes(tmp_path, clean):
     path = copy_store(clean, tmp_path / "s.zarr")
-    for name in (*store.ARRAY_NAMES, "done"):  # tile (1, 1) never finished ...
+    for name in (*basin_store.ARRAY_NAMES, "done"):  # tile (1, 1) never finished ...
         (path / name / "c" / "1" / "1").unlink()
     orphan = path / "steps" / "c" / "1" / "1.0123abcd.partial"  # ... its writer killed
     orphan.write_bytes(b"half a chunk")
@@ -238,14 +245,14 @@ def test_a_partial_store_verifies_and_a_dead_writers_partial_file_goes(tmp_path,
 def test_stats_read_a_store_tile_by_tile(tmp_path, clean, monkeypatch):
     whole = coincli.basin_stats(coincli.open_basin(clean))
     reads = []
-    real = store._read_tile
+    real = BasinStore.read_tile
 
-    def spy(view, tile):
+    def spy(self, tile):
         reads.append(tile)
-        return real(view, tile)
+        return real(self, tile)
 
-    monkeypatch.setattr(store, "_read_tile", spy)
-    monkeypatch.setattr(store, "read_basin", lambda *_: pytest.fail("whole arrays read"))
+    monkeypatch.setattr(BasinStore, "read_tile", spy)
+    monkeypatch.setattr(BasinStore, "read", lambda *_: pytest.fail("whole arrays read"))
     streamed = coincli.basin_stats(clean)
     assert sorted(reads) == [(0, 0), (0, 1), (1, 0), (1, 1)]
     assert {**streamed, "cost": None} == {**whole, "cost": None}
@@ -261,7 +268,7 @@ def _zarr_template(attrs: dict, grid, folder: Path) -> dict[str, bytes]:
     from zarr.codecs import Crc32cCodec, ZstdCodec
 
     def compressors():
-        return [ZstdCodec(level=store.ZSTD_LEVEL, checksum=False), Crc32cCodec()]
+        return [ZstdCodec(level=zarr_v3.ZSTD_LEVEL, checksum=False), Crc32cCodec()]
 
     mem = str(folder)
     group = zarr.open_group(mem, mode="w-", zarr_format=3, attributes=schema.root_attrs(attrs))
@@ -270,15 +277,15 @@ def _zarr_template(attrs: dict, grid, folder: Path) -> dict[str, bytes]:
                                  fill_value=0.0, dimension_names=(axis.name,),
                                  compressors=compressors(),
                                  attributes={"units": axis.units, "long_name": axis.long_name,
-                                             "cell_centres": store.COORD_NOTE})
+                                             "cell_centres": schema.COORD_NOTE})
         arr[:] = axis.coords
-    for name in store.ARRAY_NAMES:
-        dtype, fill, array_attrs = store.VARIABLES[name]
+    for name in basin_store.ARRAY_NAMES:
+        dtype, fill, array_attrs = schema.VARIABLES[name]
         group.create_array(name, shape=grid.shape, chunks=grid.chunk, dtype=dtype,
                            fill_value=fill, dimension_names=grid.dims, attributes=array_attrs,
                            compressors=compressors())
-    group.create_array("done", shape=grid.tile_grid, chunks=(1, 1), dtype=store.DONE_DTYPE,
-                       fill_value=0, dimension_names=store.tile_dims(grid),
+    group.create_array("done", shape=grid.tile_grid, chunks=(1, 1), dtype=basin_store.DONE_DTYPE,
+                       fill_value=0, dimension_names=schema.tile_dims(grid),
                        attributes=schema.done_attrs(attrs), compressors=compressors())
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # "consolidated metadata is not part of the v3 spec"
@@ -293,8 +300,8 @@ def test_the_template_is_what_zarr_writes(tmp_path, res):
     every file byte for byte (a grid cut by its tiles, and one that is not)."""
     path = tmp_path / "s.zarr"
     coin_ok(path, "--res", res, "--chunk", "4x2", "--no-mirror", "-q")
-    view = store.open_view(path)
-    ours = store.template(view.attrs, view.grid)
+    view = BasinStore.open(path)
+    ours = basin_store.template(view.attrs, view.grid)
     theirs = _zarr_template(view.attrs, view.grid, tmp_path / "zarr.zarr")
     assert sorted(ours) == sorted(theirs)
     assert [k for k in ours if ours[k] != theirs[k]] == []
@@ -306,14 +313,14 @@ def test_reads_are_what_zarr_reads(clean):
     import zarr
 
     group = zarr.open_group(str(clean), mode="r")
-    basin = store.read_basin(clean)
+    basin = BasinStore.open(clean).read()
     assert basin.done.all()
-    for name in store.ARRAY_NAMES:
+    for name in basin_store.ARRAY_NAMES:
         theirs = group[name][:]
         assert basin.arrays[name].dtype == theirs.dtype, name
         assert basin.arrays[name].tobytes() == theirs.tobytes(), name
-    view = store.open_view(clean)
-    flags, unreadable = store._done_flags(view)
+    view = BasinStore.open(clean)
+    flags, unreadable = view.digests()
     assert not unreadable and (flags == group["done"][:]).all()
     assert dict(group.attrs) == view.attrs
 
@@ -324,9 +331,8 @@ def test_a_sweep_does_not_import_zarr(tmp_path):
     code = ("import sys; from coincli.cli import run\n"
             "assert run(['basin', sys.argv[1], '--res', '8', '--chunk', '4', '-q']) == 0\n"
             "assert 'zarr' not in sys.modules, 'zarr imported'\n"
-            "from coincli.io import store\n"
             "import numcodecs, zarr\n"
-            "assert type(store._zstd()) is numcodecs.Zstd\n"
+            "assert 'numcodecs.zstd' in sys.modules\n"
             "assert zarr.open_group(sys.argv[1], mode='r')['quarter_turns'][:].shape == (8, 8)\n")
     done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "s.zarr")], cwd=ROOT,
                           capture_output=True, text=True, timeout=600)
@@ -360,9 +366,9 @@ def test_two_processes_started_together_share_a_new_store(tmp_path):
         assert "Traceback" not in err
     counts = [computed(out) for out, _ in outs]
     assert sum(counts) == 36, counts  # every tile computed once: none twice
-    runs = store.read_costs(path, (6, 6))[1]
+    runs = BasinStore.open(path).costs()[1]
     assert sorted(r["tiles"] for r in runs if r["tiles"]) == sorted(c for c in counts if c)
-    assert leftovers(tmp_path) == [] and not store.claims_dir(path).exists()
+    assert leftovers(tmp_path) == [] and not BasinStore(path).claims_dir.exists()
     assert_identical(path, one)
 
 
@@ -375,7 +381,7 @@ def test_racing_creations_end_in_one_store(tmp_path):
     def create():
         barrier.wait()
         try:
-            store.prepare(path, plan.attrs, plan.spec)
+            BasinStore(path).create_or_resume(plan.attrs, plan.grid)
         except Exception as exc:  # noqa: BLE001
             errors.append(exc)
 
@@ -385,12 +391,12 @@ def test_racing_creations_end_in_one_store(tmp_path):
     for t in threads:
         t.join()
     assert errors == []
-    assert store.check(path).intact and leftovers(tmp_path) == []
+    assert BasinStore.open(path).check().intact and leftovers(tmp_path) == []
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr", "s.zarr.cost"]
 
 
 def _claim(path: Path, tile, pid: int, age: float = 0.0) -> Path:
-    folder = store.claims_dir(path)
+    folder = BasinStore(path).claims_dir
     folder.mkdir(parents=True, exist_ok=True)
     f = folder / claims_io.claim_name(tile)
     f.write_text(json.dumps({"host": claims_io.HOST, "pid": pid, "token": "x"}))
@@ -402,7 +408,7 @@ def _claim(path: Path, tile, pid: int, age: float = 0.0) -> Path:
 def test_stale_claims_are_taken_over_and_live_ones_waited_for(tmp_path, clean):
     plan = coincli.plan_sweep(coincli.load_preset("paper"), res=8, chunk=4, mirror=False)
     path = tmp_path / "s.zarr"
-    store.prepare(path, plan.attrs, plan.spec)
+    BasinStore(path).create_or_resume(plan.attrs, plan.grid)
     dead = subprocess.Popen(["true"])
     dead.wait()
     alive = subprocess.Popen(["sleep", "60"])
@@ -423,7 +429,7 @@ def test_stale_claims_are_taken_over_and_live_ones_waited_for(tmp_path, clean):
         alive.kill()
         alive.wait()
     assert report.complete and report.tiles_computed == 4 and seen == [1, 2, 3, 4]
-    assert not store.claims_dir(path).exists()
+    assert not BasinStore(path).claims_dir.exists()
     assert_identical(path, clean)
 
 
@@ -458,10 +464,10 @@ def test_second_ctrl_c_stops_a_stuck_sweep_at_once(tmp_path):
     done_ref.start()  # the uninterrupted store, meanwhile
     path = tmp_path / "s.zarr"
     proc = start(path, *STUCK)
-    claim = store.claims_dir(path) / "tile_1_0"
+    claim = BasinStore(path).claims_dir / "tile_1_0"
     end = time.monotonic() + 60
     # the slow tile is being computed, and the quick one, beside it, is done
-    while not (claim.exists() and store.has_digest(path, (0, 0))):
+    while not (claim.exists() and BasinStore.open(path).has_digest((0, 0))):
         assert proc.poll() is None, proc.communicate()
         assert time.monotonic() < end, "the slow tile never started"
         time.sleep(0.005)
@@ -490,9 +496,9 @@ def test_second_ctrl_c_stops_a_stuck_sweep_at_once(tmp_path):
     assert exited_after < 5.0, f"took {exited_after:.1f} s to exit"
     assert "Traceback" not in err
     # the quick tile is kept, the stuck one left no trace
-    assert store.read_done(path).tolist() == [[1], [0]]
+    assert BasinStore.open(path).check().done.astype(int).tolist() == [[1], [0]]
     assert [p for p in path.rglob("*") if p.match("*/c/1/0*")] == []
-    assert leftovers(tmp_path) == [] and not store.claims_dir(path).exists()
+    assert leftovers(tmp_path) == [] and not BasinStore(path).claims_dir.exists()
     done_ref.join()
     coin_ok(path, *STUCK)  # resume
     assert_identical(path, reference)
@@ -519,15 +525,15 @@ def test_keyboard_interrupt_in_the_api_stops_the_tiles_in_flight(tmp_path):
     # timed from the interrupt, not from the start (loading the kernels varies with the load)
     assert time.monotonic() - sent[0] < 1.5  # not the seconds the slow tile takes
     assert report.interrupted and report.tiles_done == 1
-    assert store.read_done(path).tolist() == [[1], [0]]
+    assert BasinStore.open(path).check().done.astype(int).tolist() == [[1], [0]]
     assert [p for p in path.rglob("*") if p.match("*/c/1/0*")] == []
 
 
 # -- estimates -----------------------------------------------------------------------------------
 def test_estimate_comes_from_a_fixed_pilot():
     plan = coincli.plan_sweep(coincli.load_preset("paper"), res=512)
-    cells = api.pilot_cells(plan.grid)
-    assert cells == api.pilot_cells(plan.grid) and len(set(cells)) == 24
+    cells = pilot_cells(plan.grid)
+    assert cells == pilot_cells(plan.grid) and len(set(cells)) == 24
     rows = np.array([i for i, _ in cells])
     assert (rows < 256).any() and (rows >= 256).any()  # spread over the grid
     est = coincli.estimate_sweep(plan, threads=2)
@@ -540,7 +546,7 @@ def test_estimate_comes_from_a_fixed_pilot():
 
 
 def test_a_sweep_of_weeks_is_refused_without_yes(tmp_path, monkeypatch):
-    from coincli.cli import basin_cmd
+    from coincli.cli.basin import sweep as basin_cmd
 
     # the real pilot on a real grid; the limit lowered from 12 h so that no machine is fast
     # enough to start this sweep (4.3e9 cells: 10 h on 2 fast cores)
@@ -557,7 +563,7 @@ def test_estimates_are_printed_and_the_limit_lifted_by_yes(tmp_path, monkeypatch
         n = plan.grid.n_cells if cells is None else cells
         return coincli.SweepEstimate(seconds, n, 0.01, 2, 24, False)
 
-    monkeypatch.setattr(api, "estimate_sweep", fake)
+    monkeypatch.setattr(engine, "estimate_sweep", fake)
     seconds = 300.0
     said = " ".join(coin_ok(tmp_path / "a.zarr", *ARGS).output.split())
     assert "estimate: about 5 min on 2 cores for 64 cells" in said
@@ -620,7 +626,7 @@ def test_outputs_that_cannot_be_written_fail_in_one_line_before_work(tmp_path, c
     partial = copy_store(clean, ro / "partial.zarr")
     (partial / "done" / "c" / "1" / "1").unlink()
     before = files_of(partial)
-    monkeypatch.setattr(api, "_load_kernels",
+    monkeypatch.setattr(engine, "load_kernels",
                         lambda *_: pytest.fail("work started on a disk it cannot write"))
     Disk(monkeypatch, ro, code)
     reason = os.strerror(code).lower()
@@ -650,8 +656,8 @@ def test_disk_full_in_the_middle_of_a_sweep(tmp_path, clean, monkeypatch):
         Disk(m, tmp_path, errno.ENOSPC, after=10, match=".partial")  # chunk writes
         err = one_line_error(coin(path, *ARGS, "--threads", "1"))
     assert "no space left on device" in err
-    assert leftovers(tmp_path) == [] and not store.claims_dir(path).exists()
-    assert store.check(path).intact  # what was written is whole
+    assert leftovers(tmp_path) == [] and not BasinStore(path).claims_dir.exists()
+    assert BasinStore.open(path).check().intact  # what was written is whole
     coin_ok(path, *ARGS)  # space again: resume
     assert_identical(path, clean)
 
@@ -670,12 +676,12 @@ def mirrored(tmp_path_factory) -> Path:
 
 
 def test_a_mirrored_store_has_the_labels_of_the_full_one(mirrored, clean):
-    half, full = store.read_basin(mirrored), store.read_basin(clean)
+    half, full = read_basin(mirrored), read_basin(clean)
     for name in ("quarter_turns", "status", "certainty", "rung", "steps"):
         np.testing.assert_array_equal(half.arrays[name], full.arrays[name], err_msg=name)
     np.testing.assert_allclose(half.arrays["settle_time"], full.arrays["settle_time"], rtol=1e-5)
     assert half.attrs["sweep"]["mirror"] == ["vphi"] and full.attrs["sweep"]["mirror"] is None
-    costs = {t: json.loads((store.cost_dir(mirrored) / f"tile_{t}.json").read_text())
+    costs = {t: json.loads((cost_dir(mirrored) / f"tile_{t}.json").read_text())
              for t in ("0_0", "0_1", "1_0", "1_1")}
     assert costs["0_1"]["mirror_of"] == [0, 0] and costs["1_1"]["mirror_of"] == [1, 0]
     assert costs["0_1"]["cpu_seconds"] == 0.0 < costs["0_0"]["cpu_seconds"]
@@ -707,28 +713,29 @@ def test_a_tile_binds_the_parameters_it_was_computed_with(tmp_path, monkeypatch)
     base = coincli.load_preset("paper")
     mine = api.plan_sweep(base, res=16, chunk=8)
     theirs = api.plan_sweep(base.with_overrides(k=400.0), res=16, chunk=8)
-    write = store.write_tile
+    write = BasinStore.write_tile
     overwritten = []
 
     def overwrite_first(*args, **kwargs):
         if not overwritten:
-            store.prepare(path, theirs.attrs, theirs.spec, overwrite=True)
+            BasinStore(path).create_or_resume(theirs.attrs, theirs.grid, overwrite=True)
             overwritten.append(True)
         return write(*args, **kwargs)
 
-    monkeypatch.setattr(store, "write_tile", overwrite_first)
+    monkeypatch.setattr(BasinStore, "write_tile", overwrite_first)
     api.sweep(mine, path, threads=1)
     assert overwritten
     # the store is theirs now
-    assert store.check(path).attrs["parameters"]["foundation"]["k"] == 400.0
-    assert not store.check(path).done.any()  # and holds none of this sweep's tiles as theirs
-    monkeypatch.setattr(store, "write_tile", write)
+    assert BasinStore.open(path).check().attrs["parameters"]["foundation"]["k"] == 400.0
+    # and holds none of this sweep's tiles as theirs
+    assert not BasinStore.open(path).check().done.any()
+    monkeypatch.setattr(BasinStore, "write_tile", write)
     api.sweep(theirs, path, threads=1)  # the resume computes every tile again
-    assert store.check(path).done.all()
+    assert BasinStore.open(path).check().done.all()
     reference = tmp_path / "r.zarr"
     api.sweep(theirs, reference, threads=1)
-    assert np.array_equal(store.read_basin(path).arrays["quarter_turns"],
-                          store.read_basin(reference).arrays["quarter_turns"])
+    assert np.array_equal(read_basin(path).arrays["quarter_turns"],
+                          read_basin(reference).arrays["quarter_turns"])
 
 
 def test_a_number_written_as_an_int_or_a_float_is_one_sweep(tmp_path):

@@ -32,7 +32,8 @@ from test_store import (
 
 import coincli
 from coincli import api
-from coincli.io import schema, store
+from coincli.io.basin_store import BasinStore, tile_digest
+from coincli.sweeps import schema
 
 
 @pytest.fixture(scope="module")
@@ -244,13 +245,13 @@ def test_what_a_user_adds_with_zarr_is_kept_and_no_damage(tmp_path, clean):
 
 
 def test_a_tile_verifies_only_under_the_parameters_it_was_computed_with(clean):
-    view = store.open_view(clean)
-    data, _ = store._read_tile(view, (0, 1))
-    flag = int(store._read_chunk(view, "done", (0, 1))[0, 0])
-    assert store.tile_digest((0, 1), data, view.parameters) == flag
+    view = BasinStore.open(clean)
+    data, _ = view.read_tile((0, 1))
+    flag = int(view.read_chunk("done", (0, 1))[0, 0])
+    assert tile_digest((0, 1), data, view.parameters) == flag
     other = json.loads(json.dumps(view.attrs))
     other["parameters"]["foundation"]["c"] = 0.4
-    assert store.tile_digest((0, 1), data, schema.parameters_digest(other)) != flag
+    assert tile_digest((0, 1), data, schema.parameters_digest(other)) != flag
 
 
 def test_stats_on_a_partial_store_warns_with_the_fraction_computed(tmp_path, clean):

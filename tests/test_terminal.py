@@ -34,11 +34,17 @@ COMMANDS = {
 
 
 def run(args, width, cwd=None):
-    env = {**os.environ, "COLUMNS": str(width), "NO_COLOR": "1", "TERM": "dumb"}
+    """The command's stdout as a terminal of ``width`` columns shows it (FORCE_COLOR: rich
+    takes the pipe for a terminal; NO_COLOR: without colour codes)."""
+    env = {**os.environ, "COLUMNS": str(width), "NO_COLOR": "1", "FORCE_COLOR": "1"}
+    env.pop("TERM", None)  # a "dumb" terminal is 80 columns to rich, whatever COLUMNS says
     done = subprocess.run([sys.executable, "-m", "coincli", *args], capture_output=True,
                           text=True, env=env, timeout=300, cwd=cwd)
     assert done.returncode == 0, done.stderr
-    return done.stdout
+    return ANSI.sub("", done.stdout)  # bold and italic: NO_COLOR leaves them
+
+
+ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 
 
 def check_output(out: str, width: int, phrases) -> None:
@@ -93,10 +99,9 @@ def test_fractions_over_and_its_progress_fit_the_terminal(width, tmp_path):
     done = subprocess.run([sys.executable, "-m", "coincli", *OVER], capture_output=True,
                           text=True, env=env, timeout=300, cwd=tmp_path)
     assert done.returncode == 1, done.stderr  # the budget, spent before the precision
-    ansi = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
-    out = ansi.sub("", done.stdout)
+    out = ANSI.sub("", done.stdout)
     check_output(out, width, ["95 % interval", "uncertain", "stopped: budget (every value)"])
-    shown = [ansi.sub("", line) for line in re.split(r"[\r\n]", done.stderr)]
+    shown = [ANSI.sub("", line) for line in re.split(r"[\r\n]", done.stderr)]
     assert not any("…" in line for line in shown), done.stderr
     assert all(len(line) <= width for line in shown), [line for line in shown
                                                        if len(line) > width]

@@ -9,7 +9,7 @@ from rich.table import Table
 
 from ..enums import Method
 from ..params import ParameterError
-from . import app
+from .app import app
 from .common import (
     COpt,
     DiameterOpt,
@@ -96,7 +96,7 @@ def accuracy_command(
             run_stability(scene, json_out)
             return
         names = parse_methods(methods)
-        from ..io.runner import usable_cores
+        from ..sweeps.executors import usable_cores
 
         threads = usable_cores() if threads is None else threads
         if threads < 1:

@@ -15,8 +15,8 @@ import typer
 from rich.table import Table
 
 from ..params import ParameterError
-from . import app
 from .accuracy_cmd import parse_range, parse_res
+from .app import app
 from .common import (
     JsonOpt,
     PresetOpt,
@@ -57,7 +57,7 @@ def bench_command(
     from ..accuracy import vy_vphi_grid
 
     with user_errors():
-        from ..io.runner import usable_cores
+        from ..sweeps.executors import usable_cores
 
         threads = usable_cores() if threads is None else threads
         if threads < 1 or repeats < 1:

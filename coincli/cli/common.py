@@ -10,9 +10,11 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
+from ..defaults import IC_NAMES
 from ..params import ParameterError, Scene, parse_number, parse_whole, shown, validate
 from ..presets import load
-from .text import NBSP, keep_whole, say
+from ..quantities import parse_quantity
+from .text import say
 
 
 def number_option(value) -> float:
@@ -26,6 +28,21 @@ def number_option(value) -> float:
         return parse_number(value, finite=False)
     except ParameterError as exc:
         raise typer.BadParameter(str(exc)) from None
+
+
+def quantity_option(name: str):
+    """The parser (typer's ``parser=``) of the option of initial condition ``name``: a number,
+    an angle in multiples of pi or a height in multiples of r (:mod:`coincli.quantities`),
+    resolved once the coin is known (:meth:`coincli.params.Scene.with_overrides`)."""
+    def parse(value):
+        if not isinstance(value, str):  # a default
+            return value
+        try:  # an infinity passes, for the command to refuse naming the parameter
+            return parse_quantity(name, value, finite=False)
+        except ParameterError as exc:  # click names the option before the message
+            raise typer.BadParameter(str(exc).removeprefix(f"{name}: ")) from None
+
+    return parse
 
 
 def whole_option(value) -> int:
@@ -65,13 +82,15 @@ _PAPER = _paper_defaults()
 def _opt(flag: str, text: str, unit: str, panel: str, key: str | None = None,
          number: bool = True):
     """An option overriding the preset: its unit as the metavar, the default preset's value in
-    the help; a number unless ``number=False``."""
+    the help; a number unless ``number=False`` (an initial condition's: a quantity, see
+    :func:`quantity_option`)."""
     key = key or flag.lstrip("-").replace("-", "_")
     if key in _PAPER:
         text += f" [dim]\\[paper: {_PAPER[key]:.6g}][/dim]" if isinstance(
             _PAPER[key], float) else f" [dim]\\[paper: {_PAPER[key]}][/dim]"
+    parser = (quantity_option(key) if key in IC_NAMES else number_option) if number else None
     return typer.Option(flag, help=text, metavar=unit, rich_help_panel=panel, show_default=False,
-                        parser=number_option if number else None)
+                        parser=parser)
 
 
 def _flag(flags: str, text: str, panel: str | None = None):
@@ -91,11 +110,12 @@ COpt = Annotated[float | None, _opt("--c", "Viscous damping per corner.", "N*s/m
 GOpt = Annotated[float | None, _opt("--g", "Gravity.", "m/s^2", PHYS)]
 
 X0Opt = Annotated[float | None, _opt("--x0", "Initial x [dim]\\[0][/dim]", "m", INIT)]
-Y0Opt = Annotated[float | None, _opt("--y0", "Initial height of the centroid [dim]\\[r, the "
-                                     "half diagonal: as high as a coin balanced on a corner, "
-                                     "the paper's start][/dim]", "m", INIT)]
-Phi0Opt = Annotated[float | None, _opt("--phi0", "Initial angle [dim]\\[0][/dim]", "rad",
-                                       INIT)]
+Y0Opt = Annotated[float | None, _opt("--y0", "Initial height of the centroid, in m or in "
+                                     "multiples of r, the half diagonal (2r) [dim]\\[r: as "
+                                     "high as a coin balanced on a corner, the paper's "
+                                     "start][/dim]", "m|Nr", INIT)]
+Phi0Opt = Annotated[float | None, _opt("--phi0", "Initial angle, e.g. 0.3, pi/2 "
+                                       "[dim]\\[0][/dim]", "rad", INIT)]
 VxOpt = Annotated[float | None, _opt("--vx", "Initial horizontal velocity [dim]\\[0][/dim]",
                                      "m/s", INIT)]
 VyOpt = Annotated[float | None, _opt("--vy", "Initial vertical velocity [dim]\\[0][/dim]",
@@ -147,13 +167,7 @@ def clip_values(message: str) -> str:
 def _one_line(head: str, style: str, message: str) -> None:
     """``head: message`` on stderr as one line (``message`` plain text)."""
     text = f"[{style}]{head}:[/] {escape(clip_values(message))}"
-    if err_console.is_terminal:
-        # A person reads it: break between phrases, not mid-word where the terminal would.
-        # Piped or captured it stays one line, for grep and logs.
-        text = keep_whole(text, err_console.width, indent=len(head) + 2)
-    else:  # a command in it (text.command) copies as one, with plain spaces
-        text = text.replace(NBSP, " ")
-    err_console.print(text, highlight=False, soft_wrap=True)
+    say(err_console, text, indent=len(head) + 2)
 
 
 def fail(message: str) -> typer.Exit:

@@ -5,7 +5,7 @@ from typing import Annotated
 
 import typer
 
-from . import app
+from .app import app
 from .common import compile_first, console
 from .text import say
 

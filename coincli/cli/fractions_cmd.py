@@ -15,8 +15,8 @@ from ..defaults import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION, PA
 from ..enums import StopReason
 from ..params import ParameterError
 from ..version import __version__
-from . import app, recording
-from .basin_cmd import _Stop
+from . import recording
+from .app import app
 from .common import (
     INIT,
     COpt,
@@ -82,17 +82,6 @@ VyDist = Annotated[str | None, _dist("vy", "Initial vertical velocity, m/s "
                                      "[dim]\\[0.05:2][/dim].")]
 VphiDist = Annotated[str | None, _dist("vphi", "Initial angular velocity, rad/s "
                                        "[dim]\\[-20:20][/dim].")]
-
-
-class _BatchStop(_Stop):
-    def _handle(self, signum, frame):
-        if self.requested:
-            raise KeyboardInterrupt
-        self.event.set()
-        say(err_console, "[yellow]interrupt:[/] finishing the batches in flight, then "
-                         "stopping (Ctrl-C again to stop at once; rerun the same command "
-                         "with --store to resume)")
-
 
 
 @app.command("fractions")
@@ -241,23 +230,25 @@ def fractions_command(
     compile_first(quiet)
     with user_errors():
         if store is not None:
-            from ..io.store import check_store_writable
+            from ..io.basin_store import check_store_writable
 
             check_store_writable(store)
         est = api.estimate_fractions(plan, threads=threads, workers=workers,
                                      scheduler=scheduler, store=store)
     _check_estimate(est, plan, scheduler, yes, quiet)
     from ..io.fractions_run import StoreIncomplete
-    from ..io.runner import SchedulerLost
+    from ..sweeps.executors import SchedulerLost
     from . import interruptions
 
     recorder = None
     if where_to is not None:
-        from ..io.live import FractionsRecorder  # Rerun's code only when asked for
+        from ..io.fractions_view import FractionsRecorder  # Rerun's code only when asked for
 
         recorder = FractionsRecorder(plan, where_to)
     try:
-        with user_errors(), _BatchStop() as stop, recorder or contextlib.nullcontext(), \
+        stop = interruptions.GracefulStop("finishing the batches in flight, then stopping "
+                                          "(rerun the same command with --store to resume)")
+        with user_errors(), stop, recorder or contextlib.nullcontext(), \
                 progress:
             result = api.run_fractions(plan, store=store, overwrite=overwrite, threads=threads,
                                        workers=workers, scheduler=scheduler, progress=show,
@@ -310,7 +301,7 @@ MAX_SECONDS = 12 * 3600.0  # a run estimated longer is refused without --yes
 def _check_estimate(est, plan, scheduler, yes: bool, quiet: bool) -> None:
     """Refuse (unless --yes) a run estimated at over 12 hours, or whose stop rule likely needs
     more samples than its budget; otherwise say what a long run will cost."""
-    from ..api import format_duration
+    from ..sweeps.plan import format_duration
 
     on = (f"on {counted(est.workers, 'core')}" if est.workers
           else f"of CPU time over the cluster at {scheduler}")

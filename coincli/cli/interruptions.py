@@ -1,5 +1,6 @@
-"""How a `coin` command ends early: SIGTERM and SIGHUP taken as Ctrl-C, and a lost Dask
-scheduler said in one line.
+"""How a `coin` command ends early, for every command in one place: Ctrl-C in two steps (the
+first finishes the work in flight, the second stops at once: :class:`GracefulStop`), SIGTERM and
+SIGHUP taken as a second Ctrl-C, and a lost Dask scheduler said in one line.
 
 A batch scheduler (Slurm, Kubernetes) sends SIGTERM some seconds before it kills a job, and a
 closed terminal sends SIGHUP. By default either ends Python at once, like ``kill -9``: no run
@@ -14,8 +15,10 @@ waits before its SIGKILL, and after a SIGHUP nobody is there to press Ctrl-C a s
 
 import signal
 import sys
+import threading
 
-from .text import command
+from .common import err_console
+from .text import command, say
 
 TERMINATING = (signal.SIGTERM, signal.SIGHUP)
 SCHEDULER_LOST = 3  # exit code: the run could not go on, the store is fine, resume it
@@ -75,6 +78,44 @@ def ended_by_signal(run) -> int:
         return exit_code(130)
 
 
+class GracefulStop:
+    """First Ctrl-C: say ``message`` and set ``event`` (the work in flight finishes, no more
+    starts); second: KeyboardInterrupt (stop at once). For the block it guards, in the main
+    thread; a SIGINT ignored already (a background job) stays ignored."""
+
+    def __init__(self, message: str):
+        self.message = message
+        self.event = threading.Event()
+        self.previous = None
+
+    @property
+    def requested(self) -> bool:
+        return self.event.is_set()
+
+    def __enter__(self):
+        self.previous = signal.getsignal(signal.SIGINT)
+        if self.previous is signal.SIG_IGN:
+            self.previous = None
+            return self
+        try:
+            signal.signal(signal.SIGINT, self._handle)
+        except ValueError:  # not the main thread: Ctrl-C is not ours to handle
+            self.previous = None
+        return self
+
+    def _handle(self, signum, frame):
+        if self.requested:
+            raise KeyboardInterrupt
+        self.event.set()
+        say(err_console, f"[yellow]interrupt:[/] {self.message} (Ctrl-C again to stop at "
+                         "once)")
+
+    def __exit__(self, *exc):
+        if self.previous is not None:
+            signal.signal(signal.SIGINT, self.previous)
+        return False
+
+
 def resume_command() -> str:
     """The command line to run again, quoted for the shell: this process's own when it is the
     `coin` command, else a description."""
@@ -84,10 +125,10 @@ def resume_command() -> str:
 
 
 def lost_scheduler(exc, kept: str) -> str:
-    """One line for a :class:`coincli.io.runner.SchedulerLost`: what happened, that the store
+    """One line for a :class:`coincli.sweeps.executors.SchedulerLost`: what happened, that the store
     keeps what was finished (``kept``: 'every finished tile'), and how to resume."""
     return f"{exc}; the store keeps {kept}: resume with {resume_command()}"
 
 
-__all__ = ["SCHEDULER_LOST", "TERMINATING", "ended_by_signal", "exit_code", "lost_scheduler",
-           "received", "resume_command", "stop_on_termination", "stopped_by"]
+__all__ = ["GracefulStop", "SCHEDULER_LOST", "TERMINATING", "ended_by_signal", "exit_code",
+           "lost_scheduler", "received", "resume_command", "stop_on_termination", "stopped_by"]

@@ -3,7 +3,7 @@
 from rich import box
 from rich.table import Table
 
-from . import app
+from .app import app
 from .common import (
     COpt,
     DiameterOpt,

@@ -5,7 +5,7 @@ from rich.table import Table
 
 from .. import presets as presets_mod
 from ..defaults import DEFAULT_PRESET
-from . import app
+from .app import app
 from .common import JsonOpt, console, print_json, user_errors
 from .text import say
 

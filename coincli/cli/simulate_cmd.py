@@ -10,7 +10,7 @@ from rich.markup import escape
 from ..defaults import DEFAULT_LOG_EVERY
 from ..enums import Certainty, Status
 from ..version import __version__
-from . import app
+from .app import app
 from .common import (
     COpt,
     DiameterOpt,
@@ -40,15 +40,20 @@ from .common import (
     console,
     err_console,
     fail,
-    number_option,
     print_json,
     user_errors,
 )
-from .recording import destination, places, record_throw
-from .text import NBSP, print_rows, say
-
-REC = "Recording (Rerun)"
-MAX_FRAMES = 1_000_000
+from .recording import (
+    REC,
+    ConnectOpt,
+    LogEveryOpt,
+    SpawnOpt,
+    check_log_every,
+    destination,
+    print_recording,
+    record_throw,
+)
+from .text import LABEL_WIDTH, NBSP, print_rows, say
 
 RrdOpt = Annotated[Path, typer.Option("--rrd", metavar="PATH", help="Write the recording of the "
                                       "throw to this .rrd file (open it with `rerun PATH`).",
@@ -57,20 +62,6 @@ NoRrdOpt = Annotated[bool, typer.Option("--no-rrd", metavar="",
                                         help="Write no .rrd file (with neither "
                                         "--spawn nor --connect: print the numbers only).",
                                         rich_help_panel=REC)]
-SpawnOpt = Annotated[bool, typer.Option("--spawn", metavar="",
-                                        help="Open a Rerun viewer and stream the "
-                                        "recording to it (without a display: says so, prints "
-                                        "the outcome, writes any --rrd file, exit 1).",
-                                        rich_help_panel=REC)]
-ConnectOpt = Annotated[str | None, typer.Option("--connect", metavar="URL", help="Stream the "
-                                                "recording to a running viewer, e.g. "
-                                                "rerun+http://127.0.0.1:9876/proxy.",
-                                                rich_help_panel=REC)]
-LogEveryOpt = Annotated[float, typer.Option("--log-every", metavar="SECONDS", help="Simulated "
-                                            "time between frames of the recording and rows of "
-                                            "--csv (contact onsets and lift-offs are added to "
-                                            "the recording at their exact times).",
-                                            rich_help_panel=REC, parser=number_option)]
 EXPORTS = "Exports"
 CsvOpt = Annotated[Path | None, typer.Option("--csv", metavar="FILE", help="Write the sampled "
                                              "time series (state and energies, every "
@@ -98,7 +89,7 @@ def simulate_command(
 ) -> None:
     """Run one throw and print its outcome: n quarter turns, lying or standing, and whether that label is certain.
 
-    The throw is verified on a ladder of tighter settings (--single-pass: once), and recorded for the Rerun viewer (coin.rrd unless --rrd or --no-rrd); --csv and --gif export its time series and an animation.
+    The throw is verified on a ladder of tighter settings (--single-pass: once). Its recording for the Rerun viewer is written to coin.rrd in the current folder unless told otherwise (--rrd FILE: there instead; --no-rrd: none); --csv and --gif export its time series and an animation.
 
     Example, the throw of the paper's fig. 2 (lying after six quarter turns here; from vy0 = 1.1974 m/s on it stands after seven, as the paper says):
 
@@ -118,8 +109,9 @@ def simulate_command(
                             k=k, c=c, g=g, method=method, dt=dt, rtol=rtol, t_end=t_end,
                             stop_on_settle=stop_on_settle, max_steps=max_steps,
                             verify=False if single_pass else None)
-        if sampled:
-            _check_log_every(scene, log_every)
+        if sampled:  # --no-rrd is the way out when the recording's file alone asks for frames
+            check_log_every(scene, log_every, no_rrd_helps=rrd_path is not None and not spawn
+                             and not connect and csv is None and gif is None)
         _check_exports(csv, gif)
         _announce(scene)
         try:
@@ -182,7 +174,7 @@ def _announce(scene) -> None:
     steps = sum(min(budget, math.ceil(horizon / dt)) if math.isfinite(horizon) else budget
                 for budget, dt in zip(ladder.budgets, ladder.dts, strict=True))
     if steps > SLOW_STEPS:
-        from ..api import format_duration
+        from ..sweeps.plan import format_duration
 
         seconds = steps * 2e-8  # ~20 ns a step compiled, the paper's method
         rungs = (f"{ladder.dts[0]:g} s" if len(ladder) == 1 else
@@ -190,19 +182,6 @@ def _announce(scene) -> None:
         err_console.print(f"[yellow]note[/]: up to {steps:,} steps of {rungs} "
                           f"(about {format_duration(seconds)}); Ctrl-C stops it",
                           highlight=False)
-
-
-def _check_log_every(scene, log_every) -> None:
-    """Fail in one line, before the run, on an unusable display rate."""
-    if isinstance(log_every, bool) or not math.isfinite(log_every) or log_every <= 0:
-        raise fail(f"--log-every must be a positive number of seconds, got {log_every}")
-    from ..model import horizon_text, scene_horizon
-
-    horizon = scene_horizon(scene)  # t_end, or the throw's cap (infinite: from a non-finite start)
-    frames = horizon / log_every if math.isfinite(horizon) else 0.0
-    if frames > MAX_FRAMES:
-        raise fail(f"--log-every {log_every:g} s makes {frames:.3g} frames over "
-                   f"{horizon:g} s ({horizon_text(scene)}; at most {MAX_FRAMES:,}); raise it")
 
 
 def _check_exports(csv, gif) -> None:
@@ -254,14 +233,6 @@ def print_exports(trajectory, written: dict) -> None:
         rows.append(("animation", f"{escape(str(written['animation']))}: {DEFAULT_SECONDS:g} s at "
                                   f"{DEFAULT_FPS} frames a second"))
     print_rows(console, rows, LABEL_WIDTH)
-
-
-def print_recording(info) -> None:
-    print_rows(console, [("recording", f"{'; '.join(places(info))}: {info.frames:,} frames, "
-                              f"{info.events} contact events")], LABEL_WIDTH)
-
-
-LABEL_WIDTH = 12  # the widest label, "final state", and a space
 
 
 def outcome_text(tr) -> str:

@@ -66,6 +66,9 @@ def keep_whole(text: str, width: int, indent: int = 0) -> str:
     return "\n".join(lines).replace(NBSP, " ")
 
 
+LABEL_WIDTH = 12  # the widest label, "final state", and a space
+
+
 def clock(seconds: float) -> str:
     """84.3 -> '1:24' (minutes and seconds, as a progress bar's clock shows them)."""
     minutes, secs = divmod(round(seconds), 60)
@@ -82,19 +85,30 @@ def command(*words) -> str:
     return NBSP.join(shlex.quote(str(word)).replace(" ", NBSP) for word in words)
 
 
+def line_width(console) -> int | None:
+    """The width to break paragraphs at: the terminal's, or None when the output is no
+    terminal (a pipe, a file, a test's capture), where a paragraph stays one line for grep and
+    logs, whatever width the terminal the command was started from has."""
+    return console.width if console.is_terminal else None
+
+
 def say(console, text: str, indent: int = 0) -> None:
-    """Print a paragraph broken between phrases at the console's width."""
-    console.print(keep_whole(text, console.width, indent), highlight=False, soft_wrap=True)
+    """Print a paragraph, broken between phrases at a terminal's width."""
+    width = line_width(console)
+    if width is not None:
+        text = keep_whole(text, width, indent)
+    console.print(text.replace(NBSP, " "), highlight=False, soft_wrap=True)
 
 
 def print_rows(console, rows, label_width: int | None = None) -> None:
-    """Label and value rows, each value broken between phrases to fit the console."""
+    """Label and value rows, each value broken between phrases to fit a terminal."""
     if label_width is None:
         label_width = max(len(label) for label, _ in rows) + 1
-    width = max(console.width - label_width, 20)
+    width = line_width(console)
     for label, value in rows:
-        console.print(f"[bold]{label:<{label_width}}[/]"
-                      f"{keep_whole(value, width, indent=label_width)}",
+        if width is not None:
+            value = keep_whole(value, max(width - label_width, 20), indent=label_width)
+        console.print(f"[bold]{label:<{label_width}}[/]{value.replace(NBSP, ' ')}",
                       highlight=False, soft_wrap=True)
 
 

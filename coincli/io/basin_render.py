@@ -21,6 +21,8 @@ import numpy as np
 from ..enums import Certainty, Status
 from ..grid import AXIS_INFO
 from ..integrators import NO_LABEL
+from ..params import ParameterError, scene_from_dict
+from ..quantities import parse_quantity
 from .charts import figure_axes
 from .dataset import Basin
 from .paths import check_figure_path, save_figure
@@ -238,14 +240,19 @@ MARK_SIZE = 64.0  # points^2: a circle about 3 mm wide at any resolution
 
 
 def check_marks(basin: Basin, marks) -> list[tuple[float, float]]:
-    """The marks as (first axis, second axis) pairs of finite numbers inside the swept ranges;
+    """The marks as (first axis, second axis) pairs of finite numbers inside the swept ranges
+    (each a number or text as :mod:`coincli.quantities` reads it: ``("pi/2", 3.5)``);
     ValueError naming the mark otherwise."""
     out = []
     axes = basin.axes
+    r = scene_from_dict(basin.attrs["parameters"]).coin.r
     for mark in marks or ():
         try:
-            v, w = (float(c) for c in mark)
-        except (TypeError, ValueError):
+            v, w = (parse_quantity(axis["name"], c).resolve(r)
+                    for axis, c in zip(axes, mark, strict=True))
+        except ParameterError as exc:
+            raise ValueError(f"mark {mark!r:.40}: {exc}") from None
+        except (TypeError, ValueError):  # not a pair
             raise ValueError(f"a mark is a pair of numbers ({axes[0]['name']}, "
                              f"{axes[1]['name']}), got {mark!r:.40}") from None
         for axis, value in zip(axes, (v, w), strict=True):

@@ -24,13 +24,12 @@ from ..integrators.ladder import ladder_of
 from ..params import (
     ParameterError,
     Scene,
-    check_number,
-    parse_number,
     scene_from_dict,
     shown,
     state_array,
 )
-from .store import grid_of
+from ..quantities import parse_quantity
+from .basin_store import BasinStore, Tile, grid_of
 
 
 def sweep_axes(attrs: dict) -> tuple[Axis, Axis]:
@@ -38,11 +37,10 @@ def sweep_axes(attrs: dict) -> tuple[Axis, Axis]:
     return grid_of(attrs).axes
 
 
-def _value(name: str, value) -> float:
-    if isinstance(value, str):
-        return parse_number(value)
-    check_number(name, value)
-    return float(value)
+def _value(name: str, value, r: float) -> float:
+    """A value of initial condition ``name`` as given (:mod:`coincli.quantities`), in SI units
+    for a coin of half diagonal ``r``."""
+    return parse_quantity(name, value).resolve(r)
 
 
 def locate(attrs: dict, cell=None, **values) -> tuple[int, int]:
@@ -84,8 +82,9 @@ def locate(attrs: dict, cell=None, **values) -> tuple[int, int]:
         raise ParameterError(f"give both swept axes ({' and '.join(names)}) or a cell index; "
                              f"missing: {', '.join(missing)}")
     out = []
+    r = scene_from_dict(attrs["parameters"]).coin.r
     for axis in axes:
-        value = _value(axis.name, given[axis.name])
+        value = _value(axis.name, given[axis.name], r)
         if not axis.lo <= value <= axis.hi:
             raise ParameterError(f"{axis.name} = {value:g} is outside the swept range "
                                  f"{axis.lo:g} to {axis.hi:g} {axis.units}")
@@ -169,17 +168,15 @@ def stored_cell(arrays: dict, cell: tuple[int, int]) -> StoredCell:
 def read_stored_cell(path: str | os.PathLike, cell: tuple[int, int]):
     """(attributes, StoredCell) of a store: the cell's tile alone is read, and checked against
     its digest (a damaged tile's cells read as not computed)."""
-    from .store import Tile, open_view, scan
-
-    view = open_view(path)
-    grid = view.grid
+    store = BasinStore.open(path)
+    grid = store.grid
     tile = tuple(int(c) // k for c, k in zip(cell, grid.chunk, strict=True))
-    (_, state, data, _), = scan(view, with_data=True, tiles=[tile])
+    (_, state, data, _), = store.scan(with_data=True, tiles=[tile])
     if state is not Tile.DONE:
-        return view.attrs, StoredCell(False, None, Status.NOT_COMPUTED, Certainty.NOT_COMPUTED,
-                                      None, math.nan, None)
+        return store.attrs, StoredCell(False, None, Status.NOT_COMPUTED,
+                                       Certainty.NOT_COMPUTED, None, math.nan, None)
     s0, s1 = grid.tile_slices(tile)
-    return view.attrs, stored_cell(data, (cell[0] - s0.start, cell[1] - s1.start))
+    return store.attrs, stored_cell(data, (cell[0] - s0.start, cell[1] - s1.start))
 
 
 def replay(scene: Scene, *, sample_dt: float | None = None, record_events: bool = False):

@@ -25,7 +25,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..params import ParameterError
-from .schema import FILLS, MARK, VARIABLES
+from ..stats import BasinCounts, BasinStats
+from ..sweeps.schema import FILLS, MARK, VARIABLES
 
 JSON_ATTRS = "json_attributes"  # the Dataset attribute naming those held as JSON text
 MASKED = "quarter_turns"  # the variable whose missing labels are NaN in a Dataset
@@ -77,6 +78,14 @@ class Basin:
         missing = ~self.computed
         for name, arr in self.arrays.items():
             arr[missing] = FILLS[name]
+
+    def stats(self) -> BasinStats:
+        """Its statistics (:func:`coincli.basin_stats`); damaged tiles count as not
+        computed."""
+        counts = BasinCounts()
+        a = self.arrays
+        counts.add(a["quarter_turns"], a["status"], a.get("certainty"))
+        return BasinStats(counts, self.done, self.damaged, self.tile_seconds, self.runs)
 
 
 def to_dataset(basin: Basin):

@@ -7,6 +7,7 @@ import math
 import os
 import time
 from collections.abc import Callable
+from functools import partial
 
 import numpy as np
 
@@ -28,17 +29,18 @@ from ..montecarlo import (
 )
 from ..montecarlo.plan import FractionsPlan, FractionsProgress
 from ..params import ParameterError, state_array
+from ..sweeps.executors import SchedulerLost, executor_for, hard_stop
 
 
 class BatchQueue:
-    """The batches of a run as one process sees them, with :class:`~coincli.io.claims.TileQueue`'s
-    interface (:func:`~coincli.io.runner.run_threads` takes from it): :meth:`take` hands out the
-    lowest batch (over every value) that the stop rules may still need and nobody else computes,
-    claimed first when the run has a store (``claims``); batches other processes hold are
-    watched (:data:`~coincli.io.claims.POLL`) until they appear in the store, whose labels are
-    then counted here (``found``), or until their claim is dropped or goes stale, when they are
-    claimed and computed here. So when the queue is :attr:`finished`, every value's goal is met,
-    whoever computed its batches."""
+    """The batches of a run as one process sees them, with the interface of
+    :class:`~coincli.sweeps.claims.TileQueue` (an executor of :mod:`coincli.sweeps.executors`
+    takes from it): :meth:`take` hands out the lowest batch (over every value) that the stop
+    rules may still need and nobody else computes, claimed first when the run has a store
+    (``claims``); batches other processes hold are watched (:data:`~coincli.sweeps.claims.POLL`)
+    until they appear in the store, whose labels are then counted here (``found``), or until
+    their claim is dropped or goes stale, when they are claimed and computed here. So when the
+    queue is :attr:`finished`, every value's goal is met, whoever computed its batches."""
 
     def __init__(self, progs, make_task: Callable, claims=None,
                  written: Callable[[int, int], bool] | None = None,
@@ -125,21 +127,12 @@ class BatchQueue:
         """Sleep until the next look at the batches others hold (Ctrl-C interrupts it)."""
         time.sleep(max(0.01, self.poll - (time.monotonic() - self._last_look)))
 
-    def items(self, stop=None):
-        """The batches as a lazy stream (for Dask): None while this process has batches in
-        flight and nothing else to hand out (the caller then waits for its results), a pause
-        while only other processes' batches are awaited; the stream ends when finished or
-        ``stop`` is set."""
-        while not (stop is not None and stop.is_set()):
-            task = self.take()
-            if task is not None:
-                yield task
-            elif self.finished:
-                return
-            elif self.out:
-                yield None
-            else:
-                self.pause()
+
+
+def compute_value_batch(specs, task: BatchTask, control=None):
+    """One batch of a run over several values: with the spec of its value (a picklable task
+    for Dask, with the specs bound by ``functools.partial``)."""
+    return compute_batch(specs[task.value], task, control)
 
 
 def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None,
@@ -149,12 +142,10 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     """Run a planned Monte Carlo run (see :func:`coincli.fractions`); a Fractions for a plain run, a
     FractionsOver for a continuation. Several processes may run the same plan on one store at
     once: they share the batches by claims, and each ends with the same results and store."""
-    from . import fractions_store as fstore
-    from .claims import Claims
-    from .runner import SchedulerLost, check_where, hard_stop, run_threads, usable_cores
-    from .store import check_store_writable
+    from .basin_store import check_store_writable
+    from .fractions_store import FractionsStore, Layout, run_record
 
-    check_where(threads, workers, scheduler)
+    executor = executor_for(threads, workers, scheduler)
     started = time.time()
     sampling, goal = plan.sampling, plan.goal
     size = sampling.batch
@@ -163,18 +154,20 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     progs = [Progression(goal, size, verified) for _ in plan.scenes]
     draws = Draws(sampling)
     n_values = len(plan.scenes)
-    layout = fstore.Layout(size, goal.batches(size),
-                           None if plan.parameter is None else n_values, plan.parameter)
-    writer = claims = None
+    layout = Layout(size, goal.batches(size),
+                    () if plan.parameter is None else (n_values,),
+                    () if plan.parameter is None else (plan.parameter,))
+    target = claims = None
     damaged: list[tuple[int, int]] = []
     kept = [0] * n_values  # batches the store held whole from batch 0 when the run started
     if store is not None:
         check_store_writable(store)
-        filled = fstore.prepare(store, plan.attrs, layout, None if plan.values is None
-                                else np.asarray(plan.values), overwrite=overwrite)
-        damaged = _resume(plan, progs, draws, layout, store, filled)
-        kept = _whole_prefix(plan, layout, filled, damaged)
-        writer = fstore.Writer(store, layout)
+        target = FractionsStore(store)
+        filled = target.prepare(plan.attrs, layout, None if plan.values is None
+                                else [np.asarray(plan.values)], overwrite=overwrite)
+        filled = filled.reshape(n_values, -1)
+        damaged = _resume(plan, progs, draws, target, filled)
+        kept = _whole_prefix(plan, filled, damaged)
     # read from the store: every whole batch, also those past a gap
     from_store = sum(t.samples for p in progs for t in p.tallies.values())
     found_elsewhere = [0]
@@ -186,9 +179,9 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
 
     def found(v: int, index: int) -> bool:  # a batch another process wrote: counted here
         count = goal.count(index, size)
-        if fstore.filled_count(store, layout, v, index) != count:
+        if target.filled_count(v, index) != count:
             return False  # its count does not read back: computed again
-        labels, _ = fstore.read_batches(store, layout, v, [index], [count])
+        labels, _ = target.read_batches(v, [index], [count])
         if index not in labels:
             return False  # its samples do not read back: computed again
         lab = labels[index]
@@ -197,33 +190,19 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
         found_elsewhere[0] += count
         return True
 
-    if store is not None:
-        claims = Claims(fstore.claims_dir(store))
-        queue = BatchQueue(progs, make_task, claims,
-                           lambda v, index: fstore.batch_written(store, layout, v, index), found)
+    if target is not None:
+        claims = target.claims()
+        queue = BatchQueue(progs, make_task, claims, target.batch_written, found)
     else:
         queue = BatchQueue(progs, make_task)
-    cluster_workers: list[int] = []  # the Dask cluster's workers, each time it was looked at
     lost = None
     try:
-        if scheduler is not None or workers is not None:
-            from .dask_tasks import run_dask_tasks
-
-            mode, n_workers = "dask", workers or 0
-            runner = run_dask_tasks(compute_batch, ((specs[t.value], t) if t is not None
-                                                    else None for t in queue.items(stop)),
-                                    key=lambda item: f"coin-fractions-{item[1].value}-"
-                                                     f"{item[1].batch}",
-                                    scheduler=scheduler, workers=workers,
-                                    on_workers=cluster_workers.append)
-        else:
-            mode, n_workers = "threads", threads or usable_cores()
-            if any(p.peek() is not None for p in progs):
-                for spec, s in zip(specs, plan.scenes, strict=True):
-                    warm_up(spec.params, spec.settings, np.asarray(state_array(s)),
-                            (verified_labels,))
-            runner = run_threads(lambda t, control: compute_batch(specs[t.value], t, control),
-                                 queue, n_workers, stop)
+        if not executor.dask and any(p.peek() is not None for p in progs):
+            for spec, s in zip(specs, plan.scenes, strict=True):
+                warm_up(spec.params, spec.settings, np.asarray(state_array(s)),
+                        (verified_labels,))
+        runner = executor.run(partial(compute_value_batch, specs), queue, stop,
+                              name=lambda t: f"fractions-{t.value}-{t.batch}")
         cpu = [0.0] * n_values
         computed = 0
         wall0 = time.perf_counter()
@@ -233,10 +212,9 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                 v = result.value
                 computed += result.count
                 cpu[v] += result.cpu_seconds
-                if writer is not None:  # every batch at once: an interrupted run keeps it
-                    writer.write(v, result.batch, result.states, result.labels)
+                if target is not None:  # every batch at once: an interrupted run keeps it
+                    target.write_batch(v, result.batch, result.states, result.labels)
                     claims.release((v, result.batch))
-                queue.settle(result)
                 lab = result.labels
                 progs[v].add(result.batch, Tally.of(lab["quarter_turns"], lab["status"],
                                                     lab["certainty"], verified))
@@ -251,23 +229,22 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
         except SchedulerLost as exc:  # the batches received are written already
             interrupted, lost = True, exc
         interrupted = interrupted or not all(p.done for p in progs)
-        if store is not None and not interrupted:
-            _seal(store, layout, progs, goal, size,
-                  lambda v, index: claims.path((v, index)).exists(), kept)
+        if target is not None and not interrupted:
+            _seal(target, progs, goal, size, lambda v, index: claims.path((v, index)).exists(),
+                  kept)
     finally:
         if claims is not None:
             claims.close()
     wall = time.perf_counter() - wall0
-    n_workers = max(cluster_workers, default=n_workers)
-    if store is not None and computed:
-        fstore.record_run(store, fstore.run_record(started, wall, sum(cpu), computed, mode,
-                                                   n_workers, interrupted))
+    if target is not None and computed:
+        target.record_run(run_record(started, wall, sum(cpu), computed, executor.mode,
+                                     executor.workers, interrupted))
     if lost is not None:
         raise lost
     total_cost = {"computed": computed, "cpu_seconds": sum(cpu), "wall_seconds": wall,
                   "trajectories_per_second": computed / wall if wall > 0 else math.nan,
                   "cpu_ms_per_trajectory": 1e3 * sum(cpu) / computed if computed else math.nan,
-                  "mode": mode, "workers": n_workers, "from_store": from_store,
+                  "mode": executor.mode, "workers": executor.workers, "from_store": from_store,
                   "from_others": found_elsewhere[0], "damaged_batches": len(damaged)}
     path = None if store is None else str(store)
     results = []
@@ -300,37 +277,34 @@ class StoreIncomplete(RuntimeError):
     """A run that met its goal, but whose store does not hold every batch it counted."""
 
 
-def _seal(store, layout, progs, goal, size: int, held: Callable[[int, int], bool],
+def _seal(target, progs, goal, size: int, held: Callable[[int, int], bool],
           kept: list[int]) -> None:
     """Once every value's goal is met: remove the batches beyond each value's stop (so the
     store is the same whoever computed what; not those another process is computing, which it
     removes itself once written: ``held``), then prove that the store holds every batch the
     results counted, whole; StoreIncomplete names what is missing."""
-    from . import fractions_store as fstore
-
     for v, prog in enumerate(progs):
         # what the store held whole from batch 0 when this run started stays: an earlier run
         # (a tighter precision, more samples) needed it
-        fstore.trim(store, layout, v, max(prog.prefix, kept[v]), held)
-    filled = fstore.read_filled(store)
+        target.trim(v, max(prog.prefix, kept[v]), held)
+    filled = target.read_filled().reshape(len(progs), -1)
     missing = []
     for v, prog in enumerate(progs):
-        have = np.asarray(filled[v] if layout.values is not None else filled)
-        missing += [(v, b) for b in range(prog.prefix) if have[b] < goal.count(b, size)]
+        missing += [(v, b) for b in range(prog.prefix) if filled[v][b] < goal.count(b, size)]
     if missing:
         v, b = missing[0]
-        where = f"batch {b}" + ("" if layout.values is None else f" of value {v}")
-        raise StoreIncomplete(f"{store}: {len(missing)} batch(es) counted in the results are "
-                              f"not in the store ({where} first); rerun the same command to "
-                              "compute them")
+        where = f"batch {b}" + ("" if len(progs) == 1 else f" of value {v}")
+        raise StoreIncomplete(f"{target.path}: {len(missing)} batch(es) counted in the results "
+                              f"are not in the store ({where} first); rerun the same command "
+                              "to compute them")
 
 
-def _whole_prefix(plan: FractionsPlan, layout, filled, damaged) -> list[int]:
+def _whole_prefix(plan: FractionsPlan, filled, damaged) -> list[int]:
     """Per value, the batches from 0 on that the store holds whole (none damaged)."""
     goal, size = plan.goal, plan.sampling.batch
     out = []
     for v in range(len(plan.scenes)):
-        have = np.asarray(filled[v] if layout.values is not None else filled)
+        have = filled[v]
         index = 0
         while index < have.shape[0] and have[index] >= goal.count(index, size) > 0 and \
                 (v, index) not in damaged:
@@ -339,17 +313,15 @@ def _whole_prefix(plan: FractionsPlan, layout, filled, damaged) -> list[int]:
     return out
 
 
-def _resume(plan: FractionsPlan, progs, draws, layout, store, filled) -> list[tuple[int, int]]:
+def _resume(plan: FractionsPlan, progs, draws, target, filled) -> list[tuple[int, int]]:
     """Count the batches a store holds already (each value's, in its progression), after
     checking that this installation draws the same samples as the one that wrote them; the
     (value, batch) of those that do not read back (damaged: they are computed again)."""
-    from . import fractions_store as fstore
-
     goal, size = plan.goal, plan.sampling.batch
     checked = False
     damaged: list[tuple[int, int]] = []
     for v, prog in enumerate(progs):
-        have = np.asarray(filled[v] if plan.parameter is not None else filled)
+        have = filled[v]
         batches, counts = [], []
         for index in range(min(prog.limit, have.shape[0])):
             need = goal.count(index, size)
@@ -358,16 +330,16 @@ def _resume(plan: FractionsPlan, progs, draws, layout, store, filled) -> list[tu
                 counts.append(need)
         if not batches:
             continue
-        labels, bad = fstore.read_batches(store, layout, v, batches, counts)
+        labels, bad = target.read_batches(v, batches, counts)
         damaged += [(v, index) for index in bad]
         if labels and not checked:
             index = min(labels)
             count = goal.count(index, size)
             drawn = initial_states(plan.scenes[v], plan.sampling, draws.batch(index)[:count])
-            stored = fstore.read_initial(store, layout, v, index, count)
+            stored = target.read_initial(v, index, count)
             if not np.array_equal(drawn[:, 1:], stored):
-                raise ParameterError(f"{store}: the samples drawn here differ from the ones "
-                                     "in the store (numpy or scipy changed?); overwrite "
+                raise ParameterError(f"{target.path}: the samples drawn here differ from the "
+                                     "ones in the store (numpy or scipy changed?); overwrite "
                                      "starts it again", parameters=("overwrite",))
             checked = True
         for index, lab in labels.items():

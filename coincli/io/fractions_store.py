@@ -1,7 +1,8 @@
-"""The Zarr v3 store of `coin fractions`: the samples drawn and their labels, batch by batch,
-resumable after Ctrl-C or ``kill -9``.
+"""The Zarr v3 store of `coin fractions`, owned by one object (:class:`FractionsStore`): the
+samples drawn and their labels, batch by batch, resumable after Ctrl-C or ``kill -9``. Written and
+read through :mod:`coincli.io.zarr_v3`, as basin stores are.
 
-Layout (a plain run; a continuation adds a leading axis named after the parameter)::
+Layout (a plain run; a continuation adds a leading axis per parameter, named after it)::
 
     out.zarr/                     group; attributes: coin_fractions, version, parameters (the
                                   base scene; drawn initial conditions null), sampling (sampler,
@@ -21,30 +22,29 @@ Layout (a plain run; a continuation adds a leading axis named after the paramete
                                   (one chunk a batch, so writers never share a file)
     out.zarr.cost/runs.jsonl      beside the store: one line per invocation (wall time, CPU
                                   time, samples computed, threads or Dask)
-    out.zarr.cost/claims/         the batches being computed (:mod:`coincli.io.claims`)
+    out.zarr.cost/claims/         the batches being computed (:mod:`coincli.sweeps.claims`)
 
 Every per-sample array is chunked by batch (``sampling.batch`` samples; one value at a time),
 so one batch is one chunk of each array, and ``filled`` has one chunk a batch too: writers of
 different batches (threads, Dask, other processes sharing the store through batch claims)
-never touch the same file, and Zarr writes each chunk by an atomic rename. A batch counts only
+never touch the same file, and each chunk is written by an atomic rename. A batch counts only
 once its ``filled`` entry, written after its data, says so; a batch cut off by ``kill -9`` is
 recomputed on resume, to the same bytes. Every batch computed is written at once, so an
 interrupted run keeps all its work; when a run's goal is met, the batches beyond the point where
-its stop rule stopped are removed (:func:`trim`), so the same command makes the same store,
-file for file, whether it ran once, was interrupted and resumed, or ran on more threads or
-processes. The sample axis is as long as the largest budget asked for (whole batches); asking
-for more later lengthens it. The store is created, checked and lengthened under the creation
-lock that basin stores use, so that processes started together all open one store.
+its stop rule stopped are removed (:meth:`FractionsStore.trim`), so the same command makes the
+same store, file for file, whether it ran once, was interrupted and resumed, or ran on more
+threads or processes. The sample axis is as long as the largest budget asked for (whole
+batches); asking for more later lengthens it. The store is created, checked and lengthened under
+the creation lock, so that processes started together all open one store.
 """
 
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import os
-import shutil
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,27 +53,28 @@ import numpy as np
 
 from ..montecarlo.plan import STORE_FORMAT
 from ..params import ParameterError
-from .schema import VARIABLES
-from .store import (
-    ZSTD_LEVEL,
-    check_is_store,
-    claims_dir,
-    cost_dir,
-    creating_name,
+from ..sweeps.claims import Claims
+from ..sweeps.schema import VARIABLES
+from .basin_metadata import flatten_attrs, show_value
+from .basin_store import check_is_store, cost_dir, read_runs, record_run
+from .zarr_v3 import (
+    ArraySpec,
+    create_store,
     creation_lock,
-    flatten_attrs,
+    dig,
+    encode_chunk,
+    group_files,
+    group_metadata,
     is_store,
-    read_runs,
-    record_run,
-    remove_orphans,
-    show_value,
+    json_bytes,
+    load_json,
+    write_atomically,
 )
 
 FORMAT = STORE_FORMAT  # 2: ``filled`` in one chunk a batch (1: 1024 batches a chunk)
 MARK = "coin_fractions"
 COMPARED = ("version", "parameters", "sampling", "method", "over")
 COLUMNS = ("y0", "phi0", "vx", "vy", "vphi")
-READ_RUN = 64  # batches read in one slice (every array: about 30 MB at the default batch)
 LABELS = ("quarter_turns", "status", "settle_time", "steps", "certainty", "rung")
 FILLED_ATTRS = {"long_name": "samples of the batch written (written after them); the batch "
                              "counts only when this equals the samples it needs",
@@ -82,36 +83,46 @@ INITIAL_ATTRS = {"long_name": "initial state of each sample", "columns": list(CO
                  "units": ["m", "rad", "m/s", "m/s", "rad/s"]}
 
 
-def _zarr():
-    import zarr
-
-    return zarr
-
-
 @dataclass(frozen=True)
 class Layout:
-    """The shape of a store: ``values`` (None for a plain run) and whole batches of samples."""
+    """The shape of a store: whole batches of samples, for each value of the parameters of a
+    continuation (``values``: how many of each parameter, in ``parameters``; none for a plain
+    run). A value is counted flat, the first parameter outermost."""
 
     batch: int
     batches: int  # capacity, in batches
-    values: int | None = None  # number of values of a continuation
-    parameter: str | None = None
+    values: tuple[int, ...] = ()
+    parameters: tuple[str, ...] = ()
 
     @property
     def samples(self) -> int:
         return self.batch * self.batches
 
-    def lead(self) -> tuple:
-        return () if self.values is None else (self.values,)
+    @property
+    def n_values(self) -> int:
+        return math.prod(self.values)
 
-    def lead_dims(self) -> tuple:
-        return () if self.values is None else (self.parameter,)
+    def at(self, value: int) -> tuple[int, ...]:
+        """The chunk index of ``value`` along the leading axes."""
+        return tuple(int(i) for i in np.unravel_index(value, self.values)) if self.values \
+            else ()
 
-    def lead_chunk(self) -> tuple:
-        return () if self.values is None else (1,)
-
-    def at(self, value: int) -> tuple:
-        return () if self.values is None else (value,)
+    def specs(self, values: list[np.ndarray] | None = None) -> dict[str, ArraySpec]:
+        """Every array of a store of this layout."""
+        lead, dims, ones = self.values, self.parameters, (1,) * len(self.values)
+        specs = {name: ArraySpec(name, (n,), (n,), "float64", 0.0, (name,),
+                                 {"long_name": f"the value of {name}"})
+                 for name, n in zip(dims, lead, strict=True)}
+        specs["initial"] = ArraySpec("initial", (*lead, self.samples, len(COLUMNS)),
+                                     (*ones, self.batch, len(COLUMNS)), "float64", math.nan,
+                                     (*dims, "sample", "ic"), INITIAL_ATTRS)
+        for name in LABELS:
+            dtype, fill, attrs = VARIABLES[name]
+            specs[name] = ArraySpec(name, (*lead, self.samples), (*ones, self.batch), dtype,
+                                    fill, (*dims, "sample"), attrs)
+        specs["filled"] = ArraySpec("filled", (*lead, self.batches), (*ones, 1), "uint32", 0,
+                                    (*dims, "batch"), FILLED_ATTRS)
+        return specs
 
 
 def differences(stored: dict, wanted: dict) -> list[str]:
@@ -130,285 +141,6 @@ def differences(stored: dict, wanted: dict) -> list[str]:
     return out
 
 
-def _consolidate(path: Path) -> None:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # "consolidated metadata is not part of the v3 spec"
-        _zarr().consolidate_metadata(str(path))
-
-
-def _compressors() -> list:
-    """Every array's codecs after ``bytes``: zstd, then a CRC-32C of the compressed chunk (as
-    basin stores), so that a chunk damaged on disk fails to read instead of decoding to other
-    labels."""
-    from zarr.codecs import Crc32cCodec, ZstdCodec
-
-    return [ZstdCodec(level=ZSTD_LEVEL, checksum=False), Crc32cCodec()]
-
-
-def _create(path: Path, attrs: dict, layout: Layout, values: np.ndarray | None) -> None:
-    """Create the store in a temporary directory beside it and rename it into place (call with
-    the creation lock held)."""
-    zarr = _zarr()
-    remove_orphans(path)  # creations that died
-    tmp = path.with_name(creating_name(path))
-    group = zarr.open_group(str(tmp), mode="w-", zarr_format=3, attributes=attrs)
-    lead, dims, chunk = layout.lead(), layout.lead_dims(), layout.lead_chunk()
-    if values is not None:
-        arr = group.create_array(layout.parameter, shape=(len(values),),
-                                 chunks=(len(values),), dtype="float64", fill_value=0.0,
-                                 dimension_names=(layout.parameter,),
-                                 attributes={"long_name": f"the value of {layout.parameter}"},
-                                 compressors=_compressors())
-        arr[:] = values
-    group.create_array("initial", shape=(*lead, layout.samples, len(COLUMNS)),
-                       chunks=(*chunk, layout.batch, len(COLUMNS)), dtype="float64",
-                       fill_value=math.nan, dimension_names=(*dims, "sample", "ic"),
-                       attributes=INITIAL_ATTRS, config={"write_empty_chunks": True},
-                       compressors=_compressors())
-    for name in LABELS:
-        dtype, fill, array_attrs = VARIABLES[name]
-        group.create_array(name, shape=(*lead, layout.samples), chunks=(*chunk, layout.batch),
-                           dtype=dtype, fill_value=fill, dimension_names=(*dims, "sample"),
-                           attributes=array_attrs, config={"write_empty_chunks": True},
-                           compressors=_compressors())
-    group.create_array("filled", shape=(*lead, layout.batches), chunks=(*chunk, 1),
-                       dtype="uint32", fill_value=0, dimension_names=(*dims, "batch"),
-                       attributes=FILLED_ATTRS, compressors=_compressors())
-    _consolidate(tmp)
-    shutil.rmtree(cost_dir(path), ignore_errors=True)  # the records of an older store
-    os.rename(tmp, path)
-    cost_dir(path).mkdir(exist_ok=True)
-
-
-def _grow(path: Path, layout: Layout) -> None:
-    """Lengthen the sample axis to ``layout.batches`` batches (before any batch is written)."""
-    group = _zarr().open_group(str(path), mode="r+")
-    lead = layout.lead()
-    group["initial"].resize((*lead, layout.samples, len(COLUMNS)))
-    for name in LABELS:
-        group[name].resize((*lead, layout.samples))
-    group["filled"].resize((*lead, layout.batches))
-    _consolidate(path)
-
-
-def prepare(path, attrs: dict, layout: Layout, values: np.ndarray | None = None,
-            overwrite: bool = False) -> np.ndarray:
-    """Create the store, or open one holding the same sampling and parameters (lengthening its
-    sample axis if this run may need more), and return its ``filled`` counts
-    ([value,] batch). A store of anything else is refused in one line unless ``overwrite``.
-    Several processes may call this at once on one path: one creates the store (under the
-    creation lock), the others open it."""
-    path = Path(path)
-    if path.exists() and not path.is_dir():
-        raise ParameterError(f"{path} exists and is not a directory")
-    if path.is_dir() and not is_store(path) and any(path.iterdir()):
-        raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with creation_lock(path):
-        if is_store(path) and overwrite:
-            shutil.rmtree(path)
-            shutil.rmtree(cost_dir(path), ignore_errors=True)
-        if not is_store(path):
-            if path.is_dir():  # empty
-                path.rmdir()
-            _create(path, attrs, layout, values)
-            return np.zeros((*layout.lead(), layout.batches), dtype=np.uint32)
-        _check_stored(path, attrs, layout)
-        if layout.batches > int(_zarr().open_group(str(path), mode="r")["filled"].shape[-1]):
-            _grow(path, layout)
-    cost_dir(path).mkdir(exist_ok=True)
-    return read_filled(path)
-
-
-def _check_stored(path: Path, attrs: dict, layout: Layout) -> None:
-    """Refuse, in one line, a store of anything but these samples, or one whose arrays do not
-    have the layout its attributes describe."""
-    try:
-        group = _zarr().open_group(str(path), mode="r")
-        stored = dict(group.attrs)
-    except Exception as exc:  # noqa: BLE001 - any failure to parse is damage
-        raise ParameterError(f"{path}: its metadata cannot be read ({type(exc).__name__}): the "
-                             "store is damaged; overwrite starts it again",
-                             parameters=("overwrite",)) from None
-    if MARK not in stored:
-        raise ParameterError(f"{path} is a Zarr store but not of coin fractions; "
-                             "overwrite replaces it", parameters=("overwrite",))
-    fmt = stored[MARK].get("format") if isinstance(stored[MARK], dict) else None
-    if fmt != FORMAT:
-        raise ParameterError(f"{path} is a coin fractions store of format {fmt}, this version "
-                             f"writes format {FORMAT}: overwrite starts it again",
-                             parameters=("overwrite",))
-    diff = differences(stored, attrs)
-    if diff:
-        raise ParameterError(f"{path} holds other samples: {'; '.join(diff[:4])}"
-                             f"{' ...' if len(diff) > 4 else ''}. Run again with the "
-                             "store's settings to resume it, or overwrite to "
-                             "replace it", parameters=("overwrite",))
-    try:
-        names = set(group.array_keys())
-        missing = [n for n in ("initial", "filled", *LABELS) if n not in names]
-        shapes_fit = not missing and (
-            tuple(group["filled"].shape[:-1]) == layout.lead()
-            and group["filled"].chunks[-1] == 1
-            and tuple(group["initial"].chunks[-2:]) == (layout.batch, len(COLUMNS)))
-    except Exception as exc:  # noqa: BLE001 - an array's metadata that does not parse
-        raise ParameterError(f"{path}: an array's metadata cannot be read "
-                             f"({type(exc).__name__}): the store is damaged; overwrite "
-                             "starts it again", parameters=("overwrite",)) from None
-    if missing:
-        raise ParameterError(f"{path} is damaged: array '{missing[0]}' is missing; "
-                             "overwrite starts it again", parameters=("overwrite",))
-    if not shapes_fit:
-        raise ParameterError(f"{path} is damaged: its arrays do not have the shape "
-                             "of its attributes; overwrite starts it again",
-                             parameters=("overwrite",))
-
-
-def open_attrs(path) -> dict:
-    """The store's attributes."""
-    return dict(_zarr().open_group(str(path), mode="r").attrs)
-
-
-def read_filled(path) -> np.ndarray:
-    """The ``filled`` counts of every batch ([value,] batch), read now; 0 for a batch whose
-    ``filled`` chunk does not read back (damaged: the batch is computed again)."""
-    filled = _zarr().open_group(str(path), mode="r")["filled"]
-    try:
-        return np.asarray(filled[:])
-    except Exception:  # noqa: BLE001 - a damaged chunk: read them one by one
-        out = np.zeros(filled.shape, dtype=np.uint32)
-        for index in np.ndindex(*filled.shape):
-            with contextlib.suppress(Exception):
-                out[index] = filled[index]
-        return out
-
-
-def _chunk_files(path: Path, layout: Layout, value: int, batch: int) -> list[Path]:
-    """The files of one batch, ``filled`` first (chunk keys as Zarr v3 names them by default:
-    ``NAME/c/I/J``)."""
-    at = [str(i) for i in layout.at(value)]
-    return [path.joinpath("filled", "c", *at, str(batch)),
-            path.joinpath("initial", "c", *at, str(batch), "0"),
-            *(path.joinpath(name, "c", *at, str(batch)) for name in LABELS)]
-
-
-def batch_written(path, layout: Layout, value: int, batch: int) -> bool:
-    """Whether a batch's ``filled`` chunk exists (one stat): written last, after all its data,
-    so one that appears while a run waits for it means another process finished the batch."""
-    return _chunk_files(Path(path), layout, value, batch)[0].is_file()
-
-
-def filled_count(path, layout: Layout, value: int, batch: int) -> int:
-    """One batch's ``filled`` count, read now (0 if its chunk does not read back)."""
-    try:
-        filled = _zarr().open_group(str(path), mode="r")["filled"]
-        return int(filled[(*layout.at(value), batch)])
-    except Exception:  # noqa: BLE001 - damaged: the batch counts as not written
-        return 0
-
-
-def trim(path, layout: Layout, value: int, keep: int,
-         held: Callable[[int, int], bool] | None = None) -> int:
-    """Remove the batches from ``keep`` on of one value (its ``filled`` chunk first, so that a
-    batch cut off midway counts as not written): those a run computed beyond the point where
-    its stop rule stopped; not those ``held(value, batch)`` says another process is writing.
-    The number removed."""
-    path = Path(path)
-    removed = 0
-    for batch in range(keep, layout.batches):
-        if held is not None and held(value, batch):
-            continue
-        files = _chunk_files(path, layout, value, batch)
-        if not any(f.exists() for f in files):
-            continue
-        for f in files:
-            with contextlib.suppress(FileNotFoundError):
-                f.unlink()
-        removed += 1
-    return removed
-
-
-class Writer:
-    """Writes batches into an open store (one group handle for the whole run)."""
-
-    def __init__(self, path, layout: Layout):
-        self.path = Path(path)
-        self.layout = layout
-        group = _zarr().open_group(str(path), mode="r+")
-        self.arrays = {name: group[name].with_config({"write_empty_chunks": True})
-                       for name in ("initial", "filled", *LABELS)}
-
-    def write(self, value: int, batch: int, states: np.ndarray, labels: dict) -> None:
-        """One batch's samples (``states``: N x 6) and labels, then its ``filled`` count."""
-        count = states.shape[0]
-        lo = batch * self.layout.batch
-        at = self.layout.at(value)
-        rows = (*at, slice(lo, lo + count))
-        self.arrays["initial"][rows] = states[:, 1:]
-        for name in LABELS:
-            self.arrays[name][rows] = labels[name]
-        self.arrays["filled"][(*at, slice(batch, batch + 1))] = count
-
-
-def read_batches(path, layout: Layout, value: int, batches: list[int],
-                 counts: list[int]) -> tuple[dict[int, dict], list[int]]:
-    """The labels of the given batches of one value, ``counts[i]`` samples of each, and the
-    batches that do not read back (a chunk of any of their arrays damaged: their checksum
-    fails, or a chunk is missing). Read in one slice per run of consecutive batches, batch by
-    batch where a run fails."""
-    if not batches:
-        return {}, []
-    group = _zarr().open_group(str(path), mode="r")
-    at = layout.at(value)
-    out: dict[int, dict] = {}
-
-    def read(first: int, last: int) -> dict:
-        lo = batches[first] * layout.batch
-        hi = batches[last] * layout.batch + counts[last]
-        block = {name: np.asarray(group[name][(*at, slice(lo, hi))])
-                 for name in ("initial", *LABELS)}
-        written = batches[last] - batches[first] + 1  # whole batches: none reads as the fill
-        if np.isnan(block["initial"]).all(axis=-1).sum() > 0 or \
-                (block["status"] == VARIABLES["status"][1]).sum() > 0:
-            raise ValueError(f"{written} batch(es) hold samples never written")
-        return block
-
-    whole = [all(f.is_file() for f in _chunk_files(Path(path), layout, value, index))
-             for index in batches]  # a missing chunk would read back as fill values
-    damaged = [index for index, ok in zip(batches, whole, strict=True) if not ok]
-    counts = [c for c, ok in zip(counts, whole, strict=True) if ok]
-    batches = [index for index, ok in zip(batches, whole, strict=True) if ok]
-    start = 0
-    while start < len(batches):
-        end = start
-        while end + 1 < len(batches) and batches[end + 1] == batches[end] + 1 and \
-                end - start + 1 < READ_RUN:
-            end += 1
-        try:
-            runs = [(start, end, read(start, end))]
-        except Exception:  # noqa: BLE001 - some chunk of the run is damaged: batch by batch
-            runs = []
-            for i in range(start, end + 1):
-                try:
-                    runs.append((i, i, read(i, i)))
-                except Exception:  # noqa: BLE001
-                    damaged.append(batches[i])
-        for first, last, block in runs:
-            for i in range(first, last + 1):
-                a = (batches[i] - batches[first]) * layout.batch
-                out[batches[i]] = {name: block[name][a:a + counts[i]]
-                                   for name in ("quarter_turns", "status", "certainty")}
-        start = end + 1
-    return out, damaged
-
-
-def read_initial(path, layout: Layout, value: int, batch: int, count: int) -> np.ndarray:
-    """The stored initial states (y0, phi0, vx, vy, vphi) of one batch."""
-    group = _zarr().open_group(str(path), mode="r")
-    lo = batch * layout.batch
-    return np.asarray(group["initial"][(*layout.at(value), slice(lo, lo + count))])
-
-
 def run_record(started: float, wall: float, cpu: float, samples: int, mode: str, workers: int,
                interrupted: bool) -> dict:
     return {"started": time.strftime("%Y-%m-%dT%H:%M:%S%z", time.localtime(started)),
@@ -416,18 +148,294 @@ def run_record(started: float, wall: float, cpu: float, samples: int, mode: str,
             "mode": mode, "workers": workers, "interrupted": interrupted}
 
 
-def open_fractions(path):
-    """The store as an xarray Dataset (lazy; cells of batches not written hold the fills)."""
-    import xarray as xr
+class FractionsStore:
+    """The store of a Monte Carlo run at ``path``; :meth:`prepare` creates or opens it for a
+    run of a layout, after which it reads and writes that run's batches."""
 
+    def __init__(self, path: str | os.PathLike):
+        self.path = Path(path)
+        self.layout: Layout | None = None
+        self.specs: dict[str, ArraySpec] = {}
+
+    def __repr__(self) -> str:
+        return f"FractionsStore({str(self.path)!r})"
+
+    @property
+    def cost_dir(self) -> Path:
+        return cost_dir(self.path)
+
+    @property
+    def claims_dir(self) -> Path:
+        return self.cost_dir / "claims"
+
+    def claims(self) -> Claims:
+        return Claims(self.claims_dir)
+
+    def exists(self) -> bool:
+        return is_store(self.path)
+
+    # -- opening --------------------------------------------------------------------------------
+    def attrs(self) -> dict:
+        """The store's attributes, read now; ParameterError (one line) if there are none."""
+        check_is_store(self.path)
+        attrs = dig(load_json(self.path / "zarr.json"), "attributes")
+        if not isinstance(attrs, dict):
+            raise ParameterError(f"{self.path}: its metadata cannot be read: the store is "
+                                 "damaged; overwrite starts it again",
+                                 parameters=("overwrite",))
+        return attrs
+
+    @classmethod
+    def open(cls, path: str | os.PathLike) -> FractionsStore:
+        """An existing store, its layout read from its arrays (to read its batches, or trim
+        them); ParameterError (one line) if it is none, or not one of coin fractions."""
+        store = cls(path)
+        if MARK not in store.attrs():
+            raise ParameterError(f"{path} is not a coin fractions store")
+        try:
+            specs = store._read_specs()
+            filled, initial = specs["filled"], specs["initial"]
+        except (ValueError, KeyError) as exc:
+            raise ParameterError(f"{path}: an array's metadata cannot be read ({exc}): the "
+                                 "store is damaged; overwrite starts it again",
+                                 parameters=("overwrite",)) from None
+        store.layout = Layout(initial.chunks[-2], filled.shape[-1], filled.shape[:-1],
+                              filled.dims[:-1])
+        store.specs = specs
+        return store
+
+    def _read_specs(self) -> dict[str, ArraySpec]:
+        """The arrays as the store's metadata describe them."""
+        root = load_json(self.path / "zarr.json")
+        listed = dig(root, "consolidated_metadata", "metadata") or {}
+        specs = {}
+        for name in listed:
+            metadata = load_json(self.path / name / "zarr.json")
+            if metadata is None:
+                raise ValueError(f"array {name}: its metadata cannot be read")
+            specs[name] = ArraySpec.of(name, metadata)
+        return specs
+
+    def prepare(self, attrs: dict, layout: Layout, values: list[np.ndarray] | None = None,
+                overwrite: bool = False) -> np.ndarray:
+        """Create the store, or open one holding the same sampling and parameters (lengthening
+        its sample axis if this run may need more), and return its ``filled`` counts
+        ([value,] batch). A store of anything else is refused in one line unless
+        ``overwrite``. Several processes may call this at once on one path: one creates the
+        store (under the creation lock), the others open it."""
+        path = self.path
+        if path.exists() and not path.is_dir():
+            raise ParameterError(f"{path} exists and is not a directory")
+        if path.is_dir() and not is_store(path) and any(path.iterdir()):
+            raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        specs = layout.specs()
+        if overwrite or not is_store(path):
+            create_store(path, lambda: self._template(attrs, layout, values),
+                         replace=overwrite, side=self.cost_dir)
+        with creation_lock(path):
+            self._check_stored(attrs, layout)
+            if layout.batches > self._read_specs()["filled"].shape[-1]:
+                self._grow(layout, specs)
+        self.layout, self.specs = layout, specs
+        self.cost_dir.mkdir(exist_ok=True)
+        return self.read_filled()
+
+    @staticmethod
+    def _template(attrs: dict, layout: Layout, values) -> dict[str, bytes]:
+        specs = layout.specs()
+        files = group_files(attrs, list(specs.values()))
+        for name, column in zip(layout.parameters, values or (), strict=False):
+            spec = specs[name]
+            files[spec.key((0,))] = encode_chunk(np.asarray(column, dtype=np.float64),
+                                                 spec.dtype, spec.fill, spec.chunks)
+        return files
+
+    def _check_stored(self, attrs: dict, layout: Layout) -> None:
+        """Refuse, in one line, a store of anything but these samples, or one whose arrays do
+        not have the layout its attributes describe."""
+        path = self.path
+        stored = dig(load_json(path / "zarr.json"), "attributes")
+        if not isinstance(stored, dict):
+            raise ParameterError(f"{path}: its metadata cannot be read: the store is damaged; "
+                                 "overwrite starts it again", parameters=("overwrite",))
+        if MARK not in stored:
+            raise ParameterError(f"{path} is a Zarr store but not of coin fractions; "
+                                 "overwrite replaces it", parameters=("overwrite",))
+        fmt = stored[MARK].get("format") if isinstance(stored[MARK], dict) else None
+        if fmt != FORMAT:
+            raise ParameterError(f"{path} is a coin fractions store of format {fmt}, this "
+                                 f"version writes format {FORMAT}: overwrite starts it again",
+                                 parameters=("overwrite",))
+        diff = differences(stored, attrs)
+        if diff:
+            raise ParameterError(f"{path} holds other samples: {'; '.join(diff[:4])}"
+                                 f"{' ...' if len(diff) > 4 else ''}. Run again with the "
+                                 "store's settings to resume it, or overwrite to "
+                                 "replace it", parameters=("overwrite",))
+        try:
+            found = self._read_specs()
+        except ValueError as exc:  # an array's metadata that does not parse
+            raise ParameterError(f"{path}: an array's metadata cannot be read ({exc}): the "
+                                 "store is damaged; overwrite starts it again",
+                                 parameters=("overwrite",)) from None
+        missing = [n for n in ("initial", "filled", *LABELS) if n not in found]
+        if missing:
+            raise ParameterError(f"{path} is damaged: array '{missing[0]}' is missing; "
+                                 "overwrite starts it again", parameters=("overwrite",))
+        want = layout.specs()
+        if (found["filled"].shape[:-1] != layout.values or found["filled"].chunks[-1] != 1
+                or found["initial"].chunks[-2:] != want["initial"].chunks[-2:]):
+            raise ParameterError(f"{path} is damaged: its arrays do not have the shape "
+                                 "of its attributes; overwrite starts it again",
+                                 parameters=("overwrite",))
+
+    def _grow(self, layout: Layout, specs: dict[str, ArraySpec]) -> None:
+        """Lengthen the sample axis to ``layout.batches`` batches (call with the creation lock
+        held): each array's metadata, then the group's."""
+        root = load_json(self.path / "zarr.json")
+        metadata = dict(dig(root, "consolidated_metadata", "metadata") or {})
+        for name in ("initial", *LABELS, "filled"):
+            document = load_json(self.path / name / "zarr.json")
+            document["shape"] = list(specs[name].shape)
+            write_atomically(self.path / name / "zarr.json", json_bytes(document))
+            metadata[name] = document
+        write_atomically(self.path / "zarr.json",
+                         json_bytes(group_metadata(root["attributes"], metadata)))
+
+    # -- reading and writing batches -----------------------------------------------------------
+    def _files(self, value: int, batch: int) -> list[Path]:
+        """The files of one batch, ``filled`` first."""
+        at = self.layout.at(value)
+        return [self.specs["filled"].file(self.path, (*at, batch)),
+                self.specs["initial"].file(self.path, (*at, batch, 0)),
+                *(self.specs[name].file(self.path, (*at, batch)) for name in LABELS)]
+
+    def read_filled(self) -> np.ndarray:
+        """The ``filled`` count of every batch ([value,] batch), read now; 0 for a batch whose
+        ``filled`` chunk does not read back (damaged: the batch is computed again)."""
+        spec = self._read_specs()["filled"]
+        out = np.zeros(spec.shape, dtype=np.uint32)
+        for index in np.ndindex(*spec.shape):
+            with contextlib.suppress(FileNotFoundError, OSError, ValueError):
+                out[index] = spec.read(self.path, index).reshape(-1)[0]
+        return out
+
+    def batch_written(self, value: int, batch: int) -> bool:
+        """Whether a batch's ``filled`` chunk exists (one stat): written last, after all its
+        data, so one that appears while a run waits for it means another process finished
+        the batch."""
+        return self._files(value, batch)[0].is_file()
+
+    def filled_count(self, value: int, batch: int) -> int:
+        """One batch's ``filled`` count, read now (0 if its chunk does not read back)."""
+        try:
+            block = self.specs["filled"].read(self.path, (*self.layout.at(value), batch))
+            return int(block.reshape(-1)[0])
+        except (OSError, ValueError):  # damaged: the batch counts as not written
+            return 0
+
+    def write_batch(self, value: int, batch: int, states: np.ndarray, labels: dict) -> None:
+        """One batch's samples (``states``: N x 6) and labels, then its ``filled`` count."""
+        at = self.layout.at(value)
+        lead = (1,) * len(at)
+        self.specs["initial"].write(self.path, (*at, batch, 0),
+                                    states[:, 1:].reshape(*lead, *states[:, 1:].shape))
+        for name in LABELS:
+            block = np.asarray(labels[name])
+            self.specs[name].write(self.path, (*at, batch), block.reshape(*lead, block.size))
+        self.specs["filled"].write(self.path, (*at, batch),
+                                   np.full((*lead, 1), states.shape[0], dtype=np.uint32))
+
+    def read_batches(self, value: int, batches: list[int],
+                     counts: list[int]) -> tuple[dict[int, dict], list[int]]:
+        """The labels of the given batches of one value, ``counts[i]`` samples of each, and the
+        batches that do not read back (a chunk of any of their arrays missing or damaged)."""
+        at = self.layout.at(value)
+        out: dict[int, dict] = {}
+        damaged = []
+        for batch, count in zip(batches, counts, strict=True):
+            try:  # every chunk of the batch: one damaged is the batch's damage
+                block = {name: self.specs[name].read(self.path, (*at, batch)).reshape(-1)[:count]
+                         for name in LABELS}
+                initial = self.specs["initial"].read(self.path, (*at, batch, 0))
+            except (OSError, ValueError):  # missing (FileNotFoundError), or damaged
+                damaged.append(batch)
+                continue
+            rows = initial.reshape(-1, len(COLUMNS))[:count]
+            if np.isnan(rows).all(axis=-1).any() or \
+                    (block["status"] == VARIABLES["status"][1]).any():
+                damaged.append(batch)  # samples never written
+                continue
+            out[batch] = {name: block[name] for name in ("quarter_turns", "status", "certainty")}
+        return out, damaged
+
+    def read_initial(self, value: int, batch: int, count: int) -> np.ndarray:
+        """The stored initial states (y0, phi0, vx, vy, vphi) of one batch."""
+        block = self.specs["initial"].read(self.path, (*self.layout.at(value), batch, 0))
+        return block.reshape(-1, len(COLUMNS))[:count]
+
+    def trim(self, value: int, keep: int,
+             held: Callable[[int, int], bool] | None = None) -> int:
+        """Remove the batches from ``keep`` on of one value (its ``filled`` chunk first, so that
+        a batch cut off midway counts as not written): those a run computed beyond the point
+        where its stop rule stopped; not those ``held(value, batch)`` says another process is
+        writing. The number removed."""
+        removed = 0
+        for batch in range(keep, self.layout.batches):
+            if held is not None and held(value, batch):
+                continue
+            files = self._files(value, batch)
+            if not any(f.exists() for f in files):
+                continue
+            for f in files:
+                with contextlib.suppress(FileNotFoundError):
+                    f.unlink()
+            removed += 1
+        return removed
+
+    # -- its records ----------------------------------------------------------------------------
+    def record_run(self, run: dict) -> None:
+        record_run(self.path, run)
+
+    def runs(self) -> list[dict]:
+        return read_runs(self.path)
+
+    def dataset(self):
+        """The store as an xarray Dataset, in memory: ``initial`` ([value,] sample, ic) and the
+        labels ([value,] sample); batches not written hold the fill values (``filled`` says
+        which are)."""
+        import xarray as xr
+
+        attrs = self.attrs()
+        if MARK not in attrs:
+            raise ParameterError(f"{self.path} is not a coin fractions store")
+        specs = self._read_specs()
+        variables, coords = {}, {}
+        for name, spec in specs.items():
+            values = np.full(spec.shape, spec.fill, dtype=spec.dtype)
+            grid = [math.ceil(n / c) for n, c in zip(spec.shape, spec.chunks, strict=True)]
+            for index in np.ndindex(*grid):
+                with contextlib.suppress(FileNotFoundError):
+                    block = spec.read(self.path, index)
+                    where = tuple(slice(i * c, i * c + b) for i, c, b
+                                  in zip(index, spec.chunks, block.shape, strict=True))
+                    values[where] = block
+            variable = xr.Variable(spec.dims, values, attrs=spec.attributes)
+            if spec.dims == (name,):
+                coords[name] = variable
+            else:
+                variables[name] = variable
+        # decoded as xarray.open_zarr decodes them: labels with a missing_value as NaN
+        return xr.decode_cf(xr.Dataset(variables, coords=coords,
+                                       attrs=json.loads(json.dumps(attrs))))
+
+
+def open_fractions(path) -> object:
+    """A `coin fractions` store as an xarray Dataset (:meth:`FractionsStore.dataset`)."""
     check_is_store(path)
-    ds = xr.open_zarr(str(path))
-    if MARK not in ds.attrs:
-        raise ParameterError(f"{path} is not a coin fractions store")
-    return ds
+    return FractionsStore(path).dataset()
 
 
-__all__ = ["COLUMNS", "LABELS", "Layout", "Writer", "batch_written", "claims_dir", "cost_dir",
-           "differences", "filled_count", "open_attrs", "open_fractions", "prepare",
-           "read_batches", "read_filled", "read_initial", "read_runs", "record_run", "run_record",
-           "trim"]
+__all__ = ["COLUMNS", "FORMAT", "FractionsStore", "LABELS", "Layout", "MARK", "differences",
+           "open_fractions", "run_record"]

@@ -16,11 +16,8 @@ carries phi in radians), forces in newtons (drawn as arrows, see :func:`force_ar
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
-import shutil
-import sys
 import uuid
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -33,10 +30,10 @@ from ..model import horizon_text
 from ..params import ParameterError, check_number
 from ..version import __version__
 from .frames import ARROW_PEAK_DIAMETERS, Frames, build_frames, force_arrows
-from .paths import atomic_output, check_connect_url, check_rrd_path
+from .paths import check_connect_url, check_rrd_path
+from .rerun_stream import APPLICATION_ID, open_stream, require_notebook, viewer_class
 from .timeseries import with_samples
 
-APPLICATION_ID = "coin"
 TIMELINE = "sim_time"
 
 # Entity paths.
@@ -174,89 +171,6 @@ def _visual_bounds(frames: Frames, scene):
     return rrb.VisualBounds2D(x_range=[x0, x1], y_range=[-y1, -y0])
 
 
-def display_available() -> bool:
-    """Whether a spawned viewer has a display to open its window on: on Linux and the other
-    Unixes an X11 or Wayland display named in the environment; macOS and Windows always have
-    one. Without it the viewer dies at once and the recording waits for it (20 s) in vain."""
-    if sys.platform == "darwin" or sys.platform.startswith("win"):
-        return True
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-
-
-NO_DISPLAY = "no display to open a viewer on (DISPLAY and WAYLAND_DISPLAY are unset)"
-
-
-def _sinks(rr, rec, rrd: Path | None, spawn: bool, connect: str | None, port: int):
-    sinks = []
-    if rrd is not None:
-        sinks.append(rr.FileSink(str(rrd)))
-    urls = []
-    if spawn:
-        exe = shutil.which("rerun")
-        if exe is None:
-            candidate = Path(sys.executable).with_name("rerun")
-            exe = str(candidate) if candidate.exists() else None
-        rr.spawn(port=port, connect=False, executable_path=exe, recording=rec)
-        urls.append(f"rerun+http://127.0.0.1:{port}/proxy")
-    if connect is not None and connect not in urls:
-        urls.append(connect)
-    sinks.extend(rr.GrpcSink(url) for url in urls)
-    return sinks
-
-
-@contextlib.contextmanager
-def open_stream(name: str, *, rrd: Path | None = None, spawn: bool = False,
-                connect: str | None = None, notebook: bool = False, width: int | None = None,
-                height: int | None = None, port: int = 9876, flush_timeout: float = 30.0):
-    """A new Rerun recording stream named ``name``, sent to an ``.rrd`` file (written through
-    a temporary file renamed into place on success: complete or absent, checked to read back),
-    a spawned viewer and/or the viewer at ``connect``; flushed and closed on leaving. Shared by
-    every command that records (simulate, basin, fractions). The paths and URL are taken as
-    checked (:func:`check_rrd_path`, :func:`check_connect_url`); ``spawn`` without a display
-    raises RuntimeError (:func:`display_available`).
-
-    ``notebook`` (alone): True, the stream goes to a Rerun viewer displayed in the notebook's
-    cell now (``width`` and ``height`` in pixels); it shows what was logged once the cell has
-    ended: Jupyter hands the kernel the viewer's "ready" only between cells (Rerun's wait for
-    it, ``block_until_ready``, timed out in JupyterLab 4 with ipykernel 7 in a real browser).
-    Or a viewer shown in an earlier cell (:func:`notebook_viewer`): it is ready, and shows
-    what is logged as it comes."""
-    import rerun as rr
-
-    if notebook is not False:
-        viewer_class = _viewer_class()
-        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
-        if notebook is True:
-            viewer_class(width=width, height=height, recording=rec).display()
-        else:  # a viewer shown in an earlier cell (notebook_viewer): ready, so live
-            notebook.add_recording(rec)
-        rec.send_recording_name(name)
-        try:
-            yield rec
-        finally:
-            rec.flush(timeout_sec=flush_timeout)
-        return
-    if rrd is None and not spawn and connect is None:
-        raise ValueError("a recording needs a destination: rrd, spawn or connect")
-    if spawn and not display_available():
-        raise RuntimeError(f"{NO_DISPLAY}: write the recording to a file (rrd=...) and open it "
-                           "where there is one, or stream it to a running viewer (connect=...)")
-    with contextlib.ExitStack() as outputs:
-        file_out = outputs.enter_context(atomic_output(rrd)) if rrd is not None else None
-        rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
-        rec.set_sinks(*_sinks(rr, rec, file_out, spawn, connect, port))
-        rec.send_recording_name(name)
-        try:
-            yield rec
-        finally:
-            try:
-                rec.flush(timeout_sec=flush_timeout)
-            finally:
-                rec.disconnect()  # closes the file sink (writes its footer), hangs up on viewers
-        if file_out is not None:
-            _check_complete(file_out)
-
-
 def write_recording(trajectory, *, rrd: str | os.PathLike | None = None, spawn: bool = False,
                     connect: str | None = None, frames: Frames | None = None,
                     log_every: float | None = None, port: int = 9876,
@@ -301,60 +215,6 @@ def _send_throw(rec, rr, trajectory, frames: Frames, log_every: float | None) ->
 
 # -- the public recorder and the notebook's viewer -----------------------------------------------
 
-NOTEBOOK_EXTRA = 'pip install "coincli[notebook]"'
-
-
-class NotebookMissing(ImportError):
-    """Rerun's notebook viewer (the package rerun-notebook) is not installed."""
-
-
-def _viewer_class():
-    """rerun.notebook.Viewer, or NotebookMissing (one line naming the extra to install)."""
-    try:
-        import rerun_notebook  # noqa: F401  (rerun.notebook imports without it, then fails)
-        from rerun.notebook import Viewer
-    except ImportError:
-        raise NotebookMissing(f"showing a recording in a notebook needs Rerun's notebook "
-                              f"viewer: {NOTEBOOK_EXTRA}") from None
-    return Viewer
-
-
-def in_notebook() -> bool:
-    """Whether this runs in a notebook's kernel (Jupyter, VS Code, Colab; or marimo), where a
-    viewer can be displayed."""
-    ipython = sys.modules.get("IPython")
-    shell = ipython.get_ipython() if ipython is not None else None
-    if shell is not None and getattr(shell, "kernel", None) is not None:
-        return True
-    widget = sys.modules.get("rerun_notebook")  # imported by _viewer_class
-    return bool(widget is not None and widget.running_in_marimo())
-
-
-# What to do outside a notebook instead of notebook=True, for the live recordings of the API.
-LIVE_ELSEWHERE = ("record it with rrd='FILE.rrd' and open it with `rerun FILE.rrd`, or stream "
-                  "it with spawn=True")
-THROW_ELSEWHERE = ("write it with coincli.record(run, rrd='throw.rrd') and open it with "
-                   "`rerun throw.rrd`, or coincli.record(run, spawn=True)")
-
-
-def require_notebook(what: str, instead: str = THROW_ELSEWHERE) -> None:
-    """NotebookMissing without rerun-notebook (wherever this runs), then RuntimeError (one line,
-    naming what to do ``instead``) outside a notebook: ``what`` is the call that needs one."""
-    _viewer_class()
-    if not in_notebook():
-        raise RuntimeError(f"nothing to show it in: {what} draws in a notebook (Jupyter); "
-                           f"here {instead}")
-
-
-def notebook_viewer(*, width: int | None = None, height: int | None = None):
-    """A Rerun viewer displayed in the notebook's cell now, for the recordings of later cells
-    (``notebook=viewer``): by the time they run it is ready, and shows them live. Outside a
-    notebook RuntimeError, without rerun-notebook NotebookMissing (one line each)."""
-    require_notebook("coincli.viewer()", LIVE_ELSEWHERE)
-    viewer = _viewer_class()(width=width, height=height, use_global_recording=False)
-    viewer.display()
-    return viewer
-
 
 def inline_viewer(trajectory, *, width: int | None = None, height: int | None = None,
                   log_every: float | None = None, frames: Frames | None = None):
@@ -364,12 +224,12 @@ def inline_viewer(trajectory, *, width: int | None = None, height: int | None = 
     NotebookMissing without rerun-notebook."""
     import rerun as rr
 
-    viewer_class = _viewer_class()
+    viewer_type = viewer_class()
     run = with_samples(trajectory, log_every)
     if frames is None:
         frames = build_frames(run)
     rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
-    viewer = viewer_class(width=width, height=height, recording=rec)
+    viewer = viewer_type(width=width, height=height, recording=rec)
     rec.send_recording_name(_recording_name(run))
     _send_throw(rec, rr, run, frames, run.sample_dt)
     rec.flush()
@@ -419,23 +279,6 @@ def record(trajectory, *, rrd: str | os.PathLike | None = None, spawn: bool = Fa
         viewer.display()
         info = replace(info, viewer=viewer)
     return info
-
-
-def _check_complete(path: Path) -> None:
-    """Raise OSError unless ``path`` reads back as a whole recording: Rerun's file sink does not
-    report a failed write (a full disk left a 0-byte or truncated file behind)."""
-    import warnings
-
-    from rerun.chunk import RrdReader
-
-    try:
-        with warnings.catch_warnings():  # a truncated file also warns: one line is enough
-            warnings.simplefilter("ignore")
-            complete = bool(RrdReader(path).recordings())
-    except (RuntimeError, ValueError) as exc:
-        raise OSError(f"the recording did not read back ({exc}); is the disk full?") from None
-    if not complete:
-        raise OSError("the recording did not read back whole; is the disk full?")
 
 
 def _log_static(rec, rr, trajectory, frames: Frames, log_every: float | None) -> None:
@@ -557,23 +400,12 @@ def _time(rr, frames: Frames):
     return [rr.TimeColumn(TIMELINE, duration=_durations(frames.t))]
 
 
-def _rotations_about_z(phi: np.ndarray):
-    """A RotationAxisAngle column about +z built directly in Arrow (one Python object per frame
-    would cost ~5 us each)."""
-    import pyarrow as pa
-    from rerun.components import RotationAxisAngleBatch
-
-    dtype = getattr(RotationAxisAngleBatch, "_ARROW_DATATYPE", None)
-    if dtype is None:  # another rerun-sdk: the slow, public way
-        import rerun as rr
-
-        return [rr.RotationAxisAngle(axis=[0.0, 0.0, 1.0], radians=float(a)) for a in phi]
-    n = len(phi)
-    axis = pa.FixedSizeListArray.from_arrays(
-        pa.array(np.tile(np.array([0.0, 0.0, 1.0], np.float32), n)),
-        type=dtype.field("axis").type)
-    return pa.StructArray.from_arrays([axis, pa.array(np.asarray(phi, np.float32))],
-                                      fields=list(dtype))
+def _quaternions_about_z(phi: np.ndarray) -> np.ndarray:
+    """The rotations by ``phi`` about +z as a column of quaternions (x, y, z, w): built in one
+    numpy expression (one Python object a frame would cost ~5 us each)."""
+    half = 0.5 * np.asarray(phi, dtype=np.float64)
+    zeros = np.zeros_like(half)
+    return np.column_stack([zeros, zeros, np.sin(half), np.cos(half)]).astype(np.float32)
 
 
 def _send_scene(rec, rr, trajectory, frames: Frames) -> None:
@@ -582,7 +414,7 @@ def _send_scene(rec, rr, trajectory, frames: Frames) -> None:
     x, y, phi = frames.state[:, 0] * MM, frames.state[:, 1] * MM, frames.state[:, 2]
     rec.send_columns(COIN, indexes=index, columns=rr.Transform3D.columns(
         translation=np.column_stack([x, y, np.zeros(n)]),
-        rotation_axis_angle=_rotations_about_z(phi)))
+        quaternion=_quaternions_about_z(phi)))
     # the close-up's frame: at the centroid, in screen coordinates (y down) like SCENE
     rec.send_columns(FOLLOW, indexes=index, columns=rr.Transform3D.columns(
         translation=np.column_stack([x, -y, np.zeros(n)])))

@@ -1,16 +1,19 @@
-"""The live recording of a sweep (`coin basin STORE --rrd/--spawn/--connect`), made by a process
-of its own that reads the tiles from the store as the sweep writes them
-(:func:`coincli.io.live.record_tiles`).
+"""The live recording of a sweep into a store (`coin basin STORE --rrd/--spawn/--connect`,
+``coincli.basin(..., store=..., rrd=...)``): the map as it fills in, read back from the store
+(:class:`coincli.io.basin_view.StoreMap`), fed by the sweep's progress.
 
-Why a process: importing Rerun, the store's code and pandas (which pyarrow imports at its first
-conversion) and sending the first objects costs about half a second of CPU. In the sweep's
-process it would be taken from the sweep (one interpreter lock); in a process of its own,
-started before the sweep's process has planned anything (:meth:`SweepRecorder.start`), most of
-it falls while that process is still starting up on one thread and the other core is idle.
-The sweep's process only says, a JSON line per update, which tiles were written.
+Two recorders, one interface (a context manager around the sweep, whose ``progress`` takes each
+SweepProgress, and ``error`` set if the recording failed; the sweep goes on either way):
 
-This module imports nothing heavy: the sweep's command starts the process before it imports
-the sweep's own code.
+- :class:`SweepRecorder` makes the recording in a process of its own, which reads the tiles from
+  the store as the sweep writes them: importing Rerun and sending the maps costs the sweep's
+  process next to nothing (it only says, a JSON line per update, which tiles were written), and
+  the recording ends with the store's map whatever happens to the sweep (Ctrl-C, a signal,
+  ``kill -9``: its input closes, and it reads the store one last time).
+- :class:`InlineSweep` makes it in this process, for a viewer in a notebook's cell (the viewer
+  belongs to the kernel).
+
+:func:`sweep_recorder` gives the one a destination needs.
 """
 
 from __future__ import annotations
@@ -26,23 +29,33 @@ import threading
 import time
 from pathlib import Path
 
+from .basin_view import StoreMap
+from .rerun_stream import Destination, InProcessRecording
+
 # The recording process: this Python, running recording_process.
 RECORDER = "from coincli.io.sweep_recording import recording_process; recording_process()"
-# The commands of `coin basin` (`coin basin STORE ...` is short for `coin basin sweep STORE
-# ...`), and the options of a live recording: see start_early (both tested against the CLI).
-BASIN_COMMANDS = frozenset({"analyze", "export", "inspect", "render", "show", "stats", "sweep",
-                            "verify"})
-RECORDING_OPTIONS = ("--rrd", "--spawn", "--connect")
 
 
 class RecordingFailed(RuntimeError):
     """A live recording that could not be made or finished (why, in one line)."""
 
 
+def sweep_recorder(plan, store, where: Destination | None):
+    """The recorder of a sweep of ``plan`` into ``store`` at ``where`` (None if nowhere): in
+    this process for a notebook's viewer, else in a process of its own, started now (it
+    imports Rerun while this one opens the store)."""
+    if where is None:
+        return None
+    verified = plan.spec.ladder.verified
+    if where.notebook is not False:
+        return InlineSweep(store, plan.attrs, where, verified=verified)
+    return SweepRecorder().start().record(store, plan.attrs, where, verified=verified)
+
+
 class SweepRecorder:
-    """The live recording of a sweep: :meth:`start` the process as early as possible, say what
-    to record with :meth:`record`, then use it as a context manager around the sweep, whose
-    :meth:`progress` takes the sweep's SweepProgress (in the thread that runs the sweep).
+    """The live recording of a sweep by a process of its own: :meth:`start` the process (as
+    early as possible: it imports Rerun meanwhile), say what to record with :meth:`record`, then
+    use it as a context manager around the sweep.
 
     The process is told the store, its attributes and where to record by :meth:`begin`, when
     the sweep starts its work (its ``on_start``, else its first progress; or on leaving, if
@@ -51,9 +64,8 @@ class SweepRecorder:
     its input is closed: it reads any tile done that it has not drawn (those of other
     processes too), sends the last map, the store's, closes the recording and says how it
     went; leaving waits for that. A recording that cannot be made (no viewer, no file) leaves
-    ``error`` set and the sweep alone. A process started for a recording that will not be
-    made (the command failed first) is ended by :meth:`cancel`, or ends by itself as soon as
-    its input closes (this process's end closes it).
+    ``error`` set and the sweep alone. A process started for a recording that will not be made
+    (the command failed first) is ended by :meth:`cancel`.
 
     The process has a session of its own: a Ctrl-C at the terminal, or a signal to this
     process's group, reaches only the sweep, which ends and closes the line; if this process
@@ -79,10 +91,10 @@ class SweepRecorder:
                 self.error = exc
         return self
 
-    def record(self, path, attrs: dict, where, *, verified: bool) -> SweepRecorder:
+    def record(self, path, attrs: dict, where: Destination, *,
+               verified: bool) -> SweepRecorder:
         """What to record: the sweep into the store at ``path`` with attributes ``attrs``
-        (``verified``: its labels carry a certainty), and where to (``where``: a
-        :class:`coincli.io.live.Destination`); returns self."""
+        (``verified``: its labels carry a certainty), and where to; returns self."""
         self._setup = {"path": str(Path(path)), "attrs": attrs, "verified": verified,
                        "rrd": None if where.rrd is None else str(where.rrd),
                        "spawn": where.spawn, "connect": where.connect,
@@ -90,16 +102,16 @@ class SweepRecorder:
         return self
 
     def cancel(self) -> None:
-        """End a process started for a recording that will not be made: it ends at once
-        when its input closes before it was told what to record."""
+        """End a process started for a recording that will not be made (nothing recorded)."""
         if self._process is None:
             return
         process, self._process = self._process, None
         try:
-            with contextlib.suppress(OSError):
-                process.stdin.close()
+            process.terminate()
         finally:
             process.wait()
+            with contextlib.suppress(OSError):
+                process.stdin.close()
             process.stdout.close()
 
     def __enter__(self):
@@ -163,62 +175,66 @@ class SweepRecorder:
         return False
 
 
-_started_early: SweepRecorder | None = None  # by start_early, for this command line's sweep
+class InlineSweep(InProcessRecording):
+    """The live map of a sweep into the store at ``path`` in a notebook's viewer: the same
+    :class:`StoreMap` as a sweep's recording process makes, here in this process (a notebook's
+    viewer belongs to its kernel); :meth:`progress` takes each SweepProgress. The map is
+    opened with the first progress (or on leaving, if there was none: a store complete
+    already), not for a sweep refused before any work. A map that cannot be shown leaves
+    ``error`` set and the sweep alone."""
 
+    def __init__(self, path, attrs: dict, where: Destination, *, verified: bool,
+                 min_interval: float = 0.5):
+        super().__init__(where)
+        self.path, self.attrs = Path(path), attrs
+        self.verified, self.min_interval = verified, min_interval
+        self.map: StoreMap | None = None
+        self.elapsed: float | None = None
+        self.tried = False
 
-def sweep_recording_asked(args: list[str]) -> bool:
-    """Whether the command line ``args`` (those after `coin`) looks like a sweep with a live
-    recording: `coin basin [sweep] STORE ... --rrd FILE | --spawn | --connect URL`. A guess,
-    made before the command line is parsed: the sweep's command decides (a wrong guess
-    costs a process that ends at once)."""
-    if len(args) < 2 or args[0] != "basin" or "--help" in args:
+    def begin(self) -> None:
+        """Open the map: the sweep has passed its checks (its ``on_start``), or made its first
+        progress."""
+        self._start()
+
+    def _start(self) -> None:
+        if not self.tried:
+            self.tried = True
+            if self.open(f"coin basin {self.path}"):
+                self.map = StoreMap(self.rec, self.path, self.attrs, verified=self.verified,
+                                    min_interval=self.min_interval)
+
+    def progress(self, update) -> None:
+        self._start()
+        if self.map is None:
+            return
+        self.elapsed = update.elapsed
+        self.map.update(update.written, [(update.elapsed, update.cells_done)])
+
+    def __exit__(self, exc_type, *exc):
+        if exc_type is None:
+            self._start()
+        try:
+            if self.map is not None:
+                self.map.end(self.elapsed)
+        finally:
+            super().__exit__(exc_type, *exc)
         return False
-    if args[1] in BASIN_COMMANDS - {"sweep"}:
-        return False
-    return any(arg.split("=", 1)[0] in RECORDING_OPTIONS for arg in args[1:])
 
 
-def start_early(args: list[str]) -> None:
-    """Start the recording's process for the command line ``args`` (those after `coin`) if it
-    asks for a sweep with a live recording (:func:`sweep_recording_asked`). `coin` calls this
-    first of all, before it imports the command line's parser and its commands (0.15 s, on
-    one core): the recording's own start-up (importing Rerun) then falls in that time, not in
-    the sweep's. The sweep's command takes it with :func:`recorder_for`."""
-    global _started_early
-    if _started_early is None and sweep_recording_asked(args):
-        _started_early = SweepRecorder().start()
-
-
-def recorder_for(asked: bool) -> SweepRecorder | None:
-    """The recorder of a sweep whose command line asked for a live recording (``asked``): the
-    one :func:`start_early` started, or one started now; None if none was asked (a process
-    started early on a wrong guess is ended)."""
-    global _started_early
-    early, _started_early = _started_early, None
-    if not asked:
-        if early is not None:
-            early.cancel()
-        return None
-    return early or SweepRecorder().start()
-
-
-def _inbox(lines, *, end_without_setup: bool = False) -> queue.SimpleQueue:
+# -- the recording process ------------------------------------------------------------------------
+def _inbox(lines) -> queue.SimpleQueue:
     """The messages of ``lines`` (JSON, one a line), read by a thread of their own as they
     come, whatever the recording is doing (the sweep never waits on this process); None after
-    the last. ``end_without_setup``: lines that end before the first one came end this
-    process at once (the command gave up, or was killed, before it said what to record)."""
+    the last (a line cut off by a killed sweep ends them too)."""
     inbox: queue.SimpleQueue = queue.SimpleQueue()
 
     def read() -> None:
-        got = False
         try:
             for line in lines:
                 inbox.put(json.loads(line))
-                got = True
         except ValueError:  # a line cut off: the sweep's process was killed as it wrote it
             pass
-        if end_without_setup and not got:
-            os._exit(0)  # nothing was recorded: nothing to close or say
         inbox.put(None)
 
     threading.Thread(target=read, name="coin-sweep-lines", daemon=True).start()
@@ -231,15 +247,16 @@ def record_sweep(lines=None, out=None, *, inbox: queue.SimpleQueue | None = None
     where, each further one what the sweep did (elapsed seconds, cells done, the tiles
     written), the last one the time of the last map; their end, that the sweep ended. Writes
     one JSON line to ``out`` (default stdout) when done: ``{"error": null}``, or why the
-    recording failed; nothing if the lines ended before the first (nothing was recorded)."""
+    recording failed; nothing if the lines ended before the first (nothing was recorded), nor
+    if nobody reads it any more (the sweep's process was killed)."""
     out = sys.stdout if out is None else out
     if inbox is None:
         inbox = _inbox(sys.stdin if lines is None else lines)
+    setup = inbox.get()
+    if setup is None:  # the sweep's process ended before it said what to record
+        return
     try:
-        setup = inbox.get()
-        if setup is None:  # the sweep's process ended before it said what to record
-            return
-        from .live import record_tiles
+        from .basin_view import record_tiles
 
         record_tiles(setup, inbox)
         why = None
@@ -247,8 +264,9 @@ def record_sweep(lines=None, out=None, *, inbox: queue.SimpleQueue | None = None
         from .paths import explain
 
         why = explain(exc)
-    out.write(json.dumps({"error": why}) + "\n")
-    out.flush()
+    with contextlib.suppress(OSError):  # BrokenPipeError: the sweep is gone, nobody asks
+        out.write(json.dumps({"error": why}) + "\n")
+        out.flush()
 
 
 def answer_line():
@@ -263,26 +281,19 @@ def answer_line():
 
 
 def recording_process() -> None:
-    """The recording process's body: the code a recording needs imported at once (most of
-    its cost, while the sweep's process is still planning), then :func:`record_sweep` on
-    stdin and stdout, then its end at once. The recording is closed and the answer written by
-    then; a normal exit would tear the interpreter down first (with Rerun loaded, 0.1 s of
-    CPU and more), and the sweep's command waits for this process to end."""
-    # a Ctrl-C is the sweep's (this process has a session of its own where there are
-    # sessions; elsewhere a console's Ctrl-C reaches every process in it): this one ends
-    # when its input does
+    """The recording process's body: :func:`record_sweep` on stdin and an answer line of its
+    own. A Ctrl-C is the sweep's (this process has a session of its own where there are
+    sessions; elsewhere a console's Ctrl-C reaches every process in it): this one ends when its
+    input does."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    inbox = _inbox(sys.stdin, end_without_setup=True)
+    inbox = _inbox(sys.stdin)
     answer = answer_line()
-    import rerun as rr
-    import rerun.blueprint  # noqa: F401 - imported before they are needed: see above
-
-    from . import live, store  # noqa: F401
-    rr.Scalars(0.0)  # pyarrow's first conversion imports pandas (0.15 s): here, not mid-sweep
-    record_sweep(inbox=inbox, out=answer)
-    os._exit(0)
+    try:
+        record_sweep(inbox=inbox, out=answer)
+    finally:
+        with contextlib.suppress(OSError):
+            answer.close()
 
 
-__all__ = ["BASIN_COMMANDS", "RECORDER", "RECORDING_OPTIONS", "RecordingFailed", "SweepRecorder",
-           "answer_line", "record_sweep", "recorder_for", "recording_process", "start_early",
-           "sweep_recording_asked"]
+__all__ = ["InlineSweep", "RECORDER", "RecordingFailed", "SweepRecorder", "answer_line",
+           "record_sweep", "recording_process", "sweep_recorder"]

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..defaults import DEFAULT_BATCH
 from ..params import ParameterError, Scene, check_start
+from ..quantities import parse_quantity, parse_span
 
 # The five initial conditions drawn (x0 stays the scene's: the model is translation invariant).
 IC5 = ("y0", "phi0", "vx", "vy", "vphi")
@@ -107,35 +108,11 @@ class Dist:
         return f"normal({num(self.a)}, {num(self.b)}{trunc}){suffix}"
 
 
-_NUMBER = re.compile(
-    r"^(?P<sign>[+-]?)\s*(?P<num>(\d+\.?\d*|\.\d+)(e[+-]?\d+)?)?\s*\*?\s*(?P<unit>pi|r)?"
-    r"\s*(/\s*(?P<div>(\d+\.?\d*|\.\d+)(e[+-]?\d+)?))?$", re.IGNORECASE)
-
-
 def _number(name: str, text: str) -> tuple[float, bool]:
-    """``'2pi'`` -> (6.28..., False), ``'5r'`` -> (5.0, True) (a multiple of r), ``'-0.5'``,
-    ``'pi/2'``, ``'inf'``."""
-    t = text.strip().lower()
-    if t in ("inf", "+inf", "-inf"):
-        return (-math.inf if t.startswith("-") else math.inf), False
-    m = _NUMBER.match(t)
-    if not t or m is None or (m.group("num") is None and m.group("unit") is None):
-        raise ParameterError(f"{name}: '{text}' is not a number (like 0.5, 2pi, pi/2"
-                             f"{', 5r' if name == 'y0' else ''})", parameters=(name,))
-    value = float(m.group("num")) if m.group("num") else 1.0
-    unit = m.group("unit")
-    if unit == "pi":
-        value *= math.pi
-    if m.group("div"):
-        value /= float(m.group("div"))
-    if m.group("sign") == "-":
-        value = -value
-    if unit == "r" and name != "y0":
-        raise ParameterError(f"{name}: '{text}': multiples of r are for y0 only",
-                             parameters=(name, "y0"))
-    if not math.isfinite(value):
-        raise ParameterError(f"{name}: '{text}' is not finite", parameters=(name,))
-    return value, unit == "r"
+    """An argument of a distribution (:func:`coincli.quantities.parse_quantity`; ``inf`` for
+    a truncation without a bound): (value, whether in multiples of r)."""
+    q = parse_quantity(name, text, finite=False)
+    return q.value, q.per_r
 
 
 def _one_unit(name: str, parsed: list[tuple[float, bool]], text: str) -> bool:
@@ -191,15 +168,11 @@ def parse_dist(name: str, value) -> Dist:
         raise ParameterError(f"{name}: '{text}' is not a distribution: use a value, LO:HI "
                              "(uniform), normal(MEAN,SD) or normal(MEAN,SD,LO,HI) (truncated)",
                              parameters=(name,))
-    if ":" in text:
-        parts = text.split(":")
-        if len(parts) != 2 or not parts[0].strip() or not parts[1].strip():
-            raise ParameterError(f"{name}: '{text}' is not a LO:HI range", parameters=(name,))
-        parsed = [_number(name, p) for p in parts]
-        per_r = _one_unit(name, parsed, text)
-        return _checked(name, Dist("uniform", parsed[0][0], parsed[1][0], per_r=per_r), text)
-    number, per_r = _number(name, text)
-    return _checked(name, Dist("fixed", number, per_r=per_r), text)
+    span = parse_span(name, text)
+    if isinstance(span, tuple):
+        lo, hi = span
+        return _checked(name, Dist("uniform", lo.value, hi.value, per_r=lo.per_r), text)
+    return _checked(name, Dist("fixed", span.value, per_r=span.per_r), text)
 
 
 def _checked(name: str, d: Dist, text: str) -> Dist:

@@ -7,9 +7,9 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from .basin_cmd import _damaged_note, basin_app
-from .common import console, err_console, fail, user_errors
-from .text import counted, say
+from ..common import console, err_console, fail, user_errors
+from ..text import counted, say
+from .group import basin_app, damaged_note
 
 
 @basin_app.command("export")
@@ -25,14 +25,14 @@ def export_command(
 
     NetCDF: the Dataset of coincli.open_basin, which xarray.open_dataset and coincli.open_basin read back (quarter_turns NaN where a cell has no label; nested attributes as JSON text). CSV: one row per cell, the first swept axis outermost: the two swept values, n, pose, status, certainty, settle_time, steps, rung; header names with units; empty fields where a value is missing. Cells of tiles not computed (or damaged) are exported as not computed.
     """  # noqa: E501
-    from .. import api
-    from ..io.export import check_export_path
-    from ..io.paths import check_writable, describe
-    from ..io.store import read_basin
+    from ... import api
+    from ...io.basin_store import BasinStore
+    from ...io.export import check_export_path
+    from ...io.paths import check_writable, describe
 
     with user_errors():
         check_export_path(out)
-        basin = read_basin(path)
+        basin = BasinStore.open(path).read()
         check_writable(out, what="export")  # before the work
         try:
             api.export_basin(basin, out)
@@ -45,4 +45,4 @@ def export_command(
         if done < total:
             say(err_console, f"[yellow]partial:[/] {done} of {counted(total, 'tile')} "
                              "computed; the cells of the others are exported as not computed")
-        _damaged_note(path, basin.damaged, "exported as not computed")
+        damaged_note(path, basin.damaged, "exported as not computed")

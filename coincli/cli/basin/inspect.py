@@ -10,11 +10,10 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from ..defaults import DEFAULT_LOG_EVERY, DEFAULT_PRESET, IC_NAMES
-from ..enums import Certainty
-from ..version import __version__
-from .basin_cmd import basin_app
-from .common import (
+from ...defaults import DEFAULT_LOG_EVERY, DEFAULT_PRESET, IC_NAMES
+from ...enums import Certainty
+from ...version import __version__
+from ..common import (
     compile_first,
     console,
     err_console,
@@ -22,17 +21,18 @@ from .common import (
     print_json,
     user_errors,
 )
-from .recording import destination, record_throw
-from .simulate_cmd import (
-    LABEL_WIDTH,
+from ..recording import (
     REC,
     ConnectOpt,
     LogEveryOpt,
     SpawnOpt,
-    _check_log_every,
+    check_log_every,
+    destination,
     print_recording,
+    record_throw,
 )
-from .text import NBSP, command, print_rows, say
+from ..text import LABEL_WIDTH, NBSP, command, print_rows, say
+from .group import basin_app
 
 CELL = "Which cell"
 
@@ -62,7 +62,7 @@ def _words(scene, preset, force: bool, always=()) -> list[str] | None:
     """The `coin simulate` words that make ``scene`` from ``preset`` (None if no options can:
     a preset's step budget cannot be unset). Initial values named in ``always`` are given
     even where the preset has them."""
-    from ..params import validate
+    from ...params import validate
 
     want, have = _flat(scene), _flat(preset.scene)
     words = ["coin", "simulate"]
@@ -105,9 +105,9 @@ def simulate_words(scene, swept=()) -> list[str]:
     """The shortest `coin simulate` command line (as words) that reproduces ``scene`` exactly:
     the shipped preset that needs the fewest options, the others as options, every number in
     repr() precision (it reads back to the same float), the swept initial values always."""
-    from ..integrators import check_step
-    from ..params import ParameterError
-    from ..presets import available, load
+    from ...integrators import check_step
+    from ...params import ParameterError
+    from ...presets import available, load
 
     try:
         check_step(scene)
@@ -163,9 +163,9 @@ def inspect_command(
 
     coin basin inspect out.zarr --vy 1.2 --vphi 3.5 --rrd throw.rrd
     """  # noqa: E501
-    from ..integrators.ladder import ladder_of
-    from ..io.cells import cell_scene, ladder_matches, locate, read_stored_cell, replay
-    from ..io.store import open_view
+    from ...integrators.ladder import ladder_of
+    from ...io.basin_store import BasinStore
+    from ...io.cells import cell_scene, ladder_matches, locate, read_stored_cell, replay
 
     # checked before the replay; --spawn without a display is said now (the outcome and any
     # file still follow, exit 1)
@@ -175,12 +175,12 @@ def inspect_command(
                            else (None, False, None))
     values = dict(x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
     with user_errors():
-        attrs = open_view(path).attrs
+        attrs = BasinStore.open(path).attrs
         index = locate(attrs, cell=cell, **{k: v for k, v in values.items() if v is not None})
         attrs, stored = read_stored_cell(path, index)
         scene = cell_scene(attrs, index)
         if recording:
-            _check_log_every(scene, log_every)
+            check_log_every(scene, log_every)
         words = simulate_words(scene, swept=tuple(attrs["sweep"]["dims"]))
         compile_first()
         try:

@@ -1,0 +1,739 @@
+"""The Zarr store of a basin sweep, owned by one object (:class:`BasinStore`): its path, its
+metadata (read once, when it is opened), the parameters digest its tiles bind, its claims and
+cost records, reading and writing tiles, verifying and repairing it.
+
+Layout (dims named after the two swept initial conditions, e.g. ``vy`` and ``vphi``)::
+
+    out.zarr/                       group; attributes: coin_basin (format 5, the parameters
+                                    digest), version, parameters, sweep, method (with its
+                                    verification ladder)
+      vy, vphi                      float64 cell centres, linspace(LO, HI, n)
+      quarter_turns  (vy, vphi)     int16, fill -32768 = no label (not computed or non-finite)
+      status         (vy, vphi)     uint8, 0 settled, 1 unsettled at t_end, 2 non-finite,
+                                    3 over budget, 255 not computed
+      settle_time    (vy, vphi)     float32 [s], NaN fill (also NaN when never settled)
+      steps          (vy, vphi)     int64 integrator steps (cost), fill -1
+      certainty      (vy, vphi)     uint8, 0 uncertain (decided, rungs disagree: chaotic), 1
+                                    certain, 2 unverified, 3 undecided (a rung not settled
+                                    within its horizon or budget), 255 not computed
+      rung           (vy, vphi)     int8, last rung of the ladder run, fill -1
+      done           (tile_vy, tile_vphi)  uint32 digest of the tile, 0 = not done; chunks (1, 1);
+                                    attributes: a copy of the sweep's, with their digest
+    out.zarr.cost/                  beside the store, so that the store itself is bit-identical
+      tile_I_J.json                 however it was computed: each tile's CPU seconds and who
+      runs.jsonl                    computed it, one line per invocation (wall time, tiles,
+      claims/tile_I_J               mode), and the claims of the tiles being computed
+                                    (:mod:`coincli.sweeps.claims`)
+
+Every data array is chunked exactly like the tiles, so one tile is one chunk in every array and
+concurrent writers (threads, Dask workers, other processes) never touch the same file. Every
+chunk ends with a CRC-32C of its compressed bytes (:mod:`coincli.io.zarr_v3`), so a chunk
+damaged on disk fails to read instead of decoding to garbage. A tile's ``done`` entry, written
+after all its data, is :func:`tile_digest`: a 32-bit BLAKE2b of its data, *its tile index and the
+digest of the parameters it was computed with*, so that a chunk copied from another tile (a
+valid chunk, at the wrong place) or a missing chunk (read back as fill values) is caught too, and
+so is a parameter changed in the metadata after the tile was computed. A tile is done only if
+its ``done`` digest equals the digest of the data its chunks read back as
+(:meth:`BasinStore.scan`); otherwise it is recomputed on resume (recomputing gives the same
+bytes), counted as not computed by ``stats`` and ``render``, and listed by ``coin basin
+verify``. A ``.partial`` file left by a killed writer is removed by the next writer of that tile.
+
+The sweep's attributes are kept in three copies (:mod:`coincli.io.basin_metadata`); on opening,
+copies that differ are judged by the tiles: the parameters a computed tile verifies under are
+those it was computed with, and the copies that differ from them are damage, rebuilt on resume.
+``quarter_turns`` carries ``missing_value`` so xarray masks cells without a label to NaN
+(``mask_and_scale=False`` keeps the int16 values).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import enum
+import hashlib
+import json
+import math
+import os
+import socket
+import time
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..defaults import IC_NAMES
+from ..grid import Axis, Grid, TileResult
+from ..params import ParameterError
+from ..stats import BasinCounts, BasinStats
+from ..sweeps.claims import HOST, Claims, pid_alive
+from ..sweeps.engine import Prepared
+from ..sweeps.schema import (
+    COMPARED_ATTRS,
+    COORD_NOTE,
+    FILLS,
+    FORMAT,
+    MARK,
+    VARIABLES,
+    done_attrs,
+    owned,
+    parameters_digest,
+    root_attrs,
+    tile_dims,
+)
+from . import basin_metadata as meta
+from .dataset import Basin
+from .zarr_v3 import (
+    PARTIAL,
+    ArraySpec,
+    ChunkError,
+    create_store,
+    group_files,
+    is_store,
+    tidy,
+    write_atomically,
+)
+
+ARRAY_NAMES = tuple(VARIABLES)  # the data arrays, in the order of the digest
+DONE_DTYPE = "uint32"  # the digests; fill 0 = not done
+
+
+class StoreDamaged(ParameterError):
+    """A store whose metadata cannot be read, or whose parameters cannot be recovered."""
+
+
+class Tile(enum.Enum):
+    DONE = "done"  # digest matches the data
+    MISSING = "missing"  # not done (never computed, or cut off before its digest)
+    DAMAGED = "damaged"  # a digest, but data that do not read back or do not match it
+
+
+@dataclass
+class StoreCheck:
+    """What checking a store found."""
+
+    path: str
+    attrs: dict
+    grid: Grid
+    done: np.ndarray  # bool per tile: complete and verified
+    damaged: dict[tuple[int, int], str] = field(default_factory=dict)  # tile -> why
+    metadata: list[str] = field(default_factory=list)  # metadata/coordinate files that differ
+    repaired: list[str] = field(default_factory=list)  # ... and were rewritten
+    leftovers: int = 0  # temporary files (*.partial) of writers that died
+    seconds: float = 0.0  # time the check took
+    problems: list[str] = field(default_factory=list)  # copies of the parameters found changed
+
+    @property
+    def intact(self) -> bool:
+        return not self.damaged and not (set(self.metadata) - set(self.repaired))
+
+    @property
+    def tiles_done(self) -> int:
+        return int(self.done.sum())
+
+    def to_dict(self) -> dict:
+        total = int(self.done.size)
+        unrepaired = [k for k in self.metadata if k not in self.repaired]
+        return {"path": self.path, "intact": self.intact, "tiles": total,
+                "tiles_done": self.tiles_done,
+                "not_computed": total - self.tiles_done - len(self.damaged),
+                "damaged": [{"tile": list(t), "reason": why}
+                            for t, why in sorted(self.damaged.items())],
+                "metadata": unrepaired, "parameters_changed": list(self.problems),
+                "leftover_temporary_files": self.leftovers, "seconds": self.seconds}
+
+    def __repr__(self) -> str:
+        return (f"StoreCheck({self.path!r}, intact={self.intact}, {self.tiles_done} of "
+                f"{self.done.size} tiles done, {len(self.damaged)} damaged, "
+                f"{len(self.metadata)} metadata files differing)")
+
+
+# -- the grid, the digest and the files of a store --------------------------------------------
+def grid_of(attrs: dict) -> Grid:
+    """The grid a basin's attributes describe: its swept axes, its fixed initial values, its
+    tiles and its mirror."""
+    sweep = attrs["sweep"]
+    axes = tuple(Axis(a["name"], float(a["lo"]), float(a["hi"]), int(a["n"]))
+                 for a in sweep["axes"])
+    fixed = sweep.get("fixed") or {}
+    base = tuple(float(fixed[name]) if name in fixed else 0.0 for name in IC_NAMES)
+    return Grid(axes=axes, base_state=base, chunk=tuple(int(c) for c in sweep["chunk"]),
+                use_mirror=bool(sweep.get("mirror")))
+
+
+def tile_digest(tile: tuple[int, int], arrays: dict[str, np.ndarray], parameters: bytes) -> int:
+    """32-bit BLAKE2b of the parameters the tile was computed with (their digest,
+    :func:`coincli.sweeps.schema.parameters_digest`), its index and its data (every array of the
+    schema, in a fixed order, as little-endian bytes of its stored dtype): never 0, which means
+    "not done"."""
+    h = hashlib.blake2b(digest_size=4, person=b"coin-tile")
+    h.update(parameters)
+    h.update(np.asarray(tile, dtype="<i8").tobytes())
+    for name in ARRAY_NAMES:
+        block = np.ascontiguousarray(arrays[name],
+                                     dtype=np.dtype(VARIABLES[name][0]).newbyteorder("<"))
+        h.update(np.asarray(block.shape, dtype="<i8").tobytes())
+        h.update(block.tobytes())
+    return int.from_bytes(h.digest(), "little") or 1
+
+
+def array_specs(attrs: dict, grid: Grid) -> dict[str, ArraySpec]:
+    """Every array of the store of a sweep with attributes ``attrs`` on ``grid``."""
+    d0, d1 = grid.dims
+    specs = {axis.name: ArraySpec(axis.name, (axis.n,), (axis.n,), "float64", 0.0,
+                                  (axis.name,), {"units": axis.units,
+                                                 "long_name": axis.long_name,
+                                                 "cell_centres": COORD_NOTE})
+             for axis in grid.axes}
+    for name in ARRAY_NAMES:
+        dtype, fill, array_attrs = VARIABLES[name]
+        specs[name] = ArraySpec(name, grid.shape, grid.chunk, dtype, fill, (d0, d1),
+                                array_attrs)
+    specs["done"] = ArraySpec("done", grid.tile_grid, (1, 1), DONE_DTYPE, 0, tile_dims(grid),
+                              done_attrs(attrs))
+    return specs
+
+
+def template(attrs: dict, grid: Grid) -> dict[str, bytes]:
+    """Every file of an empty store, by key ('zarr.json', 'vy/c/0', ...): the metadata of the
+    group and its arrays (consolidated into the group's) and the coordinate chunks. Creating a
+    store is writing these files; checking one, comparing with them. Only the attributes the
+    sweep owns are taken from ``attrs`` (with their digest, in the group's attributes and in a
+    copy in the ``done`` array's)."""
+    specs = array_specs(attrs, grid)
+    files = {}
+    for axis in grid.axes:
+        spec = specs[axis.name]
+        files[spec.key((0,))] = encode(spec, np.asarray(axis.coords, dtype=np.float64))
+    files.update(group_files(root_attrs(attrs), list(specs.values())))
+    return files
+
+
+def encode(spec: ArraySpec, block: np.ndarray) -> bytes:
+    from .zarr_v3 import encode_chunk
+
+    return encode_chunk(block, spec.dtype, spec.fill, spec.chunks)
+
+
+def cost_dir(path: str | os.PathLike) -> Path:
+    """Where a store's cost records and claims live: beside it, ``out.zarr.cost/``."""
+    return Path(f"{os.fspath(path).rstrip(os.sep)}.cost")
+
+
+def check_is_store(path: str | os.PathLike) -> None:
+    """ParameterError (one line) unless ``path`` is a Zarr store, saying what it is instead."""
+    p = Path(path)
+    if not p.exists():
+        raise ParameterError(f"{path} does not exist")
+    if not is_store(p):
+        raise ParameterError(f"{path} is not a Zarr store (it has no zarr.json)")
+
+
+def _short(exc: BaseException) -> str:
+    text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    if "checksum" in text.lower():
+        return "checksum mismatch"
+    return text if len(text) <= 100 else text[:97] + "..."
+
+
+def read_runs(path: str | os.PathLike) -> list[dict]:
+    """The run records of ``STORE.cost/runs.jsonl`` (a damaged line is skipped)."""
+    runs = []
+    log = cost_dir(path) / "runs.jsonl"
+    if log.is_file():
+        for line in log.read_text().splitlines():
+            try:
+                runs.append(json.loads(line))
+            except ValueError:
+                continue
+    return runs
+
+
+def record_run(path: str | os.PathLike, run: dict) -> None:
+    """Append one invocation's record to ``STORE.cost/runs.jsonl`` (only the coordinating
+    process writes it; one write of one line, so that the records of processes sharing a store
+    do not interleave)."""
+    target = cost_dir(path) / "runs.jsonl"
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with open(target, "a") as fh:
+        fh.write(json.dumps(run) + "\n")
+
+
+def check_store_writable(path: str | os.PathLike) -> None:
+    """Raise NotWritable (one line) unless the store (or the folder it will be created in) and
+    its side folder accept new files: a read-only mount or a full disk is found before any
+    work."""
+    import errno
+
+    from .paths import REASONS, NotWritable, check_writable
+
+    path = Path(path)
+    existed = is_store(path)
+    try:
+        check_writable(path, what="store", directory=True, create_parents=True)
+        side = cost_dir(path)
+        if side.is_dir():
+            check_writable(side, what="store", directory=True)
+    except OSError as exc:
+        read_only = (errno.EROFS, errno.EACCES, errno.EPERM)
+        if not (isinstance(exc, PermissionError) or exc.errno in read_only):
+            raise  # a full disk, ...: said as it is
+        reason = REASONS.get(exc.errno, "permission denied")
+        raise NotWritable(exc.errno, f"the store {path} is read-only ({reason}): a sweep "
+                                     "cannot write to it here" if existed else
+                          f"cannot create the store {path}: its folder is read-only "
+                          f"({reason})") from None
+
+
+def remove_dead_probes(path: Path) -> None:
+    """The writability probes (``.coin-probe-HOST-PID``) of dead processes of this host."""
+    for probe in path.glob(".coin-probe-*"):
+        host, _, pid = probe.name.removeprefix(".coin-probe-").rpartition("-")
+        if host == HOST and pid.isdigit() and not pid_alive(int(pid)):
+            with contextlib.suppress(OSError):
+                probe.unlink()
+
+
+# -- the store --------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class StoreView:
+    """What opening a store read once: its attributes (those of the sweep its tiles were
+    computed with, and any a user added), its grid, the parameters digest its tiles are checked
+    against, the copies of its parameters found changed (and how the right ones are known:
+    agree, tiles, digest), and its arrays."""
+
+    attrs: dict
+    grid: Grid
+    parameters: bytes
+    problems: tuple[str, ...] = ()
+    proof: str = "agree"
+
+    @property
+    def specs(self) -> dict[str, ArraySpec]:
+        return array_specs(self.attrs, self.grid)
+
+
+class BasinStore:
+    """A basin store at ``path``: opened (its metadata read, once) on first use, by
+    :meth:`open`, or by :meth:`create_or_resume` for a sweep about to write to it (which is
+    what the sweep engine's :meth:`prepare` does). Picklable: a Dask worker writes its tiles
+    through the same object."""
+
+    def __init__(self, path: str | os.PathLike):
+        self.path = Path(path)
+        self._view: StoreView | None = None
+        self._specs: dict[str, ArraySpec] | None = None
+
+    def __repr__(self) -> str:
+        return f"BasinStore({str(self.path)!r})"
+
+    @property
+    def name(self) -> str:
+        return str(self.path)
+
+    def exists(self) -> bool:
+        """Whether a store is there (of this sweep or not: :meth:`open` says)."""
+        return is_store(self.path)
+
+    # -- opening ------------------------------------------------------------------------------
+    @classmethod
+    def open(cls, path: str | os.PathLike, grid: Grid | None = None,
+             wanted: dict | None = None) -> BasinStore:
+        """Open a basin store; ParameterError (one line) if it is none, or if its metadata
+        cannot be read, StoreDamaged if the parameters its tiles were computed with cannot be
+        recovered. ``grid``: the sweep's grid when known (else from the attributes);
+        ``wanted``: the attributes of a sweep about to resume it (they are tried too).
+
+        When the three copies of the sweep attributes differ (one was damaged or edited), the
+        one a computed tile verifies under is the one the tiles were computed with; without
+        any tile, the one that matches its digest. The copies that differ from it are listed
+        in ``problems`` (a resume rewrites them)."""
+        store = cls(path)
+        store._set_view(_read_view(store.path, grid, wanted))
+        return store
+
+    def _set_view(self, view: StoreView) -> None:
+        self._view = view
+        self._specs = view.specs
+
+    @property
+    def view(self) -> StoreView:
+        if self._view is None:
+            self._set_view(_read_view(self.path))
+        return self._view
+
+    @property
+    def attrs(self) -> dict:
+        return self.view.attrs
+
+    @property
+    def grid(self) -> Grid:
+        return self.view.grid
+
+    @property
+    def parameters(self) -> bytes:
+        return self.view.parameters
+
+    @property
+    def problems(self) -> list[str]:
+        return list(self.view.problems)
+
+    @property
+    def specs(self) -> dict[str, ArraySpec]:
+        self.view  # noqa: B018 - opened, which sets them
+        return self._specs
+
+    def create_or_resume(self, attrs: dict, grid: Grid,
+                         overwrite: bool = False) -> StoreCheck:
+        """Create the store, or open an existing one with the same parameters, and check it:
+        which tiles are done (verified), which damaged. A store with other parameters (those
+        its tiles were computed with, whatever its metadata say now) is refused with a message
+        naming them unless ``overwrite``. Metadata that differ from those of the parameters
+        are rewritten (keeping what a user added). Several processes may call this at once on
+        one path: one creates the store, the others open it."""
+        path = self.path
+        if path.exists() and not path.is_dir():
+            raise ParameterError(f"{path} exists and is not a directory")
+        if path.is_dir() and not is_store(path) and any(path.iterdir()):
+            raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
+        if overwrite or not is_store(path):
+            path.parent.mkdir(parents=True, exist_ok=True)
+            create_store(path, lambda: template(attrs, grid), replace=overwrite,
+                         side=self.cost_dir)
+        else:
+            tidy(path)
+            remove_dead_probes(path)
+        self._set_view(_read_view(path, grid, wanted=attrs))
+        diff = meta.differences(self.attrs, attrs)
+        if diff:
+            changed = ""
+            if self.problems:
+                when = ("its tiles were computed" if self.view.proof == "tiles"
+                        else "it was created")
+                changed = f" (its metadata were changed after {when}: {self.problems[0]})"
+            raise ParameterError(f"{path} holds a different sweep: {'; '.join(diff[:4])}"
+                                 f"{' ...' if len(diff) > 4 else ''}{changed}. Run again with "
+                                 "the store's parameters to resume it, or overwrite to "
+                                 "replace it", parameters=("overwrite",))
+        self.cost_dir.mkdir(exist_ok=True)
+        return self.check(repair_with=attrs)
+
+    def prepare(self, plan, overwrite: bool = False) -> Prepared:
+        """The sweep engine's start (:func:`coincli.sweeps.engine.run_sweep`): the store of
+        ``plan`` created or resumed (:meth:`create_or_resume`), and what it holds."""
+        found = self.create_or_resume(plan.attrs, plan.grid, overwrite)
+        return Prepared(found.done, dict(found.damaged), tuple(found.repaired))
+
+    def shared(self) -> BasinStore:
+        """The store as Dask workers open it: by its absolute path (the same on every machine
+        of a cluster sharing its file system)."""
+        store = BasinStore(self.path.resolve())
+        store._set_view(self.view)
+        return store
+
+    # -- where its records are ----------------------------------------------------------------
+    @property
+    def cost_dir(self) -> Path:
+        return cost_dir(self.path)
+
+    @property
+    def claims_dir(self) -> Path:
+        return self.cost_dir / "claims"
+
+    def claims(self) -> Claims:
+        """This process's claims on the store's tiles (close them when done)."""
+        return Claims(self.claims_dir)
+
+    # -- reading ------------------------------------------------------------------------------
+    def read_chunk(self, name: str, tile: tuple[int, int]) -> np.ndarray:
+        """One tile's chunk of array ``name``, cut to the tile (ChunkError, OSError if it
+        cannot be read; a missing chunk file is FileNotFoundError)."""
+        return self.specs[name].read(self.path, tile)
+
+    def read_tile(self, tile: tuple[int, int]) -> tuple[dict | None, str | None]:
+        """One tile's arrays, or why they cannot be read."""
+        out = {}
+        for name in ARRAY_NAMES:
+            key = f"chunk {name}/c/{tile[0]}/{tile[1]}"
+            try:
+                out[name] = self.read_chunk(name, tile)
+            except FileNotFoundError:
+                return None, f"{key} is missing"
+            except Exception as exc:  # noqa: BLE001 - any failure to read is damage
+                return None, f"{key} cannot be read ({_short(exc)})"
+        return out, None
+
+    def digests(self, tiles=None) -> tuple[np.ndarray, set]:
+        """The ``done`` digests (of ``tiles`` only, if given; 0 where a tile has none), and the
+        tiles whose digest cannot be read."""
+        flags = np.zeros(self.grid.tile_grid, dtype=np.uint32)
+        unreadable = set()
+        for tile in (np.ndindex(*self.grid.tile_grid) if tiles is None else tiles):
+            try:
+                flags[tile] = self.read_chunk("done", tile)[0, 0]
+            except FileNotFoundError:
+                pass  # not done
+            except Exception:  # noqa: BLE001 - any failure to read is damage
+                unreadable.add(tuple(tile))
+        return flags, unreadable
+
+    def scan(self, *, with_data: bool = False,
+             tiles: Iterable[tuple[int, int]] | None = None) -> Iterator[tuple]:
+        """Check every tile (or ``tiles``): yield (tile, Tile state, arrays or None, why
+        damaged). Arrays are given for DONE tiles when ``with_data``. Tiles are read one at a
+        time (one chunk file per array), so memory stays flat."""
+        wanted = None if tiles is None else [tuple(t) for t in tiles]
+        flags, unreadable = self.digests(wanted)
+        for tile in (np.ndindex(*self.grid.tile_grid) if wanted is None else wanted):
+            if tile in unreadable:
+                yield tile, Tile.DAMAGED, None, "its done digest cannot be read"
+                continue
+            if not flags[tile]:
+                yield tile, Tile.MISSING, None, None
+                continue
+            data, why = self.read_tile(tile)
+            if data is None:
+                yield tile, Tile.DAMAGED, None, why
+            elif tile_digest(tile, data, self.parameters) != int(flags[tile]):
+                yield tile, Tile.DAMAGED, None, ("its data do not match its digest (a chunk "
+                                                 "from another tile, or changed on disk)")
+            else:
+                yield tile, Tile.DONE, (data if with_data else None), None
+
+    def has_digest(self, tile: tuple[int, int]) -> bool:
+        """Whether a tile's ``done`` chunk exists (one stat). Written last, after all its data,
+        so a digest that appears while a sweep runs means another process finished it."""
+        return self.specs["done"].file(self.path, tile).is_file()
+
+    def tile_done(self, tile: tuple[int, int]) -> bool:
+        """Whether one tile is done and verified (read now, from disk)."""
+        if not self.has_digest(tile):
+            return False
+        return any(state is Tile.DONE for _, state, _, _ in self.scan(tiles=[tuple(tile)]))
+
+    def read(self) -> Basin:
+        """The whole basin, every tile checked: cells of tiles not done, or damaged, read as
+        not computed (their tiles are listed in ``Basin.damaged``)."""
+        grid = self.grid
+        arrays = {name: np.full(grid.shape, FILLS[name], dtype=VARIABLES[name][0])
+                  for name in ARRAY_NAMES}
+        done = np.zeros(grid.tile_grid, dtype=np.uint8)
+        damaged = []
+        for tile, state, data, _ in self.scan(with_data=True):
+            if state is Tile.DONE:
+                s0, s1 = grid.tile_slices(tile)
+                for name in ARRAY_NAMES:
+                    arrays[name][s0, s1] = data[name]
+                done[tile] = 1
+            elif state is Tile.DAMAGED:
+                damaged.append(tile)
+        tile_seconds, runs = self.costs()
+        return Basin(attrs=self.attrs, arrays=arrays, done=done, tile_seconds=tile_seconds,
+                     runs=runs, path=str(self.path), damaged=damaged)
+
+    def stats(self) -> BasinStats:
+        """Its statistics (:func:`coincli.basin_stats`), read one tile at a time, each checked,
+        so memory stays flat at any resolution; damaged tiles count as not computed."""
+        counts = BasinCounts()
+        done = np.zeros(self.grid.tile_grid, np.uint8)
+        damaged = []
+        for tile, state, data, _ in self.scan(with_data=True):
+            if state is Tile.DONE:
+                counts.add(data["quarter_turns"], data["status"], data["certainty"])
+                done[tile] = 1
+            else:
+                counts.add_not_computed(self.grid.tile_cells(tile))
+                if state is Tile.DAMAGED:
+                    damaged.append(tile)
+        seconds, runs = self.costs()
+        return BasinStats(counts, done, damaged, seconds, runs, self.damaged_metadata(),
+                          self.problems)
+
+    def costs(self) -> tuple[np.ndarray, list]:
+        """Per-tile CPU seconds (NaN where unknown) and the run records."""
+        seconds = np.full(self.grid.tile_grid, math.nan)
+        if self.cost_dir.is_dir():
+            for f in self.cost_dir.glob("tile_*.json"):
+                try:
+                    i, j = (int(x) for x in f.stem.split("_")[1:3])
+                    if i < seconds.shape[0] and j < seconds.shape[1]:
+                        seconds[i, j] = json.loads(f.read_text())["cpu_seconds"]
+                except (ValueError, KeyError, TypeError, OSError):
+                    pass  # a damaged cost record loses the cost, never the results
+        return seconds, read_runs(self.path)
+
+    # -- checking and repairing ---------------------------------------------------------------
+    def damaged_metadata(self) -> list[str]:
+        """Keys of the metadata files and coordinate chunks that do not hold what the store's
+        (proven) parameters give."""
+        return [key for key, data in template(self.attrs, self.grid).items()
+                if meta.differs(self.path / key, data)]
+
+    def leftovers(self) -> int:
+        """Temporary files (``*.partial``) of writers that died."""
+        return sum(1 for _ in self.path.glob(f"*/c/**/*{PARTIAL}"))
+
+    def check(self, *, repair_with: dict | None = None) -> StoreCheck:
+        """Check every tile and every metadata file (read only, unless ``repair_with`` gives
+        the attributes to rewrite differing metadata from: what the sweep wrote is rewritten,
+        what a user added to it is kept)."""
+        t0 = time.perf_counter()
+        attrs = repair_with if repair_with is not None else self.attrs
+        files = template(attrs, self.grid)
+        metadata = [key for key, data in files.items() if meta.differs(self.path / key, data)]
+        repaired = []
+        if repair_with is not None:
+            for key in metadata:
+                target = self.path / key
+                target.parent.mkdir(parents=True, exist_ok=True)
+                write_atomically(target, meta.repaired(target, files[key]))
+                repaired.append(key)
+        done = np.zeros(self.grid.tile_grid, dtype=bool)
+        damaged = {}
+        for tile, state, _, why in self.scan():
+            if state is Tile.DONE:
+                done[tile] = True
+            elif state is Tile.DAMAGED:
+                damaged[tile] = why
+        return StoreCheck(str(self.path), self.attrs, self.grid, done, damaged, metadata,
+                          repaired, self.leftovers(), time.perf_counter() - t0,
+                          list(self.problems))
+
+    # -- writing ------------------------------------------------------------------------------
+    def _remove_partials(self, tile: tuple[int, int]) -> None:
+        """Temporary chunk files of this tile's chunks left by a writer that died (only the
+        owner of a tile's claim writes it, so any such file is an orphan)."""
+        for name in (*ARRAY_NAMES, "done"):
+            folder = self.path / name / "c" / str(tile[0])
+            if folder.is_dir():
+                for leftover in folder.glob(f"{tile[1]}.*{PARTIAL}"):
+                    with contextlib.suppress(OSError):
+                        leftover.unlink()
+
+    def write_tile(self, result: TileResult, parameters: bytes | None = None) -> None:
+        """Write one tile's arrays, its cost, and last its ``done`` digest, which binds the
+        parameters digest ``parameters`` (by default, the store's as opened: a sweep passes
+        the digest of the parameters it computed with, whatever another process may have
+        written into the metadata meanwhile)."""
+        parameters = self.parameters if parameters is None else parameters
+        tile = result.tile
+        self._remove_partials(tile)
+        for name in ARRAY_NAMES:
+            self.specs[name].write(self.path, tile, result.arrays[name])
+        cost = {"cpu_seconds": result.cpu_seconds, "host": socket.gethostname(),
+                "pid": os.getpid()}
+        if result.mirror_of is not None:
+            cost["mirror_of"] = list(result.mirror_of)
+        write_atomically(self.cost_dir / f"tile_{tile[0]}_{tile[1]}.json",
+                         json.dumps(cost).encode())
+        self.specs["done"].write(self.path, tile,
+                                 np.array([[tile_digest(tile, result.arrays, parameters)]]))
+
+    def record_run(self, run: dict) -> None:
+        record_run(self.path, run)
+
+
+# -- which parameters the tiles were computed with ----------------------------------------------
+def _read_view(path: Path, grid: Grid | None = None, wanted: dict | None = None) -> StoreView:
+    """What :meth:`BasinStore.open` reads (see there)."""
+    check_is_store(path)
+    attrs, copies = meta.read_copies(path)
+    if attrs is not None and MARK not in attrs and copies[2].value is None:
+        raise ParameterError(f"{path} is not a coin basin store")
+    mark = attrs.get(MARK) if attrs is not None else None
+    fmt = mark.get("format") if isinstance(mark, dict) else None
+    if fmt is not None and fmt != FORMAT:
+        raise ParameterError(f"{path} is a coin basin store of format {fmt}, this version "
+                             f"reads format {FORMAT}: recompute it (overwrite)",
+                             parameters=("overwrite",))
+    if all(c.value is None for c in copies):
+        raise StoreDamaged(f"{path}: its metadata cannot be read: the store is damaged; "
+                           "overwrite starts the sweep again", parameters=("overwrite",))
+    proven, proof = _prove(path, copies, wanted)
+    if proven is None:
+        raise StoreDamaged(f"{path}: {proof}", parameters=("overwrite",))
+    extra = {k: v for k, v in (attrs or {}).items() if k != MARK and k not in COMPARED_ATTRS}
+    full = {**root_attrs(proven), **extra}
+    if grid is None or (wanted is not None and owned(wanted) != proven):
+        try:
+            grid = grid_of(full)
+        except Exception as exc:  # noqa: BLE001
+            raise StoreDamaged(f"{path}: its metadata cannot be read ({_short(exc)}): the "
+                               "store is damaged; overwrite starts the sweep again",
+                               parameters=("overwrite",)) from None
+    return StoreView(full, grid, parameters_digest(proven),
+                     tuple(meta.problems_of(copies, proven, proof)), proof)
+
+
+def _digest_tiles(path: Path) -> list[tuple[int, int]]:
+    """The tiles with a ``done`` chunk file, from the folder (whatever the metadata say)."""
+    tiles = []
+    for row in (path / "done" / "c").glob("*"):
+        for cell in row.glob("*"):
+            if row.name.isdigit() and cell.name.isdigit():
+                tiles.append((int(row.name), int(cell.name)))
+    return sorted(tiles)
+
+
+def _tiles_verify(path: Path, value: dict, tiles: list, most: int = 16) -> bool:
+    """Whether a computed tile verifies under the sweep attributes ``value`` (one does only
+    under the parameters it was computed with). Up to ``most`` readable tiles are tried."""
+    try:
+        grid = grid_of(value)
+        store = BasinStore(path)
+        store._set_view(StoreView(value, grid, parameters_digest(value)))
+    except Exception:  # noqa: BLE001 - attributes that describe no grid prove nothing
+        return False
+    t0, t1 = grid.tile_grid
+    tried = 0
+    for tile in tiles:
+        if tile[0] >= t0 or tile[1] >= t1:
+            continue
+        try:
+            flag = int(store.read_chunk("done", tile)[0, 0])
+        except (OSError, ChunkError, ValueError):  # damage: no proof
+            continue
+        data, _ = store.read_tile(tile)
+        if data is None:
+            continue
+        if tile_digest(tile, data, store.parameters) == flag:
+            return True
+        tried += 1
+        if tried >= most:
+            break
+    return False
+
+
+def _prove(path: Path, copies: list[meta.Copy],
+           wanted: dict | None) -> tuple[dict | None, str]:
+    """The sweep attributes the store's tiles were computed with, and how that is known:
+    'agree' (every copy whole and the same), 'tiles' (a computed tile verifies under them),
+    'digest' (the one copy that matches its own digest); (None, why) if nothing proves any."""
+    values = meta.unique(c.value for c in copies if c.value is not None)
+    if len(values) == 1 and all(c.consistent for c in copies):
+        return values[0], "agree"
+    tiles = _digest_tiles(path)
+    candidates = meta.unique([*values, *([owned(wanted)] if wanted is not None else [])])
+    for value in candidates:
+        if tiles and _tiles_verify(path, value, tiles):
+            return value, "tiles"
+    consistent = meta.unique(c.value for c in copies if c.consistent)
+    if len(consistent) == 1:
+        return consistent[0], "digest"
+    if len(values) == 1 and not tiles:  # nothing computed, and nothing says otherwise
+        return values[0], "agree"
+    if tiles:
+        n = len(tiles)
+        return None, (f"the parameters its {n} tile{'s' if n != 1 else ''} were computed with "
+                      "cannot be recovered: no tile verifies under "
+                      + ("its metadata's" if wanted is None else "its metadata's or these")
+                      + " (the metadata were changed after the tiles were computed"
+                      + (f": {meta.disagreement(copies)}" if len(values) > 1 else "") + "). "
+                      + "Run the sweep with the parameters of its tiles to resume it, or "
+                      "overwrite to start again")
+    return None, (f"its parameters cannot be recovered: {meta.disagreement(copies)}, and no "
+                  "computed tile proves either; overwrite starts the sweep again")
+
+
+__all__ = ["ARRAY_NAMES", "BasinStore", "StoreCheck", "StoreDamaged", "StoreView", "Tile",
+           "check_is_store", "check_store_writable", "cost_dir", "grid_of", "read_runs",
+           "record_run", "template", "tile_digest"]

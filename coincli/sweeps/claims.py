@@ -1,0 +1,324 @@
+"""Claims on tiles (and on the batches of `coin fractions`), so that several processes (on one
+machine or several sharing the store's file system) can run the same work together without
+computing a piece twice.
+
+A claim is a file ``out.zarr.cost/claims/tile_I_J`` created with ``O_CREAT | O_EXCL`` (exactly
+one process can create it) holding its owner: host, pid, the pid's start time and a random
+token. While the owner computes the tile a heartbeat thread touches the file every
+:data:`HEARTBEAT` seconds; the owner removes it once the tile is written (or abandoned). A claim
+is *stale*, and taken over by whoever needs the tile, when its heartbeat is older than
+:data:`STALE` seconds, or at once when its owner ran on this host and its process is gone (a
+``kill -9``, a crash, a reboot). Taking over renames the stale file out of the way, checks that
+what it moved is the claim it judged stale (restoring it otherwise), and then claims as usual,
+so two processes taking over the same tile cannot both win.
+
+:class:`TileQueue` hands out the tiles one process should compute: it claims each before handing
+it out and checks, once claimed, that nobody finished it meanwhile; tiles claimed by live others
+are watched until they are done, or until their claim is dropped or goes stale, in which case it
+claims and computes them itself. So when a queue is :attr:`~TileQueue.finished`, every tile of
+the sweep is done, whoever computed it. A process that meets a tile held by another moves on to
+the middle of the tiles it has left, so processes spread over the grid rather than take turns.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import secrets
+import socket
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+HEARTBEAT = 10.0  # s between touches of the claims a process holds
+STALE = 60.0  # s without a heartbeat after which a claim is taken over
+POLL = 0.5  # s between looks at the tiles other processes hold
+
+HOST = socket.gethostname()
+_live_tokens: set[str] = set()  # claims held by this process (any TileQueue)
+
+
+def _start_time(pid: int) -> str | None:
+    """A process's start time (clock ticks since boot, Linux), to tell a reused pid apart."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            text = fh.read().decode(errors="replace")
+        return text[text.rindex(")") + 2:].split()[19]
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def pid_alive(pid: int, start: str | None = None) -> bool:
+    """Whether process ``pid`` of this host still runs (and is the one that started at
+    ``start``, when given and knowable)."""
+    if pid <= 0:
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass  # alive, someone else's
+    if start is not None:
+        now = _start_time(pid)
+        if now is not None and now != start:
+            return False
+    return True
+
+
+MY_START = _start_time(os.getpid())
+
+
+def claim_name(tile: tuple[int, int]) -> str:
+    return f"tile_{tile[0]}_{tile[1]}"
+
+
+def read_claim(path: Path) -> tuple[dict | None, float | None]:
+    """(owner, mtime) of a claim file; owner None when unreadable (being written, or damaged);
+    mtime None when there is no claim."""
+    try:
+        mtime = path.stat().st_mtime
+    except FileNotFoundError:
+        return None, None
+    try:
+        owner = json.loads(path.read_text())
+        if not isinstance(owner, dict):
+            owner = None
+    except (OSError, ValueError):
+        owner = None
+    return owner, mtime
+
+
+def is_stale(owner: dict | None, mtime: float, now: float | None = None) -> bool:
+    """A claim whose heartbeat stopped, or whose owner on this host is gone."""
+    now = time.time() if now is None else now
+    if now - mtime > STALE:
+        return True
+    if owner is None:
+        return False  # being written: give it its heartbeat's time
+    if owner.get("host") == HOST:
+        pid = int(owner.get("pid", -1))
+        if pid == os.getpid():
+            return owner.get("token") not in _live_tokens  # ours from before (an earlier sweep)
+        return not pid_alive(pid, owner.get("start"))
+    return False
+
+
+def describe_owner(owner: dict | None) -> str:
+    if not owner:
+        return "another process"
+    return f"pid {owner.get('pid')} on {owner.get('host')}"
+
+
+class Claims:
+    """The claims one sweep holds in ``folder``, kept alive by a heartbeat thread."""
+
+    def __init__(self, folder: str | os.PathLike, heartbeat: float = HEARTBEAT):
+        self.folder = Path(folder)
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.token = secrets.token_hex(8)
+        self.held: dict[tuple[int, int], str] = {}
+        self.lost: set[tuple[int, int]] = set()
+        self._lock = threading.Lock()
+        self._closed = threading.Event()
+        self._serial = 0
+        _live_tokens.add(self.token)
+        self._thread = threading.Thread(target=self._beat, args=(heartbeat,), daemon=True,
+                                        name="coin-claims-heartbeat")
+        self._thread.start()
+
+    def path(self, tile: tuple[int, int]) -> Path:
+        return self.folder / claim_name(tile)
+
+    def _content(self, tile) -> bytes:
+        return json.dumps({"host": HOST, "pid": os.getpid(), "start": MY_START,
+                           "token": self.token, "tile": list(tile),
+                           "since": time.time()}).encode()
+
+    def try_claim(self, tile: tuple[int, int]) -> bool:
+        """Claim ``tile`` if nobody holds it, taking over a stale claim; False if a live
+        process holds it."""
+        tile = tuple(tile)
+        for _ in range(3):
+            path = self.path(tile)
+            try:
+                fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileNotFoundError:  # the folder went with another process's last claim
+                self.folder.mkdir(parents=True, exist_ok=True)
+                continue
+            except FileExistsError:
+                owner, mtime = read_claim(path)
+                if mtime is None:
+                    continue  # released meanwhile: try again
+                if not is_stale(owner, mtime):
+                    return False
+                self._take_over(path, mtime)
+                continue
+            try:
+                os.write(fd, self._content(tile))
+            except BaseException:
+                os.close(fd)
+                with contextlib.suppress(OSError):
+                    os.unlink(path)
+                raise
+            os.close(fd)
+            with self._lock:
+                self.held[tile] = self.token
+            return True
+        return False
+
+    def _take_over(self, path: Path, seen_mtime: float) -> None:
+        """Move a stale claim out of the way, unless it changed since it was judged."""
+        with self._lock:
+            self._serial += 1
+            grave = path.with_name(f".{path.name}.stale-{self.token}-{self._serial}")
+        try:
+            os.rename(path, grave)
+        except FileNotFoundError:
+            return  # someone else did
+        try:
+            if grave.stat().st_mtime != seen_mtime:
+                # a new claim was made between our look and the rename: put it back
+                with contextlib.suppress(OSError):  # EEXIST: claimed again meanwhile
+                    os.link(grave, path)
+        finally:
+            with contextlib.suppress(OSError):
+                os.unlink(grave)
+
+    def owns(self, tile: tuple[int, int]) -> bool:
+        owner, _ = read_claim(self.path(tile))
+        return owner is not None and owner.get("token") == self.token
+
+    def release(self, tile: tuple[int, int]) -> None:
+        """Drop the claim on ``tile`` (if it is still ours)."""
+        tile = tuple(tile)
+        with self._lock:
+            if self.held.pop(tile, None) is None:
+                return
+        if self.owns(tile):
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(self.path(tile))
+
+    def _beat(self, period: float) -> None:
+        while not self._closed.wait(period):
+            with self._lock:
+                tiles = list(self.held)
+            for tile in tiles:
+                try:
+                    if self.owns(tile):
+                        os.utime(self.path(tile))
+                    else:  # taken over after our heartbeat stalled (a suspended process)
+                        self.lost.add(tile)
+                except OSError:
+                    pass
+
+    def close(self) -> None:
+        """Stop the heartbeat and drop every claim still held."""
+        self._closed.set()
+        with self._lock:
+            tiles = list(self.held)
+        for tile in tiles:
+            with contextlib.suppress(OSError):
+                self.release(tile)
+        # a claim made as a signal came (its file written, not yet recorded as held) is ours
+        # all the same: it carries our token
+        with contextlib.suppress(OSError):
+            for path in self.folder.iterdir():
+                owner, _ = read_claim(path)
+                if owner is not None and owner.get("token") == self.token:
+                    with contextlib.suppress(OSError):
+                        path.unlink()
+        _live_tokens.discard(self.token)
+        with contextlib.suppress(OSError):
+            self.folder.rmdir()  # empty once nobody holds a claim
+
+
+class TileQueue:
+    """The tiles of a sweep as one process sees them: :meth:`take` hands out a tile this
+    process has claimed (and that is not done), or None when every tile left is held by another
+    live process; those are watched (:attr:`POLL`) until done, or claimed here when their owner
+    lets go or goes stale. :meth:`finished` is True once every tile is done, here or elsewhere.
+    Without ``claims`` (an in-memory sweep) it hands the tiles out in order."""
+
+    def __init__(self, tiles: Iterable[tuple[int, int]], claims: Claims | None = None,
+                 is_done: Callable[[tuple[int, int]], bool] | None = None,
+                 poll: float = POLL):
+        self.pending = deque(tuple(t) for t in tiles)
+        self.claims = claims
+        self.is_done = is_done
+        self.poll = poll
+        self.watched: list[tuple[int, int]] = []  # held by others
+        self.out: set[tuple[int, int]] = set()  # handed out, not yet settled
+        self.done_elsewhere: list[tuple[int, int]] = []
+        self._last_look = 0.0
+
+    def _finished_elsewhere(self, tile) -> bool:
+        if self.is_done is not None and self.is_done(tile):
+            self.done_elsewhere.append(tile)
+            return True
+        return False
+
+    def _get(self, tile) -> bool:
+        """Claim ``tile``; True if this process is to compute it."""
+        if self.claims is None:
+            return True
+        if self._finished_elsewhere(tile):
+            return False
+        if not self.claims.try_claim(tile):
+            self.watched.append(tile)
+            # another process works here: move on to the middle of what is left, so that
+            # processes spread over the grid instead of taking turns tile by tile
+            self.pending.rotate(-(len(self.pending) // 2))
+            return False
+        if self._finished_elsewhere(tile):  # finished between our look and our claim
+            self.claims.release(tile)
+            return False
+        return True
+
+    def take(self) -> tuple[int, int] | None:
+        while self.pending:
+            tile = self.pending.popleft()
+            if self._get(tile):
+                self.out.add(tile)
+                return tile
+        if self.watched and time.monotonic() - self._last_look >= self.poll:
+            self._last_look = time.monotonic()
+            watched, self.watched = self.watched, []
+            self.pending.extend(watched)
+            while self.pending:
+                tile = self.pending.popleft()
+                if self._get(tile):
+                    self.out.add(tile)
+                    return tile
+        return None
+
+    def settle(self, tile: tuple[int, int]) -> None:
+        """A handed-out tile is written: drop its claim."""
+        self.drop(tile)
+
+    def drop(self, tile: tuple[int, int]) -> None:
+        """A handed-out tile is written, or will not be by this run (stopping, failed):
+        release its claim."""
+        self.out.discard(tuple(tile))
+        if self.claims is not None:
+            self.claims.release(tile)
+
+    @property
+    def finished(self) -> bool:
+        return not self.pending and not self.watched and not self.out
+
+    @property
+    def waiting(self) -> bool:
+        """Nothing to hand out now, but tiles held by others are not done yet."""
+        return not self.pending and bool(self.watched)
+
+    def pause(self) -> None:
+        """Sleep until the next look at the others' tiles (Ctrl-C interrupts it)."""
+        time.sleep(max(0.01, self.poll - (time.monotonic() - self._last_look)))
+
+
+__all__ = ["Claims", "HEARTBEAT", "POLL", "STALE", "TileQueue", "describe_owner", "is_stale",
+           "pid_alive", "read_claim"]
