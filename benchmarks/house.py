@@ -4,12 +4,19 @@ and every use of another library's private name (an attribute or an import whose
 with one underscore, of a module that is not ours).
 
     python benchmarks/house.py [PACKAGE_DIR] [--json]
+    python benchmarks/house.py --timing [--rounds 5] [--against CHECKOUT [--against-cache DIR]]
 
 The private names are found in the syntax tree: ``x._name`` where ``x`` is a name imported from
 another library (``numba.core.caching._CacheLocator``, ``rr.components.X._Y``) or where
 ``_name`` is no name the package defines itself (``dispatcher._cache``); ``from lib import
 _name`` / ``from lib._module import ...``; ``getattr(lib, "_name")``; a keyword ``_name=``.
 Dunder names (``__version__``) and a named tuple's ``_replace``, ``_fields``... are public.
+
+With ``--timing``, what a user waits for, medians of interleaved rounds: `coin --help`, a warm
+`coin simulate --vy 1.197 --vphi 3.508 --no-rrd`, the default 512 x 512 `coin basin` (the whole
+command, into a fresh store) and the same with `--rrd` (its ratio to the plain one, pair by
+pair); with ``--against`` another checkout of coincli (its own kernel cache in
+``--against-cache``) is timed in the same rounds, each command of one right after the other's.
 """
 
 from __future__ import annotations
@@ -123,12 +130,77 @@ def measure(package: Path) -> dict:
     }
 
 
+COMMANDS = {
+    "coin --help": ["--help"],
+    "warm coin simulate --no-rrd": ["simulate", "--vy", "1.197", "--vphi", "3.508", "--no-rrd"],
+    "default 512 x 512 coin basin": ["basin", "{store}", "--quiet"],
+    "the same with --rrd": ["basin", "{store}", "--quiet", "--rrd", "{rrd}"],
+}
+
+
+def timing(rounds: int, against: str | None, against_cache: str | None) -> dict:
+    """Medians of interleaved rounds of COMMANDS, for this checkout and ``against``."""
+    import os
+    import shutil
+    import statistics
+    import subprocess
+    import tempfile
+    import time
+
+    here = str(Path(__file__).resolve().parents[1])
+    sides = {"this": {"PYTHONPATH": here}}
+    if against:
+        sides["against"] = {"PYTHONPATH": against,
+                            **({"XDG_CACHE_HOME": against_cache} if against_cache else {})}
+    times = {side: {name: [] for name in COMMANDS} for side in sides}
+    work = Path(tempfile.mkdtemp(prefix="coin-house-"))
+    try:
+        for _ in range(rounds + 1):  # the first round warms the caches and is not counted
+            for name, args in COMMANDS.items():
+                for side, env in sides.items():
+                    store, rrd = work / f"{side}.zarr", work / f"{side}.rrd"
+                    shutil.rmtree(store, ignore_errors=True)
+                    shutil.rmtree(f"{store}.cost", ignore_errors=True)
+                    rrd.unlink(missing_ok=True)
+                    command = [sys.executable, "-m", "coincli",
+                               *(a.format(store=store, rrd=rrd) for a in args)]
+                    t0 = time.perf_counter()
+                    subprocess.run(command, check=True, capture_output=True, cwd=work,
+                                   env={**os.environ, **env})
+                    times[side][name].append(time.perf_counter() - t0)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    out = {}
+    for side, by_name in times.items():
+        row = {name: statistics.median(values[1:]) for name, values in by_name.items()}
+        plain, recorded = by_name["default 512 x 512 coin basin"], by_name["the same with --rrd"]
+        row["recorded ratio"] = statistics.median(r / p for p, r in zip(plain[1:], recorded[1:],
+                                                                         strict=True))
+        out[side] = row
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("package", nargs="?", default=str(Path(__file__).resolve().parents[1]
                                                          / "coincli"))
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--timing", action="store_true")
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--against", help="another checkout to time beside this one")
+    parser.add_argument("--against-cache", help="its kernel cache (XDG_CACHE_HOME)")
     args = parser.parse_args()
+    if args.timing:
+        result = timing(args.rounds, args.against, args.against_cache)
+        if args.json:
+            json.dump(result, sys.stdout, indent=2)
+            print()
+            return
+        for side, row in result.items():
+            print(side)
+            for name, value in row.items():
+                print(f"  {name}: {value:.3f}" + ("" if name == "recorded ratio" else " s"))
+        return
     result = measure(Path(args.package))
     if args.json:
         json.dump(result, sys.stdout, indent=2)

@@ -5,8 +5,8 @@ process, its stamps taken on the monotonic clock the parent shares, medians over
     python benchmarks/startup_timeline.py --rounds 9 -- basin /tmp/t.zarr --res 512 -q
 
 Stamps: the interpreter up, numpy imported, the CLI imported, the sweep's estimate (numba
-imported and the kernels activated and loaded inside it), the store prepared, the command done
-(when cli.exit_now is called), and the process gone as the parent sees it. The child wraps
+imported and the kernels loaded inside it), the store prepared, the command done (when the
+command line's run returns), and the process gone as the parent sees it. The child wraps
 those functions of coincli to stamp them; nothing else changes. An argument ending in .zarr is
 removed before every run.
 """
@@ -29,8 +29,8 @@ import numpy
 stamps.append(("numpy imported", time.monotonic()))
 import coincli.cli as cli
 stamps.append(("CLI imported", time.monotonic()))
-from coincli import api, jit
-from coincli.io import store
+from coincli.io.basin_store import BasinStore
+from coincli.sweeps import engine
 
 
 def stamped(owner, name, label):
@@ -45,22 +45,13 @@ def stamped(owner, name, label):
     setattr(owner, name, wrapper)
 
 
-stamped(api, "estimate_sweep", "estimate")
-stamped(jit, "_activate", "numba activation")
-stamped(api, "_load_kernels", "kernel load")
-stamped(store, "prepare", "store prepared")
-exit_now = cli.exit_now
-
-
-def done(code):
-    stamps.append(("command done", time.monotonic()))
-    print(json.dumps(stamps), file=sys.stderr, flush=True)
-    exit_now(code)
-
-
-cli.exit_now = done
-sys.argv = ["coin"] + sys.argv[1:]
-cli.main()
+stamped(engine, "estimate_sweep", "estimate")
+stamped(engine, "load_kernels", "kernel load")
+stamped(BasinStore, "prepare", "store prepared")
+code = cli.run(sys.argv[1:])
+stamps.append(("command done", time.monotonic()))
+print(json.dumps(stamps), file=sys.stderr, flush=True)
+sys.exit(code)
 '''
 
 

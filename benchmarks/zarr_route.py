@@ -36,7 +36,8 @@ def main() -> None:
 
     import coincli
     from coincli.grid import TileResult
-    from coincli.io.basin_store import ARRAY_NAMES, BasinStore
+    from coincli.io.basin_layout import ARRAY_NAMES
+    from coincli.io.basin_store import BasinStore
 
     work = Path(tempfile.mkdtemp(prefix="coin-zarr-route-"))
     try:

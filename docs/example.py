@@ -9,8 +9,9 @@
 # %%
 import coincli
 
-scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
-run = coincli.simulate(scene)  # a Trajectory: outcome, status, final state, energies
+base = coincli.load_preset("paper")
+run = coincli.simulate(base, vy=1.197, vphi=3.508)  # a Trajectory: outcome, status, energies
+scene = run.scene  # the scene with those initial values
 print(f"fig.-2 throw: n = {run.quarter_turns} ({run.pose}), {run.status.label} at "
       f"t = {run.settle_time:.4f} s, {run.steps} steps")
 

@@ -35,8 +35,9 @@ import coincli
 from coincli import api
 from coincli.cli import app
 from coincli.integrators import NO_LABEL
-from coincli.io import basin_store, zarr_v3
-from coincli.io.basin_store import BasinStore, cost_dir
+from coincli.io import basin_layout, zarr_v3
+from coincli.io.basin_layout import cost_dir
+from coincli.io.basin_store import BasinStore
 from coincli.sweeps import claims as claims_io
 from coincli.sweeps import engine, schema
 from coincli.sweeps.plan import pilot_cells
@@ -219,7 +220,7 @@ def test_tiles_are_written_as_zarr_writes_them(tmp_path):
     import zarr
 
     group = zarr.open_group(str(path), mode="r+")
-    for name in (*basin_store.ARRAY_NAMES, "done"):
+    for name in (*basin_layout.ARRAY_NAMES, "done"):
         arr = group[name].with_config({"write_empty_chunks": True})
         values = arr[:]
         shutil.rmtree(path / name / "c")
@@ -231,7 +232,7 @@ def test_tiles_are_written_as_zarr_writes_them(tmp_path):
 
 def test_a_partial_store_verifies_and_a_dead_writers_partial_file_goes(tmp_path, clean):
     path = copy_store(clean, tmp_path / "s.zarr")
-    for name in (*basin_store.ARRAY_NAMES, "done"):  # tile (1, 1) never finished ...
+    for name in (*basin_layout.ARRAY_NAMES, "done"):  # tile (1, 1) never finished ...
         (path / name / "c" / "1" / "1").unlink()
     orphan = path / "steps" / "c" / "1" / "1.0123abcd.partial"  # ... its writer killed
     orphan.write_bytes(b"half a chunk")
@@ -279,12 +280,12 @@ def _zarr_template(attrs: dict, grid, folder: Path) -> dict[str, bytes]:
                                  attributes={"units": axis.units, "long_name": axis.long_name,
                                              "cell_centres": schema.COORD_NOTE})
         arr[:] = axis.coords
-    for name in basin_store.ARRAY_NAMES:
+    for name in basin_layout.ARRAY_NAMES:
         dtype, fill, array_attrs = schema.VARIABLES[name]
         group.create_array(name, shape=grid.shape, chunks=grid.chunk, dtype=dtype,
                            fill_value=fill, dimension_names=grid.dims, attributes=array_attrs,
                            compressors=compressors())
-    group.create_array("done", shape=grid.tile_grid, chunks=(1, 1), dtype=basin_store.DONE_DTYPE,
+    group.create_array("done", shape=grid.tile_grid, chunks=(1, 1), dtype=basin_layout.DONE_DTYPE,
                        fill_value=0, dimension_names=schema.tile_dims(grid),
                        attributes=schema.done_attrs(attrs), compressors=compressors())
     with warnings.catch_warnings():
@@ -301,7 +302,7 @@ def test_the_template_is_what_zarr_writes(tmp_path, res):
     path = tmp_path / "s.zarr"
     coin_ok(path, "--res", res, "--chunk", "4x2", "--no-mirror", "-q")
     view = BasinStore.open(path)
-    ours = basin_store.template(view.attrs, view.grid)
+    ours = basin_layout.template(view.attrs, view.grid)
     theirs = _zarr_template(view.attrs, view.grid, tmp_path / "zarr.zarr")
     assert sorted(ours) == sorted(theirs)
     assert [k for k in ours if ours[k] != theirs[k]] == []
@@ -315,7 +316,7 @@ def test_reads_are_what_zarr_reads(clean):
     group = zarr.open_group(str(clean), mode="r")
     basin = BasinStore.open(clean).read()
     assert basin.done.all()
-    for name in basin_store.ARRAY_NAMES:
+    for name in basin_layout.ARRAY_NAMES:
         theirs = group[name][:]
         assert basin.arrays[name].dtype == theirs.dtype, name
         assert basin.arrays[name].tobytes() == theirs.tobytes(), name
@@ -747,3 +748,27 @@ def test_a_number_written_as_an_int_or_a_float_is_one_sweep(tmp_path):
     report = api.sweep(api.plan_sweep(base.with_overrides(k=400.0), res=16, chunk=8), path,
                        threads=1)
     assert report.tiles_before == report.tiles_total and not report.damaged
+
+
+def test_a_store_of_an_earlier_version_with_the_same_labels_resumes_as_its_own(tmp_path):
+    """A store written by 0.9.0 (the kernels, the ladder and the layout unchanged since:
+    schema.RESUMES) is resumed in its own version: its tiles and the new ones verify, and the
+    store is the one 0.9.0 would have finished; a store of a version not in RESUMES is another
+    sweep."""
+    import dataclasses
+
+    plan = coincli.plan_sweep(coincli.load_preset("paper"), res=8, chunk=4, mirror=False)
+    old = dataclasses.replace(plan, attrs=schema.root_attrs({**plan.attrs, "version": "0.9.0"}))
+    whole, part = tmp_path / "whole.zarr", tmp_path / "part.zarr"
+    coincli.sweep(old, whole, threads=1)
+    stop = threading.Event()
+    coincli.sweep(old, part, threads=1, progress=lambda _: stop.set(), stop=stop)
+    assert 0 < BasinStore.open(part).check().tiles_done < 4
+    report = coincli.sweep(plan, part, threads=1)  # this version resumes it
+    assert report.complete and BasinStore.open(part).check().intact
+    assert BasinStore.open(part).attrs["version"] == "0.9.0"
+    assert_identical(part, whole)
+    older = dataclasses.replace(plan, attrs=schema.root_attrs({**plan.attrs, "version": "0.8.0"}))
+    coincli.sweep(older, tmp_path / "older.zarr", threads=1)
+    with pytest.raises(coincli.ParameterError, match="coincli version = 0.8.0 in the store"):
+        coincli.sweep(plan, tmp_path / "older.zarr", threads=1)

@@ -32,7 +32,8 @@ from test_store import (
 
 import coincli
 from coincli import api
-from coincli.io.basin_store import BasinStore, tile_digest
+from coincli.io.basin_layout import tile_digest
+from coincli.io.basin_store import BasinStore
 from coincli.sweeps import schema
 
 

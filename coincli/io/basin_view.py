@@ -27,6 +27,7 @@ import numpy as np
 
 from ..grid import AXIS_INFO
 from ..params import ParameterError
+from .basin_layout import grid_of
 from .basin_render import (
     NONFINITE,
     STANDING,
@@ -36,7 +37,7 @@ from .basin_render import (
     cell_classes,
     n_range,
 )
-from .basin_store import BasinStore, Tile, grid_of
+from .basin_store import BasinStore, Tile
 from .dataset import Basin
 from .rerun_stream import Destination
 from .zarr_v3 import is_store

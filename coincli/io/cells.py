@@ -29,7 +29,8 @@ from ..params import (
     state_array,
 )
 from ..quantities import parse_quantity
-from .basin_store import BasinStore, Tile, grid_of
+from .basin_layout import grid_of
+from .basin_store import BasinStore, Tile
 
 
 def sweep_axes(attrs: dict) -> tuple[Axis, Axis]:

@@ -1,7 +1,9 @@
 """A basin written out for other tools: NetCDF-4 (the Dataset of :func:`.dataset.to_dataset`,
 every variable and attribute, reopened by ``xarray.open_dataset`` or ``coincli.open_basin``)
 or CSV (one row per cell, header names with units, empty fields where a value is missing).
-Written through a temporary file: an export is complete or absent."""
+Written through a temporary file: an export is complete or absent. A NetCDF file is made in
+memory first and then written by this module: HDF5 (h5py, beneath h5netcdf) does not survive
+a write that fails on a full disk (it crashes the interpreter), a plain write raises OSError."""
 
 from __future__ import annotations
 
@@ -48,7 +50,12 @@ def write_netcdf(basin: Basin, path: Path) -> None:
         raise ParameterError("writing NetCDF needs the package h5py (pip install h5py)") from None
     ds = to_dataset(basin)
     encoding = {name: {**ds[name].encoding, **COMPRESSION} for name in ds.data_vars}
-    ds.to_netcdf(path, engine="h5netcdf", encoding=encoding)
+    # into memory (no path: a memoryview), then one plain write: h5py writing to a full disk
+    # prints tracebacks from its destructors and crashes the interpreter (SIGSEGV), where a
+    # write of ours raises OSError (ENOSPC) and leaves nothing behind (atomic_output)
+    data = ds.to_netcdf(engine="h5netcdf", encoding=encoding)
+    with open(path, "wb") as fh:
+        fh.write(data)
 
 
 def open_export(path: str | os.PathLike):

@@ -3,7 +3,9 @@ viewer, a running viewer, or a viewer in a notebook's cell (:func:`open_stream`)
 given by a user, checked before any work (:class:`Destination`, :func:`check_destination`);
 and a recording made in this process beside the work it shows, which never fails that work
 (:class:`InProcessRecording`). Every recording of the package (a throw, a sweep, a store, an
-estimate, an analysis) goes through here. Rerun is imported inside the functions that need it.
+estimate, an analysis) goes through here, and its file is written by this module, not by Rerun
+(:class:`FileWriter`: a full disk is one OSError). Rerun is imported inside the functions that
+need it.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import contextlib
 import os
 import shutil
 import sys
+import threading
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,10 +36,10 @@ def display_available() -> bool:
 NO_DISPLAY = "no display to open a viewer on (DISPLAY and WAYLAND_DISPLAY are unset)"
 
 
-def _sinks(rr, rec, rrd: Path | None, spawn: bool, connect: str | None, port: int):
+def _sinks(rr, rec, rrd: str | None, spawn: bool, connect: str | None, port: int):
     sinks = []
     if rrd is not None:
-        sinks.append(rr.FileSink(str(rrd)))
+        sinks.append(rr.FileSink(rrd))
     urls = []
     if spawn:
         exe = shutil.which("rerun")
@@ -92,8 +95,11 @@ def open_stream(name: str, *, rrd: Path | None = None, spawn: bool = False,
                            "where there is one, or stream it to a running viewer (connect=...)")
     with contextlib.ExitStack() as outputs:
         file_out = outputs.enter_context(atomic_output(rrd)) if rrd is not None else None
+        pipe = outputs.enter_context(FileWriter(file_out, rrd)) if file_out is not None else None
         rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
-        rec.set_sinks(*_sinks(rr, rec, file_out, spawn, connect, port))
+        rec.set_sinks(*_sinks(rr, rec, pipe.sink_path if pipe else None, spawn, connect, port))
+        if pipe is not None:
+            pipe.opened()  # Rerun holds the pipe's write end now
         rec.send_recording_name(name)
         try:
             yield rec
@@ -102,8 +108,85 @@ def open_stream(name: str, *, rrd: Path | None = None, spawn: bool = False,
                 rec.flush(timeout_sec=flush_timeout)
             finally:
                 rec.disconnect()  # closes the file sink (writes its footer), hangs up on viewers
-        if file_out is not None:
+        if pipe is not None:
+            pipe.close(flush_timeout)  # OSError if the file could not be written (a full disk)
             _check_complete(file_out)
+
+
+class FileWriter:
+    """Rerun's file sink writes a recording into a pipe, and a thread of ours drains it into
+    ``path`` as the data come: a recording's file is written by this module, not by Rerun.
+    Rerun's own writer, on a full disk, prints its errors (ERROR and WARN lines, coloured), and
+    could hang the command; ours keeps reading (so Rerun never waits on the disk) and
+    :meth:`close` raises the OSError the write met. It adds no memory to Rerun's own however
+    long the recording: the pipe holds 64 KiB at most. Reading Rerun's stream out in pieces
+    (``binary_stream``, ``memory_recording``) would not do: each piece ends with a footer of its
+    own, and pieces put together are no valid .rrd (RrdReader fails their checksum).
+
+    Where the system has no /dev/fd (Windows), Rerun writes ``path`` itself. ``name``: the
+    file that errors name (``path`` is its temporary file)."""
+
+    def __init__(self, path: Path, name: Path | None = None):
+        self.path = Path(path)
+        self.name = Path(name or path)
+        self.error: OSError | None = None
+        self._write_end: int | None = None
+        self._thread: threading.Thread | None = None
+        if not Path("/dev/fd").is_dir():
+            self.sink_path = str(self.path)
+            return
+        out = open(self.path, "wb")  # noqa: SIM115 - the thread closes it (fails here at once)
+        read_end, self._write_end = os.pipe()
+        self.sink_path = f"/dev/fd/{self._write_end}"
+        self._thread = threading.Thread(target=self._drain, args=(read_end, out), daemon=True,
+                                        name="coin-rrd-writer")
+        self._thread.start()
+
+    def _drain(self, read_end: int, out) -> None:
+        with os.fdopen(read_end, "rb", buffering=0) as pipe:
+            while data := pipe.read(1 << 16):
+                if self.error is None:  # after a failed write: read on (Rerun never waits)
+                    try:
+                        out.write(data)
+                    except Exception as exc:  # noqa: BLE001 - said by close(), in one line
+                        self.error = self._named(exc)
+        try:
+            out.close()
+        except Exception as exc:  # noqa: BLE001
+            self.error = self.error or self._named(exc)
+
+    def _named(self, exc: Exception) -> OSError:
+        """The error as an OSError naming the recording's file (not its temporary one)."""
+        if isinstance(exc, OSError) and exc.errno:
+            return OSError(exc.errno, exc.strerror, str(self.name))
+        return OSError(f"cannot write '{self.name}': {exc}")
+
+    def opened(self) -> None:
+        """Rerun has opened the pipe (its sinks are set): ours closes, so that the pipe ends
+        when Rerun closes its file."""
+        if self._write_end is not None:
+            os.close(self._write_end)
+            self._write_end = None
+
+    def close(self, timeout: float) -> None:
+        """Wait for the file to be written whole (Rerun has closed its sink); OSError if it
+        could not be."""
+        self.opened()
+        if self._thread is not None:
+            self._thread.join(timeout)
+            if self._thread.is_alive():
+                raise OSError(f"the recording was not written within {timeout:g} s")
+        if self.error is not None:
+            raise self.error
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if exc[0] is not None:  # the recording failed: the pipe ends, the thread with it
+            with contextlib.suppress(OSError):
+                self.close(5.0)
+        return False
 
 
 NOTEBOOK_EXTRA = 'pip install "coincli[notebook]"'
@@ -274,6 +357,6 @@ class InProcessRecording:
 
 
 __all__ = ["APPLICATION_ID", "LIVE_ELSEWHERE", "NO_DISPLAY", "NOTEBOOK_EXTRA", "THROW_ELSEWHERE",
-           "Destination", "InProcessRecording", "NotebookMissing", "check_destination",
-           "display_available", "in_notebook", "notebook_viewer", "open_stream",
-           "require_notebook", "viewer_class"]
+           "Destination", "FileWriter", "InProcessRecording", "NotebookMissing",
+           "check_destination", "display_available", "in_notebook", "notebook_viewer",
+           "open_stream", "require_notebook", "viewer_class"]

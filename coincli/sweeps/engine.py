@@ -35,18 +35,28 @@ from ..grid import SweepSpec, compute_tile, with_mirror
 from ..integrators.batch import new_control
 from .claims import TileQueue
 from .executors import Dask, SchedulerLost, Threads, hard_stop
-from .plan import SweepEstimate, SweepPlan, SweepTooLong, estimate_sweep, load_kernels
+from .plan import (
+    SweepEstimate,
+    SweepPlan,
+    SweepTooLong,
+    check_tile_memory,
+    estimate_sweep,
+    load_kernels,
+)
 from .schema import parameters_digest
 
 
 @dataclass(frozen=True)
 class Prepared:
     """What a target holds when a sweep starts: the tiles done (bool per tile), those found
-    damaged (tile -> why: recomputed now) and the metadata files rewritten."""
+    damaged (tile -> why: recomputed now), the metadata files rewritten, and the digest of the
+    parameters its tiles bind (a store of an earlier version that this one resumes keeps its
+    own: :data:`coincli.sweeps.schema.RESUMES`)."""
 
     done: np.ndarray
     damaged: dict = field(default_factory=dict)
     repaired: tuple = ()
+    parameters: bytes | None = None  # the digest its tiles bind (None: the plan's)
 
 
 @dataclass(frozen=True)
@@ -190,6 +200,9 @@ def run_sweep(plan: SweepPlan, target, executor: Threads | Dask, *, overwrite: b
     check_progress(progress)
     started = time.time()
     grid, spec = plan.grid, plan.spec
+    # the tiles computed at once on this machine (a cluster's workers: each its own)
+    check_tile_memory(grid, 1 if executor.dask and executor.scheduler else
+                      max(1, executor.workers))
     want_estimate = max_seconds is not None or on_start is not None
     fresh = overwrite or not target.exists()
     estimate = _estimate(plan, executor, None, max_seconds) if fresh and want_estimate else None
@@ -211,63 +224,86 @@ def run_sweep(plan: SweepPlan, target, executor: Threads | Dask, *, overwrite: b
         return SweepReport(path, total, total, total, 0, 0.0, executor.mode, executor.workers,
                            False, damaged=damaged, estimate=estimate)
 
-    def is_done(tile) -> bool:  # by another process, since the target was prepared
-        return all(target.tile_done(u) if u in prepared.damaged  # check the data
-                   else target.has_digest(u) for u in grid.task_tiles(tile))
+    def finished(tile) -> bool:  # written since the target was prepared, here or elsewhere
+        return target.tile_done(tile) if tile in prepared.damaged else target.has_digest(tile)
+
+    def is_done(task) -> bool:  # by another process, since the target was prepared
+        return all(finished(u) for u in grid.task_tiles(task))
 
     claims = target.claims()
     queue = TileQueue(todo, claims, is_done=is_done if claims is not None else None)
     task = partial(run_tile_task, target.shared() if executor.dask else target, spec,
-                   parameters_digest(plan.attrs))
+                   prepared.parameters or parameters_digest(plan.attrs))
     if not executor.dask:
         load_kernels(spec)
     runner = executor.run(task, queue, stop, name=lambda t: f"basin-tile-{t[0]}-{t[1]}")
-    wall0 = time.perf_counter()
-    interrupted = False
-    lost = None
-    computed = cells = mirrored = 0
-    kernel_seconds = store_seconds = 0.0
-
-    def tiles_elsewhere() -> int:
-        return sum(len(grid.task_tiles(t)) for t in queue.done_elsewhere)
-
     try:
-        for done in runner:
-            kernel_seconds += done.compute_seconds
-            store_seconds += done.write_seconds
-            if done.written:
-                computed += done.tiles
-                cells += done.cells
-                mirrored += done.cells - grid.tile_cells(done.tile)
-            if progress is not None:
-                progress(SweepProgress(before + computed + tiles_elsewhere(), total,
-                                       cells, cells_todo, time.perf_counter() - wall0,
-                                       grid.task_tiles(done.tile) if done.written else ()))
-    except KeyboardInterrupt:
-        interrupted = True
-        hard_stop(runner)  # the tiles in flight stop now, unwritten
-    except SchedulerLost as exc:  # raised once the run is recorded: the target keeps its tiles
-        lost = exc
+        work = _collect(runner, grid, queue, before, total, cells_todo, progress)
     finally:
         if claims is not None:
             claims.close()
-    interrupted = interrupted or not queue.finished or (stop is not None and stop.is_set())
-    wall = time.perf_counter() - wall0
-    elsewhere = tiles_elsewhere()
-    n_done = total if not interrupted else before + computed + elsewhere
+    interrupted = work.interrupted or not queue.finished or (stop is not None and stop.is_set())
+    elsewhere = sum(len(grid.task_tiles(t)) for t in queue.done_elsewhere)
+    # interrupted: what the target holds, also the tiles a task cut off wrote before it was
+    # (a tile's mirror image, written after it) and those other processes finished
+    n_done = total if not interrupted else before + sum(
+        finished(u) for t in todo for u in grid.task_tiles(t))
     interrupted = interrupted and n_done < total  # a stop that came after the last tile
     try:
-        target.record_run(run_record(started, wall, computed, cells, executor.mode,
-                                     executor.workers, interrupted,
-                                     kernel_seconds=kernel_seconds,
-                                     store_seconds=store_seconds))
+        target.record_run(run_record(started, work.wall, work.computed, work.cells,
+                                     executor.mode, executor.workers, interrupted,
+                                     kernel_seconds=work.kernel_seconds,
+                                     store_seconds=work.store_seconds))
     except OSError:
         pass  # a cost record lost is no reason to fail a sweep
-    if lost is not None:
-        raise lost
-    return SweepReport(path, total, n_done, before, cells, wall, executor.mode,
-                       executor.workers, interrupted, computed, elsewhere, damaged, estimate,
-                       kernel_seconds, store_seconds, mirrored)
+    if work.lost is not None:
+        raise work.lost
+    return SweepReport(path, total, n_done, before, work.cells, work.wall, executor.mode,
+                       executor.workers, interrupted, work.computed, elsewhere, damaged,
+                       estimate, work.kernel_seconds, work.store_seconds, work.mirrored)
+
+
+@dataclass
+class _Work:
+    """What one run's tiles did, as they came in."""
+
+    computed: int = 0  # tiles written (mirror images included)
+    cells: int = 0
+    mirrored: int = 0  # of ``cells``, those written as mirror images
+    kernel_seconds: float = 0.0
+    store_seconds: float = 0.0
+    wall: float = 0.0
+    interrupted: bool = False  # by KeyboardInterrupt: the tiles in flight stopped unwritten
+    lost: SchedulerLost | None = None
+
+
+def _collect(runner, grid, queue, before: int, total: int, cells_todo: int,
+             progress) -> _Work:
+    """Take each finished tile of ``runner``, count it and report the progress; a
+    KeyboardInterrupt stops the tiles in flight at once, a lost Dask scheduler is kept to be
+    raised once the run is recorded (the target keeps its tiles)."""
+    work = _Work()
+    wall0 = time.perf_counter()
+    try:
+        for done in runner:
+            work.kernel_seconds += done.compute_seconds
+            work.store_seconds += done.write_seconds
+            if done.written:
+                work.computed += done.tiles
+                work.cells += done.cells
+                work.mirrored += done.cells - grid.tile_cells(done.tile)
+            if progress is not None:
+                elsewhere = sum(len(grid.task_tiles(t)) for t in queue.done_elsewhere)
+                progress(SweepProgress(before + work.computed + elsewhere, total, work.cells,
+                                       cells_todo, time.perf_counter() - wall0,
+                                       grid.task_tiles(done.tile) if done.written else ()))
+    except KeyboardInterrupt:
+        work.interrupted = True
+        hard_stop(runner)  # the tiles in flight stop now, unwritten
+    except SchedulerLost as exc:
+        work.lost = exc
+    work.wall = time.perf_counter() - wall0
+    return work
 
 
 __all__ = ["Prepared", "SweepProgress", "SweepReport", "SweepStart", "TileDone",

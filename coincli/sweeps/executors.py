@@ -20,6 +20,8 @@ of the package, which every worker imports: install coincli on each machine of t
 from __future__ import annotations
 
 import contextlib
+import logging
+import math
 import os
 import signal
 import time
@@ -42,9 +44,10 @@ def usable_cores() -> int:
         return os.cpu_count() or 1
 
 
-def check_where(threads, workers, scheduler) -> None:
+def check_where(threads, workers, scheduler, worker_timeout=None) -> None:
     """Refuse a contradictory or impossible choice of where to run (threads, a local Dask
-    cluster of workers, or an existing scheduler)."""
+    cluster of workers, or an existing scheduler; how long a Dask run waits without a
+    worker)."""
     if workers is not None and scheduler is not None:
         raise ParameterError("give workers (a local cluster) or scheduler (an existing "
                              "one), not both", parameters=("workers", "scheduler"))
@@ -59,15 +62,25 @@ def check_where(threads, workers, scheduler) -> None:
     if scheduler is not None and "://" not in scheduler:
         raise ParameterError(f"scheduler '{scheduler}' is not an address like "
                              "tcp://HOST:PORT", parameters=("scheduler",))
+    if worker_timeout is not None:
+        if workers is None and scheduler is None:
+            raise ParameterError("worker_timeout is for a Dask run (workers or scheduler)",
+                                 parameters=("worker_timeout",))
+        if (isinstance(worker_timeout, bool) or not isinstance(worker_timeout, int | float)
+                or not 0 < worker_timeout < math.inf):
+            raise ParameterError(f"worker_timeout must be a number of seconds > 0, got "
+                                 f"{worker_timeout!r}", parameters=("worker_timeout",))
 
 
 def executor_for(threads: int | None = None, workers: int | None = None,
-                 scheduler: str | None = None) -> Threads | Dask:
-    """The executor of a run's options (checked): Dask for ``workers`` or ``scheduler``, else
-    ``threads`` threads (default one per core)."""
-    check_where(threads, workers, scheduler)
+                 scheduler: str | None = None,
+                 worker_timeout: float | None = None) -> Threads | Dask:
+    """The executor of a run's options (checked): Dask for ``workers`` or ``scheduler``
+    (``worker_timeout``: see :class:`Dask`), else ``threads`` threads (default one per
+    core)."""
+    check_where(threads, workers, scheduler, worker_timeout)
     if workers is not None or scheduler is not None:
-        return Dask(scheduler=scheduler, workers=workers)
+        return Dask(scheduler=scheduler, workers=workers, worker_timeout=worker_timeout)
     return Threads(threads)
 
 
@@ -213,26 +226,52 @@ class WorkersLost(SchedulerLost):
         RuntimeError.__init__(self, f"the Dask workers kept dying on a task: {reason}")
 
 
+class NoWorkers(SchedulerLost):
+    """The Dask cluster has had no worker for the run's ``worker_timeout``: its workers were
+    lost (killed, out of memory, their machines gone) and none joined. What was finished is in
+    the store, as after a lost scheduler."""
+
+    def __init__(self, address: str | None, seconds: float):
+        self.address = address
+        self.reason = f"no worker for {seconds:g} s"
+        where = f"at {address}" if address else "of the local cluster"
+        RuntimeError.__init__(self, f"the Dask cluster {where} has had no worker for "
+                                    f"{seconds:g} s")
+
+
 # A call to the scheduler that meets it gone retries connecting for the client's whole
 # timeout (20 s), while the client's own stream notices the loss at once: calls are cut short
 # here, and the loss is then reported from the client's status.
 SCHEDULER_CALL_TIMEOUT = 2.0  # s
+# A cluster without a worker this long is said to be waited for (a local cluster's nanny
+# restarts a worker that died within a second or two)
+NO_WORKER_NOTICE = 5.0  # s
+log = logging.getLogger("coincli.dask")
 
 
 class Dask:
     """Items as Dask distributed tasks: on the cluster at ``scheduler`` (tcp://host:port), or on
     a LocalCluster of ``workers`` processes with one thread each. This process (the client)
     takes each item from the queue (claiming it) before submitting it; a task's result comes
-    back to it (a tile's task writes the tile itself and returns only its cost)."""
+    back to it (a tile's task writes the tile itself and returns only its cost).
+
+    A cluster left without a worker (the last one lost) is waited for: after
+    :data:`NO_WORKER_NOTICE` seconds, a warning on the logger ``coincli.dask`` says so (and
+    another when a worker joins); with ``worker_timeout`` (seconds), the run stops after that
+    long without a worker (:class:`NoWorkers`), else it waits until one joins."""
 
     mode = "dask"
     dask = True
 
-    def __init__(self, scheduler: str | None = None, workers: int | None = None):
-        check_where(None, workers, scheduler)
+    def __init__(self, scheduler: str | None = None, workers: int | None = None,
+                 worker_timeout: float | None = None):
+        check_where(None, workers, scheduler, worker_timeout)
         self.scheduler = scheduler
         self.local_workers = workers
+        self.worker_timeout = worker_timeout
         self.seen: list[int] = []  # the cluster's workers, each time it was looked at
+        self._alone_since: float | None = None  # when the cluster was last seen with workers
+        self._said = False  # whether the wait for a worker was said
 
     @property
     def workers(self) -> int:
@@ -310,7 +349,32 @@ class Dask:
                 close_dask(client, cluster, lost)
 
     def _window(self, client, previous: int) -> int:
-        return cluster_window(client, self.seen.append, previous)
+        return cluster_window(client, self._count_workers, previous)
+
+    def _count_workers(self, n: int) -> None:
+        """Note the cluster's workers now: say a wait for one, or stop it (NoWorkers)."""
+        self.seen.append(n)
+        now = time.monotonic()
+        if n:
+            if self._said:
+                log.warning("a Dask worker joined the cluster %s: the run goes on", self._where)
+            self._alone_since, self._said = None, False
+            return
+        if self._alone_since is None:
+            self._alone_since = now
+        waited = now - self._alone_since
+        if self.worker_timeout is not None and waited >= self.worker_timeout:
+            raise NoWorkers(self.scheduler, self.worker_timeout)
+        if waited >= NO_WORKER_NOTICE and not self._said:
+            self._said = True
+            limit = (f"stops if none has joined after {self.worker_timeout:g} s"
+                     if self.worker_timeout is not None else "waits without a time-out")
+            log.warning("waiting for a Dask worker: the cluster %s has had none for %.0f s; "
+                        "the run goes on when one joins, and %s", self._where, waited, limit)
+
+    @property
+    def _where(self) -> str:
+        return f"at {self.scheduler}" if self.scheduler else "on this machine"
 
 
 def cluster_window(client, on_workers: Callable[[int], None] | None = None,
@@ -426,5 +490,5 @@ def open_dask(scheduler: str | None, workers: int | None):
     return Client(cluster), cluster
 
 
-__all__ = ["Dask", "ItemQueue", "POLL", "SchedulerLost", "Threads", "WorkersLost", "check_where",
-           "cluster_window", "executor_for", "hard_stop", "usable_cores"]
+__all__ = ["Dask", "ItemQueue", "NoWorkers", "POLL", "SchedulerLost", "Threads", "WorkersLost",
+           "check_where", "cluster_window", "executor_for", "hard_stop", "usable_cores"]

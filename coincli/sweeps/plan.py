@@ -5,6 +5,7 @@ should take (:func:`estimate_sweep`, from a pilot of a few dozen cells timed on 
 from __future__ import annotations
 
 import math
+import os
 import threading
 import time
 from dataclasses import dataclass
@@ -72,9 +73,55 @@ def plan_sweep(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, force: boo
         for value in (axis.lo, axis.hi):
             validate(scene.with_overrides(**{axis.name: value}))
     _check_starts(scene, grid)
+    check_tile_memory(grid)
     method = check_step(scene, force=force)
     spec = make_spec(scene, grid)
     return SweepPlan(scene, spec, basin_attrs(scene, method, spec))
+
+
+# The memory a tile's work takes, per cell: its initial states (6 float64), its labels (17
+# bytes a cell over the six arrays) and their mirror image, and an array being encoded for
+# writing (an int64 and its bytes). A tile of 512 x 512 cells takes 26 MB.
+TILE_BYTES_PER_CELL = 48 + 17 + 17 + 16
+
+
+def available_memory() -> int | None:
+    """Bytes of memory a new allocation can take here without swapping: Linux's MemAvailable
+    (/proc/meminfo), elsewhere the free pages; None where neither is known."""
+    try:
+        with open("/proc/meminfo") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _size(n_bytes: float) -> str:
+    return f"{n_bytes / 2**30:.1f} GiB" if n_bytes >= 2**30 else f"{n_bytes / 2**20:.0f} MiB"
+
+
+def check_tile_memory(grid: Grid, at_once: int = 1) -> None:
+    """ParameterError naming ``chunk`` unless ``at_once`` tiles of ``grid`` (one a thread or a
+    worker of this machine) fit in the memory available now: checked before anything is
+    allocated, where a tile too large would end in numpy's MemoryError."""
+    available = available_memory()
+    cells = math.prod(grid.chunk)
+    need = at_once * cells * TILE_BYTES_PER_CELL
+    if available is None or need <= available:
+        return
+    side = int(math.isqrt(max(available // (at_once * TILE_BYTES_PER_CELL), 1)))
+    side = side // 64 * 64 or side
+    tiles = (f"{at_once} tiles at once (one a thread or worker) of {cells:,} cells each need"
+             if at_once > 1 else f"a tile of {cells:,} cells needs")
+    raise ParameterError(f"chunk {'x'.join(map(str, grid.chunk))}: {tiles} about "
+                         f"{_size(need)} of memory, and this machine has {_size(available)} "
+                         f"available; give a smaller chunk (at most {side})",
+                         parameters=("chunk",))
 
 
 def _check_starts(scene: Scene, grid: Grid) -> None:
@@ -200,4 +247,5 @@ def estimate_sweep(plan: SweepPlan, threads: int | None = None, *, workers: int 
 
 
 __all__ = ["PILOT_CELLS", "PILOT_SECONDS", "SweepEstimate", "SweepPlan", "SweepTooLong",
-           "estimate_sweep", "format_duration", "load_kernels", "pilot_cells", "plan_sweep"]
+           "TILE_BYTES_PER_CELL", "available_memory", "check_tile_memory", "estimate_sweep",
+           "format_duration", "load_kernels", "pilot_cells", "plan_sweep"]

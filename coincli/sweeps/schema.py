@@ -20,6 +20,19 @@ FORMAT = 5  # 3: checksummed chunks, done = a digest of each tile; 4: ... and of
 # 5: certainty 3 = undecided (before, undecided labels were 0, uncertain, like chaotic ones)
 # The attributes the sweep owns: what determines the labels (the parameters digest binds them)
 COMPARED_ATTRS = ("version", "parameters", "sweep", "method")
+# Earlier versions whose stores hold the labels this one computes (the kernels, the ladder and
+# the store's layout unchanged since): a store of one of them is resumed as its own sweep, in
+# its own version (its tiles keep binding its parameters digest).
+RESUMES = ("0.9.0",)
+
+
+def resumable_as(stored: dict, wanted: dict) -> dict | None:
+    """``wanted`` in the version of the ``stored`` attributes, if that is all that tells them
+    apart and that version's stores are :data:`RESUMES`'s; else None."""
+    version = stored.get("version")
+    if version == wanted.get("version") or version not in RESUMES:
+        return None
+    return {**wanted, "version": version}
 MARK = "coin_basin"  # the root attribute that makes a group a basin store
 COPY = "sweep_attributes"  # the copy of COMPARED_ATTRS in the done array's attributes
 
@@ -102,5 +115,5 @@ def tile_dims(grid: Grid) -> tuple[str, str]:
 
 
 __all__ = ["COMPARED_ATTRS", "COORD_NOTE", "COPY", "DIGEST_NOTE", "DONE_ATTRS", "DTYPES", "FILLS",
-           "FORMAT", "MARK", "VARIABLES", "basin_attrs", "done_attrs", "owned",
-           "parameters_digest", "root_attrs", "tile_dims"]
+           "FORMAT", "MARK", "RESUMES", "VARIABLES", "basin_attrs", "done_attrs", "owned",
+           "parameters_digest", "resumable_as", "root_attrs", "tile_dims"]

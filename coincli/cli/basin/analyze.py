@@ -28,7 +28,7 @@ from ..text import (
     print_table,
     say,
 )
-from .group import basin_app
+from .group import basin_app, metadata_note
 
 
 def _num(x, fmt: str = ".3f") -> str:
@@ -112,44 +112,17 @@ def analyze_command(
         if figure is not None:
             check_figure_path(figure)
             check_rrd_path(figure)  # a writable file path
-        basin = BasinStore.open(path).read()
+        store = BasinStore.open(path)
+        basin = store.read()
         api.check_where(threads, None, None)
+    metadata_note(store)
     where_to, no_viewer = recording.destination(rrd, spawn, connect)
-    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
-
-    from ..progress import Bars
-
-    progress = Bars(TextColumn("[bold]analyze[/] {task.description}"), BarColumn(),
-                        TextColumn("{task.percentage:>3.0f} %"), TimeElapsedColumn(),
-                        console=err_console, disable=quiet, transient=True)
-    tasks: dict = {}
-
-    def show(stage, done, total):
-        if stage not in tasks:
-            text = ("measures on the map" if stage == "map"
-                    else "perturbation method (simulator)")
-            tasks[stage] = progress.add_task(text, total=total)
-        progress.update(tasks[stage], completed=done, total=total)
-
     n_points = DEFAULT_POINTS if points is None else points
     if n_points:
         compile_first(quiet)
-    recorder = None
-    if where_to is not None:
-        from ...io.analysis_view import AnalysisRecorder  # Rerun's code only when asked for
-
-        recorder = AnalysisRecorder(basin, where_to, bands=bands, eps=eps_list)
-    try:  # Ctrl-C: the simulator's threads stop within a chunk of points, nothing is written
-        with user_errors(), progress, recorder or contextlib.nullcontext():
-            result = api.analyze(basin, box=box, bands=bands, points=n_points, eps=eps_list,
-                                 seed=seed, threads=threads, radius=radius, balls=balls,
-                                 max_dilation=max_dilation, progress=show,
-                                 on_band=None if recorder is None else recorder.band)
-            if recorder is not None:
-                recorder.result(result)
-    except KeyboardInterrupt:
-        err_console.print("[yellow]interrupted:[/] no result")
-        raise typer.Exit(code=130) from None
+    result, recorder = _run(basin, where_to, quiet, box=box, bands=bands, points=n_points,
+                            eps=eps_list, seed=seed, threads=threads, radius=radius,
+                            balls=balls, max_dilation=max_dilation)
     if figure is not None:
         with user_errors():
             api.render_analysis(result, figure)
@@ -164,6 +137,46 @@ def analyze_command(
         if recorder is not None and recorder.error is None:
             say(console, recording.recorded(where_to))
     recording.finish(recorder, no_viewer)
+
+
+def _run(basin, where_to, quiet: bool, **options):
+    """The analysis with its progress bars and its live recording: (its result, the recorder
+    or None). Ctrl-C: the simulator's threads stop within a chunk of points, nothing is
+    written, exit 130."""
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
+
+    from ... import api
+    from ..progress import Bars
+
+    progress = Bars(TextColumn("[bold]analyze[/] {task.description}"), BarColumn(),
+                    TextColumn("{task.percentage:>3.0f} %"), TimeElapsedColumn(),
+                    console=err_console, disable=quiet, transient=True)
+    tasks: dict = {}
+
+    def show(stage, done, total):
+        if stage not in tasks:
+            text = ("measures on the map" if stage == "map"
+                    else "perturbation method (simulator)")
+            tasks[stage] = progress.add_task(text, total=total)
+        progress.update(tasks[stage], completed=done, total=total)
+
+    recorder = None
+    if where_to is not None:
+        from ...io.analysis_view import AnalysisRecorder  # Rerun's code only when asked for
+
+        recorder = AnalysisRecorder(basin, where_to, bands=options["bands"],
+                                    eps=options["eps"])
+    try:
+        with user_errors(), progress, recorder or contextlib.nullcontext():
+            result = api.analyze(basin, progress=show,
+                                 on_band=None if recorder is None else recorder.band,
+                                 **options)
+            if recorder is not None:
+                recorder.result(result)
+    except KeyboardInterrupt:
+        err_console.print("[yellow]interrupted:[/] no result")
+        raise typer.Exit(code=130) from None
+    return result, recorder
 
 
 def _print_analysis(path: Path, result, data: dict) -> None:
@@ -205,43 +218,7 @@ def _print_analysis(path: Path, result, data: dict) -> None:
 
     p = w.perturbation
     if p is not None:
-        conf = int(round(100 * opts.confidence))
-        exp = Table(show_edge=False, pad_edge=False)
-        for col in (head, "alpha", f"{conf} % interval", "D", "local alpha", "left out",
-                    "grid"):
-            exp.add_column(col, justify="left" if col == head else "right", no_wrap=True)
-        impossible = False  # a grid alpha outside 0 to 2 (it would make D < 0 or D > 2)
-
-        def grid_alpha(r) -> str:
-            nonlocal impossible
-            alpha = r.grid_exponent.alpha if r.grid_exponent else None
-            if alpha is not None and math.isfinite(alpha) and not 0.0 <= alpha <= 2.0:
-                impossible = True
-                return f"{alpha:.2f}*"
-            return _num(alpha, ".2f")
-
-        for r, d in zip(regions, [data, *data["bands"]], strict=True):
-            x = r.exponent
-            exp.add_row("whole map" if r is w else _span(r), _num(r.alpha, ".2f"),
-                        "-" if x is None or not math.isfinite(x.alpha_low)
-                        else f"{x.alpha_low:.2f} to {x.alpha_high:.2f}",
-                        _num(None if x is None else x.boundary_dimension, ".2f"),
-                        _local(d["perturbation"]["local_exponents"] if d["perturbation"]
-                               else []),
-                        percent(r.uncertain_fraction), grid_alpha(r),
-                        style="bold" if r is w else None)
-        print_table(console, exp, f"Uncertainty exponent: perturbation method, "
-                                  f"{p.n_points:,} points, eps {p.eps[0]:.0e} to "
-                                  f"{p.eps[-1]:.0e}")
-        say(console, "[dim]alpha: slope of log f(eps) against log eps, f the fraction of "
-                     "points whose certain label changes under a perturbation eps (relative to "
-                     f"each axis's range; the grid spacing is {1 / (ax0['n'] - 1):.1e}); "
-                     "D = 2 - alpha. local alpha: the slope between the two smallest and "
-                     "between the two largest eps at which some label changes. left out: "
-                     "points whose label (or a perturbed one) was not certain. grid: alpha by "
-                     "box counting on the map (Attractors.jl's estimator), for comparison"
-                     + ("; * outside 0 to 2: no dimension follows, the map does not resolve "
-                        "the scaling there" if impossible else "") + ".[/dim]")
+        _print_exponents(result, data, regions, head)
     wada = "; ".join(f"{'whole map' if r is w else _span(r)}: "
                      f"{'yes' if r.wada.is_wada else 'no'}" for r in regions)
     say(console, f"Wada (merging method, up to {opts.max_dilation} cells; {w.wada.n_classes} "
@@ -252,3 +229,47 @@ def _print_analysis(path: Path, result, data: dict) -> None:
            else f" (no perturbation method: {command('--points', 0)})")
     say(console, f"took {s['total']:.1f} s wall, {c['total']:.1f} CPU s: map measures "
                  f"{s['map']:.1f} s{sim}")
+
+
+def _print_exponents(result, data: dict, regions: list, head: str) -> None:
+    """The table of the uncertainty exponent, region by region, and what it means."""
+    ax0 = result.axes[0]
+    opts = result.options
+    w, p = result.whole, result.whole.perturbation
+    conf = int(round(100 * opts.confidence))
+    exp = Table(show_edge=False, pad_edge=False)
+    for col in (head, "alpha", f"{conf} % interval", "D", "local alpha", "left out",
+                "grid"):
+        exp.add_column(col, justify="left" if col == head else "right", no_wrap=True)
+    impossible = False  # a grid alpha outside 0 to 2 (it would make D < 0 or D > 2)
+
+    def grid_alpha(r) -> str:
+        nonlocal impossible
+        alpha = r.grid_exponent.alpha if r.grid_exponent else None
+        if alpha is not None and math.isfinite(alpha) and not 0.0 <= alpha <= 2.0:
+            impossible = True
+            return f"{alpha:.2f}*"
+        return _num(alpha, ".2f")
+
+    for r, d in zip(regions, [data, *data["bands"]], strict=True):
+        x = r.exponent
+        exp.add_row("whole map" if r is w else _span(r), _num(r.alpha, ".2f"),
+                    "-" if x is None or not math.isfinite(x.alpha_low)
+                    else f"{x.alpha_low:.2f} to {x.alpha_high:.2f}",
+                    _num(None if x is None else x.boundary_dimension, ".2f"),
+                    _local(d["perturbation"]["local_exponents"] if d["perturbation"]
+                           else []),
+                    percent(r.uncertain_fraction), grid_alpha(r),
+                    style="bold" if r is w else None)
+    print_table(console, exp, f"Uncertainty exponent: perturbation method, "
+                              f"{p.n_points:,} points, eps {p.eps[0]:.0e} to "
+                              f"{p.eps[-1]:.0e}")
+    say(console, "[dim]alpha: slope of log f(eps) against log eps, f the fraction of "
+                 "points whose certain label changes under a perturbation eps (relative to "
+                 f"each axis's range; the grid spacing is {1 / (ax0['n'] - 1):.1e}); "
+                 "D = 2 - alpha. local alpha: the slope between the two smallest and "
+                 "between the two largest eps at which some label changes. left out: "
+                 "points whose label (or a perturbed one) was not certain. grid: alpha by "
+                 "box counting on the map (Attractors.jl's estimator), for comparison"
+                 + ("; * outside 0 to 2: no dimension follows, the map does not resolve "
+                    "the scaling there" if impossible else "") + ".[/dim]")

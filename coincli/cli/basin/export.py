@@ -9,7 +9,7 @@ from rich.markup import escape
 
 from ..common import console, err_console, fail, user_errors
 from ..text import counted, say
-from .group import basin_app, damaged_note
+from .group import basin_app, damaged_note, metadata_note
 
 
 @basin_app.command("export")
@@ -32,7 +32,8 @@ def export_command(
 
     with user_errors():
         check_export_path(out)
-        basin = BasinStore.open(path).read()
+        store = BasinStore.open(path)
+        basin = store.read()
         check_writable(out, what="export")  # before the work
         try:
             api.export_basin(basin, out)
@@ -45,4 +46,5 @@ def export_command(
         if done < total:
             say(err_console, f"[yellow]partial:[/] {done} of {counted(total, 'tile')} "
                              "computed; the cells of the others are exported as not computed")
+        metadata_note(store)
         damaged_note(path, basin.damaged, "exported as not computed")

@@ -6,7 +6,7 @@ import typer
 from typer.core import TyperGroup
 
 from ..app import app, help_only
-from ..common import err_console
+from ..common import err_console, warn
 from ..text import counted, say
 
 
@@ -42,6 +42,28 @@ def tile_list(tiles, most: int = 8) -> str:
     """'(0, 1), (2, 3) and 5 more'."""
     text = ", ".join(f"({i}, {j})" for i, j in list(tiles)[:most])
     return text + (f" and {len(tiles) - most} more" if len(tiles) > most else "")
+
+
+def metadata_note(store) -> None:
+    """One warning line when the metadata of ``store`` (a BasinStore, opened) are damaged, as
+    `coin basin verify` finds them: a copy of the parameters changed or lost, or a metadata
+    file that differs from what they give. The store is read with the parameters its tiles (or
+    its other copies) prove; a resume rewrites the rest."""
+    files = store.damaged_metadata()
+    if not store.problems and not files:
+        return
+    what = store.problems[0] if store.problems else (
+        f"{counted(len(files), 'metadata file')} {'differs' if len(files) == 1 else 'differ'} "
+        "from its parameters: " + ", ".join(files[:3]) + (" ..." if len(files) > 3 else ""))
+    more = len(store.problems) - 1 if store.problems else 0
+    warn(f"{store.path}: damaged metadata ({what}{f', and {more} more' if more else ''}); "
+         f"read with the parameters {READ_WITH[store.view.proof]}. `coin basin verify` lists "
+         "the damage; the sweep command, run again, rewrites it")
+
+
+# how the parameters a store is read with are known (BasinStore.view.proof)
+READ_WITH = {"tiles": "its computed tiles prove", "digest": "of the copy its digest confirms",
+             "agree": "its copies agree on"}
 
 
 def damaged_note(path, damaged, treated: str) -> None:

@@ -32,7 +32,7 @@ from ..recording import (
     record_throw,
 )
 from ..text import LABEL_WIDTH, NBSP, command, print_rows, say
-from .group import basin_app
+from .group import basin_app, metadata_note
 
 CELL = "Which cell"
 
@@ -175,7 +175,8 @@ def inspect_command(
                            else (None, False, None))
     values = dict(x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
     with user_errors():
-        attrs = BasinStore.open(path).attrs
+        store = BasinStore.open(path)
+        attrs = store.attrs
         index = locate(attrs, cell=cell, **{k: v for k, v in values.items() if v is not None})
         attrs, stored = read_stored_cell(path, index)
         scene = cell_scene(attrs, index)
@@ -216,25 +217,8 @@ def inspect_command(
             "command": " ".join(words), "parameters": scene.to_dict(),
             "rrd": str(info.rrd) if info is not None and info.rrd is not None else None})
     else:
-        where = ", ".join(f"{d} = {state[d]:.6g}" for d in dims)
-        say(console, f"[bold]coin basin inspect[/] {escape(str(path))}  "
-                     f"cell{NBSP}({index[0]},{NBSP}{index[1]}): "
-                     f"{where}")
-        if stored.computed:
-            rung = (f" at {ladder.rung_text(stored.rung)} (rung {stored.rung})"
-                    if stored.rung is not None else "")
-            settle = ("" if math.isnan(stored.settle_time)
-                      else f", decided at t = {stored.settle_time:.6g} s")
-            rows = [("stored", f"{_label(stored.quarter_turns, stored.certainty, stored.status)}"
-                               f"{rung}{settle}")]
-        else:
-            rows = [("stored", "not computed yet (its tile is not done): rerun the sweep")]
-        verdict = ("the same" if matches else "[red]differs from the stored one[/]"
-                   if stored.computed else "nothing stored to compare")
-        rows.append(("replayed", f"{_label(run.quarter_turns, run.certainty, run.status)} at "
-                                 f"{run.rungs[-1].setting} (rung {replay_rung}): {verdict}"))
-        rows.append(("reproduce", command(*words)))
-        print_rows(console, rows, LABEL_WIDTH)
+        _print_cell(path, index, state, dims, stored, run, ladder, matches, words)
+        metadata_note(store)
         if not same_ladder:
             say(err_console, "[yellow]note:[/] the store records another verification ladder "
                              "than this version climbs (a store of another version)")
@@ -251,3 +235,29 @@ def inspect_command(
         raise typer.Exit(code=1)
     if no_viewer:
         raise typer.Exit(code=1)
+
+
+def _print_cell(path, index, state: dict, dims, stored, run, ladder, matches: bool,
+                words) -> None:
+    """What the store holds for the cell, what its replay gives, and the command that
+    reproduces it."""
+    replay_rung = len(run.rungs) - 1
+    where = ", ".join(f"{d} = {state[d]:.6g}" for d in dims)
+    say(console, f"[bold]coin basin inspect[/] {escape(str(path))}  "
+                 f"cell{NBSP}({index[0]},{NBSP}{index[1]}): "
+                 f"{where}")
+    if stored.computed:
+        rung = (f" at {ladder.rung_text(stored.rung)} (rung {stored.rung})"
+                if stored.rung is not None else "")
+        settle = ("" if math.isnan(stored.settle_time)
+                  else f", decided at t = {stored.settle_time:.6g} s")
+        rows = [("stored", f"{_label(stored.quarter_turns, stored.certainty, stored.status)}"
+                           f"{rung}{settle}")]
+    else:
+        rows = [("stored", "not computed yet (its tile is not done): rerun the sweep")]
+    verdict = ("the same" if matches else "[red]differs from the stored one[/]"
+               if stored.computed else "nothing stored to compare")
+    rows.append(("replayed", f"{_label(run.quarter_turns, run.certainty, run.status)} at "
+                             f"{run.rungs[-1].setting} (rung {replay_rung}): {verdict}"))
+    rows.append(("reproduce", command(*words)))
+    print_rows(console, rows, LABEL_WIDTH)

@@ -21,7 +21,7 @@ from ..text import (
     counted,
     say,
 )
-from .group import basin_app, damaged_note
+from .group import basin_app, damaged_note, metadata_note
 
 
 def _mark(text: str) -> tuple[str, str]:
@@ -79,7 +79,8 @@ def render_command(
         if n_max is not None and n_max < 1:
             raise ParameterError(f"--n-max must be at least 1, got {n_max}")
         marks = [_mark(text) for text in mark or ()]
-        basin = BasinStore.open(path).read()
+        store = BasinStore.open(path)
+        basin = store.read()
         check_writable(target, what="picture")  # before drawing
         if rrd is not None:
             check_rrd_path(rrd)
@@ -89,6 +90,7 @@ def render_command(
         except OSError as exc:
             raise fail(describe(exc, f"cannot write {target}")) from None
         console.print(f"wrote {target}")
+        metadata_note(store)
         damaged_note(path, basin.damaged, "drawn as not computed")
         if rrd is not None:
             from ...io.basin_view import show_basin
@@ -119,7 +121,8 @@ def show_command(
     from ...io.basin_view import show_basin
 
     with user_errors():
-        basin = BasinStore.open(path).read()
+        store = BasinStore.open(path)
+        basin = store.read()
     if rrd is None and connect is None:  # a viewer, then, or nothing to do
         from ...io.rerun_stream import NO_DISPLAY, display_available
 
@@ -130,6 +133,7 @@ def show_command(
             raise typer.Exit(code=1)
         spawn = True
     where_to, no_viewer = recording.destination(rrd, spawn, connect)
+    metadata_note(store)
     damaged_note(path, basin.damaged, "shown as not computed")
     try:
         show_basin(basin, where_to)

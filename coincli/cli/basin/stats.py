@@ -60,7 +60,6 @@ def stats_command(
             except OSError as exc:
                 raise fail(describe(exc, f"cannot write {csv_out}")) from None
     attrs = view.attrs
-    warnings = stats["warnings"]
     if json_out:
         print_json({"path": str(path), "version": __version__, "store_version": attrs["version"],
                     "sweep": attrs["sweep"], "method": attrs["method"],
@@ -73,6 +72,39 @@ def stats_command(
                   f"{attrs['method']['name']}", highlight=False)
     if attrs["method"].get("horizon"):
         console.print(f"horizon: {attrs['method']['horizon']}", highlight=False)
+    _print_outcomes(stats, every_n)
+    _print_summary(stats)
+
+
+
+def _write_csv(stats: dict, target: Path) -> None:
+    import csv
+
+    from ...io.paths import atomic_output
+
+    certain = {r["n"]: r for r in stats.get("outcomes_certain", [])}
+    with atomic_output(target) as tmp, open(tmp, "w", newline="") as fh:
+        writer = csv.writer(fh)
+        header = ["n", "pose", "direction", "cells", "fraction", "low", "high"]
+        if stats["verified"]:
+            header += ["certain_cells", "fraction_of_certain", "certain_low", "certain_high"]
+        writer.writerow(header)
+        for row in stats["outcomes"]:
+            line = [row["n"], row["pose"], row["direction"], row["count"], row["fraction"],
+                    row["low"], row["high"]]
+            if stats["verified"]:
+                r = certain.get(row["n"])
+                line += ([r["count"], r["fraction"], r["low"], r["high"]] if r
+                         else [0, 0.0, "", ""])
+            writer.writerow(line)
+
+
+def _num(x, fmt: str = ".3f") -> str:
+    return "-" if x is None or (isinstance(x, float) and not math.isfinite(x)) else format(x, fmt)
+
+
+def _print_outcomes(stats: dict, every_n: bool) -> None:
+    """The table of outcomes: the most frequent n (every n with ``every_n``)."""
     verified = stats["verified"]
     table = Table(title="Outcomes (fractions of the labelled cells)", title_justify="left")
     for col, just in (("n", "right"), ("pose", "left"), ("turn", "left"), ("cells", "right"),
@@ -96,6 +128,12 @@ def stats_command(
     console.print(table)
     if hidden:
         say(console, left_out(hidden, sum(row["fraction"] for row in hidden), "labelled cells"))
+
+
+def _print_summary(stats: dict) -> None:
+    """The cells, their status, the certainty, P(standing) and the cost, a row each."""
+    warnings = stats["warnings"]
+    verified = stats["verified"]
     summary = []
     summary.append(("cells", f"{stats['cells']:,}: {stats['computed']:,} computed "
                              f"({stats['tiles_done']}/{stats['tiles_total']} tiles), "
@@ -138,29 +176,3 @@ def stats_command(
                                 f"run{'s' if runs != 1 else ''}, "
                                 f"{_num(cost['trajectories_per_second'], ',.0f')} cells/s"))
     print_rows(console, summary)
-
-
-def _write_csv(stats: dict, target: Path) -> None:
-    import csv
-
-    from ...io.paths import atomic_output
-
-    certain = {r["n"]: r for r in stats.get("outcomes_certain", [])}
-    with atomic_output(target) as tmp, open(tmp, "w", newline="") as fh:
-        writer = csv.writer(fh)
-        header = ["n", "pose", "direction", "cells", "fraction", "low", "high"]
-        if stats["verified"]:
-            header += ["certain_cells", "fraction_of_certain", "certain_low", "certain_high"]
-        writer.writerow(header)
-        for row in stats["outcomes"]:
-            line = [row["n"], row["pose"], row["direction"], row["count"], row["fraction"],
-                    row["low"], row["high"]]
-            if stats["verified"]:
-                r = certain.get(row["n"])
-                line += ([r["count"], r["fraction"], r["low"], r["high"]] if r
-                         else [0, 0.0, "", ""])
-            writer.writerow(line)
-
-
-def _num(x, fmt: str = ".3f") -> str:
-    return "-" if x is None or (isinstance(x, float) and not math.isfinite(x)) else format(x, fmt)

@@ -29,6 +29,7 @@ from ..common import (
     StopOpt,
     TEndOpt,
     ThicknessOpt,
+    WorkerTimeoutOpt,
     build_scene,
     compile_first,
     console,
@@ -120,6 +121,7 @@ def sweep_command(
                                                   "tiles to PATH, so PATH must be the same "
                                                   "shared directory on all of them.",
                                                   rich_help_panel=RUN)] = None,
+    worker_timeout: WorkerTimeoutOpt = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", metavar="", help="No progress bar.",
                                         rich_help_panel=RUN)] = False,
     yes: Annotated[bool, typer.Option("--yes", "-y", metavar="",
@@ -152,13 +154,14 @@ def sweep_command(
         plan = api.plan_sweep(scene, res=res, chunk=chunk, force=force,
                               mirror=not no_mirror, x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy,
                               vphi=vphi)
-        api.check_where(threads, workers, scheduler)
+        api.check_where(threads, workers, scheduler, worker_timeout)
     where_to, no_viewer = recording.destination(rrd, spawn, connect)
     # before the sweep: its pilot estimate is the first run of the kernels (a store that
     # is already complete on a fresh install is the one case compiled for without need)
     compile_first(quiet)
     report, recorder = _run(plan, path, where_to, overwrite=overwrite, threads=threads,
-                            workers=workers, scheduler=scheduler, quiet=quiet, yes=yes)
+                            workers=workers, scheduler=scheduler, quiet=quiet, yes=yes,
+                            worker_timeout=worker_timeout)
     if recorder is not None and recorder.error is None:
         say(console, recording.recorded(where_to))
     _report(path, plan, report, scheduler)
@@ -169,7 +172,7 @@ def sweep_command(
 
 
 def _run(plan, path: Path, where_to, *, overwrite: bool, threads, workers, scheduler,
-         quiet: bool, yes: bool):
+         quiet: bool, yes: bool, worker_timeout=None):
     """The sweep with its progress bar, its live recording and two-step Ctrl-C: (its
     SweepReport, the recorder or None). Fails in one line on what the sweep refuses."""
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn, TimeRemainingColumn
@@ -215,7 +218,8 @@ def _run(plan, path: Path, where_to, *, overwrite: bool, threads, workers, sched
                 report = api.sweep(plan, path, overwrite=overwrite, threads=threads,
                                    workers=workers, scheduler=scheduler, progress=show,
                                    stop=stop.event, on_start=started,
-                                   max_seconds=None if yes else MAX_SECONDS)
+                                   max_seconds=None if yes else MAX_SECONDS,
+                                   worker_timeout=worker_timeout)
             finally:
                 progress.stop()
     except api.SweepTooLong as exc:
@@ -229,7 +233,8 @@ def _run(plan, path: Path, where_to, *, overwrite: bool, threads, workers, sched
         disk = exc.errno in DISK_ERRORS or isinstance(exc, NotWritable)
         raise fail(describe(exc, f"cannot write {path}" if disk else "cannot run the sweep")
                    + ("; the tiles written so far are kept: rerun the command to resume"
-                      if disk and is_store(path) else "")) from None
+                      if disk and is_store(path) and not isinstance(exc, NotWritable)
+                      else "")) from None
     return report, recorder
 
 
