@@ -22,7 +22,7 @@ $(VENV)/.installed: pyproject.toml $(BIN)/activate
 	$(BIN)/python -m compileall -q coincli
 	touch $@
 
-# The kernels compile as a step of their own (once per version and machine, about 2 minutes,
+# The kernels compile as a step of their own (once per version and machine, about a minute,
 # with a live clock), not silently inside the first command that needs them.
 install: $(VENV)/.installed
 	$(COIN) compile

@@ -2,7 +2,7 @@
 """What writing a sweep's tiles through zarr-python would cost the default 512 x 512 map, side by
 side with the one Zarr route of the package (coincli.io.zarr_v3), and why the stores do not use it.
 
-    python benchmarks/zarr_route.py [--rounds 5] [--json]
+    python benchmarks/zarr_route.py [--rounds 5] [--json] [--write]
 
 The default map is computed once (``coincli.basin`` into a store); then, in interleaved rounds,
 its tiles are written again into fresh stores: by ``BasinStore.write_tile`` (every chunk encoded
@@ -10,12 +10,14 @@ here, one file each, renamed into place) and by zarr-python (``array[tile] = blo
 array, ``write_empty_chunks`` on, the same codecs). Each round also times zarr-python's import in
 a fresh interpreter. The figure that decides is the whole command's extra time through zarr,
 against the whole command's time (``coin basin --res 512``, median of the rounds): the issue's
-bar is 5 %.
+bar is 5 %. The result is kept in benchmarks/zarr-route.json; ``--write`` puts its line between
+``<!-- zarr-route:start -->`` and ``:end -->`` of docs/performance.md.
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import shutil
 import statistics
@@ -32,6 +34,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--write", action="store_true",
+                        help="put the figures in docs/performance.md too")
     args = parser.parse_args()
 
     import coincli
@@ -97,17 +101,29 @@ def main() -> None:
         result["command_through_zarr_ratio"] = 1 + extra / result["command_seconds"]
     finally:
         shutil.rmtree(work, ignore_errors=True)
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from docs_tables import PERFORMANCE, machine, provenance, replace_between
+
+    command = "python benchmarks/zarr_route.py" + (
+        f" --rounds {args.rounds}" if args.rounds != 5 else "")
+    result["measured"] = {"version": coincli.__version__, "machine": machine(),
+                          "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d"),
+                          "command": command}
+    Path(__file__).with_name("zarr-route.json").write_text(json.dumps(result, indent=1) + "\n")
     if args.json:
         print(json.dumps(result, indent=2))
         return
-    print(f"coincli {coincli.__version__}: the default 512 x 512 map, {result['tiles']} tiles of "
-          f"{result['chunks_per_tile']} chunks, medians of {args.rounds} rounds")
-    print(f"  the whole command:            {result['command_seconds']:.2f} s")
-    print(f"  its tiles written here:       {result['write_seconds_ours']:.3f} s (one thread)")
-    print(f"  the same through zarr-python: {result['write_seconds_zarr']:.3f} s, and its import "
-          f"{result['zarr_import_seconds']:.2f} s")
-    print(f"  the command through zarr-python would take "
-          f"{result['command_through_zarr_ratio']:.2f} times as long")
+    text = (f"{provenance(result['measured'])}\n\n"
+            f"The default 512 x 512 map ({result['tiles']} tiles of {result['chunks_per_tile']} "
+            f"chunks), medians of {args.rounds} rounds: the whole command "
+            f"{result['command_seconds']:.2f} s; its tiles written through "
+            f"`coincli.io.zarr_v3` {result['write_seconds_ours']:.3f} s (one thread), through "
+            f"zarr-python {result['write_seconds_zarr']:.3f} s, and importing zarr-python "
+            f"{result['zarr_import_seconds']:.2f} s: the command would take "
+            f"{result['command_through_zarr_ratio']:.2f} times as long through zarr-python.")
+    print(text)
+    if args.write:
+        replace_between(PERFORMANCE, "zarr-route", text)
 
 
 if __name__ == "__main__":

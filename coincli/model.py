@@ -32,7 +32,7 @@ TINY_TURN = 0.03  # rad: below it the series to d^6 and d^7 is exact to rounding
 SMALL_TURN = 0.3  # rad: below it the series to d^12 and d^13 is (next term 2e-21)
 
 
-@kernel(inline=True)
+@kernel
 def rotate(c, s, d):
     """(cos(phi + d), sin(phi + d)) from c = cos phi, s = sin phi: a rotation by the small turn
     d, its cosine and sine from their Taylor series, evaluated in parallel pieces (Estrin)
@@ -75,14 +75,14 @@ def corner_force(p, y, dx, dy, vx, vy, vphi):
     return -p.c * (vx - vphi * dy), -p.k * (y + dy) - p.c * (vy + vphi * dx)
 
 
-@kernel(inline=True)
+@kernel
 def corner_heights(p, y, c, s):
     """Heights y_i = y + d_yi of the four corners (negative = penetrating)."""
     return (y + corner_offset(p, 0, c, s)[1], y + corner_offset(p, 1, c, s)[1],
             y + corner_offset(p, 2, c, s)[1], y + corner_offset(p, 3, c, s)[1])
 
 
-@kernel(inline=True)
+@kernel
 def below(heights):
     """Bit mask of the corners whose height is negative (bit i set = corner i penetrates)."""
     mask = 0
@@ -121,7 +121,7 @@ def elastic_energy(p, heights):
     return 0.5 * p.k * total
 
 
-@kernel(inline=True)
+@kernel
 def energy_with_heights(p, y, vx, vy, vphi, heights):
     """Total energy, the corner heights known (kinetic + m g y + elastic)."""
     kinetic = 0.5 * p.mass * (vx * vx + vy * vy) + 0.5 * p.inertia * vphi * vphi
@@ -238,7 +238,7 @@ def well_index(p, phi):
     return j + 1 if offset > 0 else j - 1
 
 
-@kernel(inline=True)
+@kernel
 def last_boundary(p, phi_a, phi_b):
     """The last well boundary passed going monotonically from phi_a to phi_b (NaN if none):
     the boundaries between wells are the angles k pi +- phi_cr."""

@@ -22,8 +22,8 @@ from coincli.presets import load
 
 def pytest_configure(config):
     """Compile the kernels once, here, before pytest-xdist starts its workers, which on a cold
-    cache would each compile all of them at the same time (warm_up compiles its two drivers in
-    two processes: one core each).
+    cache would each compile all of them at the same time (each about a minute of one core and
+    half a gigabyte of memory).
 
     And first, before any test module imports it, the command line: its consoles
     (coincli.cli.common) are created then, as they would be with the output piped (no

@@ -1,122 +1,134 @@
-"""The kernel cache (coincli.jit): what a first compilation prunes, and what it leaves."""
+"""The kernel cache (coincli.jit): numba's own, in a folder keyed by the kernel sources; what
+marking a compilation prunes, and what it leaves."""
 
-import pickle
+import inspect
+import os
+import shutil
+import subprocess
+import sys
 from pathlib import Path
+
+import pytest
 
 from coincli import jit
 
-VERSION = "0.68.1"
+
+@pytest.fixture
+def empty_cache(tmp_path, monkeypatch):
+    """coincli's cache in an empty temporary folder (jit.cache_dir follows NUMBA_CACHE_DIR)."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba-cache"))
+    return jit.cache_dir()
 
 
-def write_index(path: Path, stamp: str, data_names, version: str = VERSION) -> None:
-    """An index file as numba writes one: its version, then (stamp, {key: data file name})."""
-    with open(path, "wb") as f:
-        pickle.dump(version, f, protocol=-1)
-        f.write(pickle.dumps((stamp, {f"key{i}": name for i, name in enumerate(data_names)})))
+def test_the_cache_folder_is_this_installations_and_named_after_the_sources_and_numba(
+        empty_cache):
+    folder = jit.kernel_cache_dir()
+    assert folder.parent == jit.installation_dir() and folder.parent.parent == empty_cache
+    assert folder.name == f"{jit.sources_digest()}-numba-{jit.numba_version()}"
 
 
-def test_a_first_compilation_prunes_what_no_process_can_load(tmp_path):
-    root = tmp_path / "numba-0.68.1"
-    source = tmp_path / "site-packages" / "coincli"
-    source.mkdir(parents=True)
-    ours = root / "coincli_0123"
-    ours.mkdir(parents=True)
-    write_index(ours / "kernel-10.py311.nbi", "new", ["kernel-10.py311.1.nbc"])
-    write_index(ours / "kernel-12.py311.nbi", "old", ["kernel-12.py311.1.nbc"])  # an edit ago
-    write_index(ours / "other-5.py311.nbi", "new", [], version="0.60.0")
-    (ours / "broken-7.py311.nbi").write_bytes(b"not a pickle")
-    for name in ("kernel-10.py311.1.nbc", "kernel-10.py311.2.nbc", "kernel-12.py311.1.nbc"):
-        (ours / name).write_bytes(b"machine code")
-    gone = root / "coincli_4567"  # an installation since deleted
-    gone.mkdir()
-    (gone / jit.SOURCE_RECORD).write_text(str(tmp_path / "deleted-venv" / "coincli"))
-    (gone / "kernel-10.py311.1.nbc").write_bytes(b"machine code")
-    alive = root / "coincli_89ab"  # another checkout, still there
+def test_an_edit_of_any_kernel_source_gives_another_cache_folder(tmp_path, monkeypatch):
+    """The digest covers every file that defines a kernel (a callee's too: numba itself would
+    check only the caller's file), and changes with any byte of any of them."""
+    files = jit.source_files()
+    for module in jit.KERNEL_MODULES:
+        assert inspect.getfile(sys.modules[module]) in files, module
+    copies = []
+    for i, name in enumerate(files):
+        copies.append(tmp_path / f"{i}-{Path(name).name}")
+        shutil.copyfile(name, copies[-1])
+    assert jit.digest_files(copies) == jit.sources_digest()
+    seen = {jit.sources_digest()}
+    for copy in copies:
+        text = copy.read_bytes()
+        copy.write_bytes(text.replace(b"\n", b"\n ", 1))
+        seen.add(jit.digest_files(copies))
+        copy.write_bytes(text)
+    assert len(seen) == len(copies) + 1
+    monkeypatch.setattr(jit, "sources_digest", lambda: "0123456789abcdef")
+    assert jit.kernel_cache_dir().name.startswith("0123456789abcdef-")
+
+
+def test_marking_prunes_other_digests_and_gone_installations(empty_cache, tmp_path):
+    current = jit.kernel_cache_dir()
+    (current / "model").mkdir(parents=True)
+    (current / "model" / "kernel-10.py311.nbi").write_bytes(b"index")
+    older = current.parent / f"0123456789abcdef-numba-{jit.numba_version()}"  # an edit ago
+    (older / "model").mkdir(parents=True)
+    other_numba = current.parent / f"{jit.sources_digest()}-numba-0.1.0"
+    other_numba.mkdir()
+    alive = empty_cache / "install-alive"  # another checkout, still there
     alive.mkdir()
-    (alive / jit.SOURCE_RECORD).write_text(str(source))
-    (alive / "kernel-10.py311.1.nbc").write_bytes(b"machine code")
-    legacy = root / "integrators_cdef"  # from before directories recorded their sources
-    legacy.mkdir()
-    (legacy / "kernel-10.py311.1.nbc").write_bytes(b"machine code")
-    marker = root / "compiled-new-aaaa"
-    for name in ("compiled-new-aaaa", "compiled-old-aaaa", "compiled-old-bbbb"):
-        (root / name).touch()
+    (alive / jit.INSTALLATION_RECORD).write_text(f"{tmp_path}\n{sys.prefix}\n")
+    gone = empty_cache / "install-gone"  # an environment since deleted
+    gone.mkdir()
+    (gone / jit.INSTALLATION_RECORD).write_text(f"{tmp_path}\n{tmp_path / 'deleted-venv'}\n")
+    unknown = empty_cache / "numba-0.68.1"  # not a folder of this layout: left alone
+    unknown.mkdir()
 
-    jit._prune(root, {ours: source}, "new", VERSION, marker)
+    assert not jit.kernels_cached()
+    jit.mark_cached()
 
-    assert sorted(path.name for path in ours.iterdir()) == [
-        "broken-7.py311.nbi", "kernel-10.py311.1.nbc", "kernel-10.py311.nbi", jit.SOURCE_RECORD]
-    assert (ours / jit.SOURCE_RECORD).read_text() == str(source)
-    assert not gone.exists() and alive.is_dir() and legacy.is_dir()
-    assert sorted(path.name for path in root.glob("compiled-*")) == [
-        "compiled-new-aaaa", "compiled-old-bbbb"]
-
-
-def test_pruning_an_empty_cache_does_nothing(tmp_path):
-    root = tmp_path / "numba-0.68.1"
-    root.mkdir()
-    jit._prune(root, {root / "coincli_0123": tmp_path}, "new", VERSION, root / "compiled-new-a")
-    assert list(root.iterdir()) == []
+    assert jit.kernels_cached()
+    assert (current / "model" / "kernel-10.py311.nbi").read_bytes() == b"index"
+    assert sorted(p.name for p in current.parent.iterdir()) == [current.name,
+                                                                 jit.INSTALLATION_RECORD]
+    assert sorted(p.name for p in empty_cache.iterdir()) == sorted(
+        [current.parent.name, "install-alive", "numba-0.68.1"])
 
 
-def test_only_the_first_marking_of_a_version_prunes(tmp_path, monkeypatch):
-    """mark_cached prunes when it writes this version's marker, not each time it is called
-    again; and a cache that cannot be written is not pruned."""
-    marker = tmp_path / "numba-0.68.1" / "compiled-new-aaaa"
+def test_only_the_first_marking_of_a_digest_prunes(empty_cache, monkeypatch):
+    """mark_cached prunes when it writes the marker, not each time it is called again; and a
+    cache that cannot be written is not pruned."""
     pruned = []
-    monkeypatch.setattr(jit, "_marker", lambda: marker)
-    monkeypatch.setattr(jit, "prune_cache", lambda: pruned.append(marker.exists()))
+    monkeypatch.setattr(jit, "prune_cache", lambda: pruned.append(jit.kernels_cached()))
     jit.mark_cached()
-    jit.mark_cached()
-    assert marker.exists() and pruned == [True]
-    monkeypatch.setattr(jit, "_marker", lambda: tmp_path / "a-file" / "compiled-new-aaaa")
-    (tmp_path / "a-file").write_text("not a directory")
     jit.mark_cached()
     assert pruned == [True]
+    shutil.rmtree(empty_cache)
+    empty_cache.parent.mkdir(parents=True, exist_ok=True)
+    empty_cache.write_text("not a folder")
+    jit.mark_cached()
+    assert pruned == [True] and not jit.kernels_cached()
 
 
-def test_the_cache_directories_pruned_are_where_numba_keeps_this_packages_kernels(paper):
-    """prune_cache looks where the compiled kernels are: a kernel run compiled (or loaded) leaves
-    its index in the cache directory that _cache_dirs gives for its source directory. numba
-    finds that directory through our cache locator (jit._install_locator)."""
-    import numba
-    import numpy as np
-
-    from coincli import model
-    from coincli.params import model_params
-
-    state = np.array([0.0, 0.01, 0.0, 0.0, 1.0, 3.0])
-    assert jit.compiled(model.total_energy)(model_params(paper), state) > 0
-    ours = jit._cache_dirs(jit.cache_dir() / f"numba-{numba.__version__}")
-    (directory,) = [d for d, source in ours.items() if source == Path(model.__file__).parent]
-    assert list(directory.glob("model.total_energy-*.nbi")), sorted(directory.iterdir())
-
-
-def test_pruning_never_raises_on_a_numba_it_does_not_know(monkeypatch):
-    """A numba whose internals differ (here: the cache directories cannot be found) leaves its
-    cache unpruned; the compilation that asked for the pruning goes on."""
-    def unknown_layout(root):
-        raise ImportError("cannot import name '_CacheLocator' from 'numba.core.caching'")
-
-    monkeypatch.setattr(jit, "_cache_dirs", unknown_layout)
+def test_pruning_an_empty_cache_does_nothing(empty_cache):
     jit.prune_cache()
+    assert not empty_cache.exists()
 
 
-def test_a_numba_without_our_hooks_keeps_its_own_caching_and_loading(monkeypatch):
-    """Where numba's cache locators or its dispatcher's cache are not as we expect, the kernels
-    are cached and loaded as numba does it by itself; and only the numba versions the suite
-    has run on load cached code without numba's refresh."""
-    import types
+def test_numba_caches_the_kernels_in_the_folder_and_keeps_its_own_setting(tmp_path):
+    """In a fresh process that imported numba first (as in a notebook), with an empty cache:
+    kernels_cached() is False; a kernel run compiled is cached by numba in kernel_cache_dir()
+    (and a second process loads it from there), while numba's CACHE_DIR setting for other
+    code is the user's still; after mark_cached() (what a whole compilation ends with)
+    kernels_cached() is True."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "user-numba-cache")}
+    code = """
+import sys
+import numba
+import numpy as np
+from coincli import jit, model
+from coincli.params import Scene, model_params
+first = sys.argv[1] == "first"
+assert jit.kernels_cached() != first
+energy = jit.compiled(model.total_energy)
+assert energy(model_params(Scene()), np.array([0.0, 0.01, 0.0, 0.0, 1.0, 3.0])) > 0
+assert numba.config.CACHE_DIR == sys.argv[2], numba.config.CACHE_DIR
+hits = sum(energy.stats.cache_hits.values())
+assert Path(energy.stats.cache_path).is_relative_to(jit.kernel_cache_dir())
+assert hits == (0 if first else 1), energy.stats
+if first:
+    jit.mark_cached()
+    assert jit.kernels_cached()
+""".replace("import sys", "import sys\nfrom pathlib import Path")
+    for run in ("first", "second"):
+        done = subprocess.run([sys.executable, "-c", code, run, env["NUMBA_CACHE_DIR"]],
+                              env=env, capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr[-2000:]
 
-    import numba
-    import numba.core.caching as caching
 
-    before = list(caching.CacheImpl._locator_classes)
-    monkeypatch.delattr(caching, "_CacheLocator")
-    jit._install_locator(numba)
-    assert caching.CacheImpl._locator_classes == before
-    other = types.SimpleNamespace(_cache=types.SimpleNamespace(load_overload=len))
-    jit._refresh_on_miss(other)
-    assert other._cache.load_overload is len
-    monkeypatch.setattr(numba, "__version__", "0.99.0")
-    assert not jit.loads_without_refresh()
+def test_the_suite_runs_on_compiled_and_marked_kernels():
+    """conftest's pytest_configure compiled every kernel (or found them compiled) before any
+    test ran, and marked it."""
+    assert jit.kernels_cached()

@@ -152,6 +152,20 @@ MaxStepsOpt = Annotated[int | None, typer.Option("--max-steps", metavar="N", hel
                                                  rich_help_panel=INTEG, parser=whole_option)]
 JsonOpt = Annotated[bool, typer.Option("--json", metavar="", help="Print one JSON object on "
                                        "stdout instead of tables.")]
+RUN = "Where it runs"
+ThreadsOpt = Annotated[int | None, typer.Option("--threads", metavar="N", parser=whole_option,
+                                                rich_help_panel=RUN, help="Threads on this "
+                                                "machine (default: one per core).")]
+WorkersOpt = Annotated[int | None, typer.Option("--workers", metavar="N", parser=whole_option,
+                                                rich_help_panel=RUN, help="Start a local Dask "
+                                                "cluster of N worker processes and run on it.")]
+QuietOpt = Annotated[bool, typer.Option("--quiet", "-q", metavar="", rich_help_panel=RUN,
+                                        help="No progress bar.")]
+WorkerTimeoutOpt = Annotated[float | None, typer.Option(
+    "--worker-timeout", metavar="SECONDS", parser=number_option, rich_help_panel=RUN,
+    help="On Dask (--workers, --scheduler): stop, exit 3 with the work done kept, once the "
+         "cluster has had no worker for this long [dim]\\[default: wait until one joins, "
+         "saying so][/dim]")]
 
 
 LONG_TOKEN = 200  # characters without a space: no word or path, a value pasted by mistake

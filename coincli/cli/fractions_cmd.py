@@ -1,6 +1,6 @@
 """`coin fractions`: outcome probabilities by Monte Carlo over distributions of the five
 initial conditions, with 95 % intervals; resumable in a Zarr store; continuation along a
-physical parameter (--over) with a plot."""
+physical parameter, or over a grid of two (--over, twice), with a plot."""
 
 import contextlib
 import math
@@ -15,10 +15,11 @@ from ..defaults import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION, PA
 from ..enums import StopReason
 from ..params import ParameterError
 from ..version import __version__
-from . import recording
+from . import interruptions, recording
 from .app import app
 from .common import (
     INIT,
+    RUN,
     COpt,
     DiameterOpt,
     DtOpt,
@@ -31,11 +32,15 @@ from .common import (
     MaxStepsOpt,
     MethodOpt,
     PresetOpt,
+    QuietOpt,
     RtolOpt,
     SinglePassOpt,
     StopOpt,
     TEndOpt,
     ThicknessOpt,
+    ThreadsOpt,
+    WorkersOpt,
+    WorkerTimeoutOpt,
     build_scene,
     compile_first,
     console,
@@ -62,8 +67,7 @@ from .text import (
 )
 
 SAMPLING = "Sampling and stopping"
-OVER = "Continuation along a parameter"
-RUN = "Where it runs"
+OVER = "Continuation along one parameter or two"
 
 
 def _dist(name: str, text: str):
@@ -114,34 +118,29 @@ def fractions_command(
                                        "unit of work, of storing and of the stop test.",
                                        rich_help_panel=SAMPLING,
                                        parser=whole_option)] = DEFAULT_BATCH,
-    over: Annotated[str | None, typer.Option(
+    over: Annotated[list[str] | None, typer.Option(
         "--over", metavar="NAME=LO:HI:STEPS", help="Repeat at STEPS values of a physical "
-        "parameter (thickness, diameter, k, c, mass, inertia, g), the same samples at every "
-        "value. For thickness and diameter, mass and inertia follow a uniform solid disc "
-        "unless --mass or --inertia is given.", rich_help_panel=OVER)] = None,
+        "parameter (thickness, diameter, k, c, mass, inertia, g), or at the values listed "
+        "(NAME=V1,V2,...), the same samples at every value; given twice, at every point of "
+        "the grid of both. For thickness and diameter, mass and inertia follow a uniform solid "
+        "disc unless --mass or --inertia is given.", rich_help_panel=OVER)] = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", metavar="FILE", help="With --over: draw P(outcome) against the parameter "
-        "with 95 % bands (.png, .svg or .pdf).", rich_help_panel=OVER)] = None,
+        "with 95 % bands; over two, a map of P(standing) with its 1/3 line and that line's "
+        "95 % band (.png, .svg or .pdf).", rich_help_panel=OVER)] = None,
     store: Annotated[Path | None, typer.Option(
         "--store", metavar="PATH", help="Keep the samples and labels in this Zarr store; the "
         "same command resumes it.", rich_help_panel=RUN)] = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", metavar="",
                                             help="Replace a --store of other "
                                             "samples.", rich_help_panel=RUN)] = False,
-    threads: Annotated[int | None, typer.Option("--threads", help="Threads on this machine "
-                                                "(default: one per core).",
-                                                rich_help_panel=RUN, parser=whole_option,
-                                                metavar="N")] = None,
-    workers: Annotated[int | None, typer.Option("--workers", help="Run the batches on a "
-                                                "local Dask cluster of N processes.",
-                                                rich_help_panel=RUN, parser=whole_option,
-                                                metavar="N")] = None,
-    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Run the batches on the "
-                                                  "Dask cluster at this address "
-                                                  "(tcp://HOST:PORT); the store stays here.",
-                                                  rich_help_panel=RUN)] = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", metavar="", help="No progress line.",
-                                        rich_help_panel=RUN)] = False,
+    threads: ThreadsOpt = None, workers: WorkersOpt = None,
+    scheduler: Annotated[str | None, typer.Option(
+        "--scheduler", metavar="ADDRESS", rich_help_panel=RUN,
+        help="Run the batches on the Dask cluster at this address (tcp://HOST:PORT); the "
+             "store stays here.")] = None,
+    worker_timeout: WorkerTimeoutOpt = None,
+    quiet: QuietOpt = False,
     yes: Annotated[bool, typer.Option("--yes", "-y", metavar="",
                                       help="Start a run estimated to take "
                                       "more than 12 hours, or to spend its budget before "
@@ -168,13 +167,14 @@ def fractions_command(
     """  # noqa: E501
     from .. import api
     from ..montecarlo import parse_count, parse_precision
+    from ..sweeps.executors import check_where
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
                             inertia=inertia, k=k, c=c, g=g, method=method, dt=dt, rtol=rtol,
                             t_end=t_end, stop_on_settle=stop_on_settle, max_steps=max_steps,
                             verify=False if single_pass else None)
-        if plot is not None and over is None:
+        if plot is not None and not over:
             raise ParameterError("--plot draws a continuation: give --over NAME=LO:HI:STEPS")
         if plot is not None:
             from ..io.paths import check_figure_path
@@ -186,116 +186,43 @@ def fractions_command(
             scene, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi,
             samples=parse_count("samples", samples), precision=parse_precision(precision),
             of=of, max_samples=parse_count("max_samples", max_samples), seed=seed,
-            sampler=sampler, batch=batch, over=over, keep=keep, force=force)
-        api.check_where(threads, workers, scheduler)
+            sampler=sampler, batch=batch, over=over or None, keep=keep, force=force)
+        check_where(threads, workers, scheduler, worker_timeout)
     where_to, no_viewer = recording.destination(rrd, spawn, connect)
     if plan.note and not json_out and not console.is_terminal:  # else the result shows it
         say(err_console, f"[cyan]note:[/] {plan.note}")
-    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
-
-    from .progress import Bars, RateColumn
-
-    wide = err_console.width >= 100  # at 80 columns the rate goes: the estimate matters more
-    bar_width = 20 if wide else 8
-    progress = Bars(
-        TextColumn("{task.fields[value]}"), BarColumn(bar_width=bar_width),
-        TextColumn("{task.fields[detail]}"), *([RateColumn("traj")] if wide else []),
-        TimeElapsedColumn(), console=err_console, disable=quiet, transient=False)
-    tasks: dict[int, int] = {}
-    label_width = 0
-
-    def show(update) -> None:
-        nonlocal label_width
-        v = update.value
-        p, lo, hi = update.standing
-        estimate = "-" if math.isnan(p) else \
-            f"{100 * p:.3g} % ({100 * lo:.2g}-{100 * hi:.2g})"
-        width = "" if update.precision is None or math.isnan(update.widest) else \
-            f"±{100 * update.widest:.2g}→{100 * update.precision:.2g} pp"
-        label = "" if update.values == 1 else \
-            f"{plan.parameter} = {plan.values[v]:g} ({v + 1}/{update.values})"
-        label_width = max(label_width, len(label))
-        total = max(update.expected, update.samples, 1)
-        # what fits beside the label, the bar, the rate and the clock (rich cuts a line short)
-        room = (err_console.width - label_width - bar_width - len("0:00:00")
-                - (len("99,999 traj/s") + 1 if wide else 0) - 4)
-        detail = fit(room, f"{update.samples:,}/{total:,}", f"P(standing) {estimate}", width,
-                     short=f"P {estimate}")
-        if v not in tasks:
-            tasks[v] = progress.add_task("fractions", total=total, value=label, detail=detail)
-        progress.update(tasks[v], completed=update.samples, total=total, detail=detail)
-        if recorder is not None:
-            recorder.progress(update)
-
     compile_first(quiet)
     with user_errors():
         if store is not None:
-            from ..io.basin_store import check_store_writable
+            from ..io.basin_layout import check_store_writable
 
             check_store_writable(store)
         est = api.estimate_fractions(plan, threads=threads, workers=workers,
                                      scheduler=scheduler, store=store)
     _check_estimate(est, plan, scheduler, yes, quiet)
-    from ..io.fractions_run import StoreIncomplete
-    from ..sweeps.executors import SchedulerLost
-    from . import interruptions
-
-    recorder = None
-    if where_to is not None:
-        from ..io.fractions_view import FractionsRecorder  # Rerun's code only when asked for
-
-        recorder = FractionsRecorder(plan, where_to)
-    try:
-        stop = interruptions.GracefulStop("finishing the batches in flight, then stopping "
-                                          "(rerun the same command with --store to resume)")
-        with user_errors(), stop, recorder or contextlib.nullcontext(), \
-                progress:
-            result = api.run_fractions(plan, store=store, overwrite=overwrite, threads=threads,
-                                       workers=workers, scheduler=scheduler, progress=show,
-                                       stop=stop.event)
-            if recorder is not None:
-                recorder.result(result)
-    except StoreIncomplete as exc:
-        say(err_console, f"[bold red]error:[/] {escape(str(exc))}")
-        raise typer.Exit(code=1) from None
-    except SchedulerLost as exc:
-        fail(interruptions.lost_scheduler(exc, "every batch received"))
-        raise typer.Exit(code=interruptions.SCHEDULER_LOST) from None
-    if plot is not None:
-        with user_errors():
-            api.render_fractions(result, plot)
-    if json_out:
-        print_json({"version": __version__, **result.to_dict()})
-    elif plan.parameter is None:
-        _print_result(plan, result, every_n)
-    else:
-        _print_over(plan, result)
-    if plot is not None and not json_out:
-        say(console, f"wrote {plot}")
-    if recorder is not None and recorder.error is None and not json_out:
-        say(console, recording.recorded(where_to))
-    if result.interrupted:
-        say(err_console, f"[yellow]stopped:[/] {interruptions.stopped_by()}interrupted; the "
-                         "estimates above are from the "
-                         "samples done" + (f"; rerun the same command to resume {store}"
-                                           if store is not None else ""))
-        recording.finish(recorder, no_viewer, exit_code=None)
-        raise typer.Exit(code=130)
-    runs = result.results if plan.parameter is not None else [result]
-    short = [r for r in runs if r.stopped is StopReason.BUDGET]
-    if short:
-        where = "" if plan.parameter is None else \
-            f" at {len(short)} of {len(runs)} values of {plan.parameter}"
-        say(err_console, f"[yellow]stopped short:[/] the budget of "
-                         f"{plan.goal.max_samples:,} samples was spent before the precision "
-                         f"asked for{where}; raise --max-samples (the same command with "
-                         "--store resumes from the samples done) or ask for less precision")
-        recording.finish(recorder, no_viewer, exit_code=None)
-        raise typer.Exit(code=1)
-    recording.finish(recorder, no_viewer)
+    result, recorder = _run(plan, where_to, quiet, store=store, overwrite=overwrite,
+                            threads=threads, workers=workers, scheduler=scheduler,
+                            worker_timeout=worker_timeout)
+    _report(plan, result, store=store, plot=plot, json_out=json_out, every_n=every_n,
+            recorder=recorder, where_to=where_to, no_viewer=no_viewer)
 
 
 MAX_SECONDS = 12 * 3600.0  # a run estimated longer is refused without --yes
+
+
+@contextlib.contextmanager
+def _naming(store: Path | None):
+    """A disk's error while the run writes ``store`` (a full disk) said naming the store, and
+    that the batches it holds are kept."""
+    from ..io.paths import DISK_ERRORS, NotWritable, describe
+
+    try:
+        yield
+    except OSError as exc:
+        if store is None or isinstance(exc, NotWritable) or exc.errno not in DISK_ERRORS:
+            raise
+        raise NotWritable(exc.errno, describe(exc, f"cannot write {store}") + "; the batches "
+                          "written so far are kept: rerun the command to resume") from None
 
 
 def _check_estimate(est, plan, scheduler, yes: bool, quiet: bool) -> None:
@@ -308,7 +235,7 @@ def _check_estimate(est, plan, scheduler, yes: bool, quiet: bool) -> None:
     cost = (f"about {format_duration(est.seconds)} {on} for {est.samples:,} samples "
             f"({est.cpu_per_sample * 1e3:.3g} ms a sample, from a pilot of "
             f"{est.pilot_samples:,})")
-    over = f" over {len(plan.scenes)} values" if plan.parameter is not None else ""
+    over = f" over {len(plan.scenes)} values" if plan.parameters else ""
     if not est.budget_suffices and not yes and not est.held:  # a resume goes on
         raise fail(f"--precision needs about {est.needed:,} samples{over} (from a pilot of "
                    f"{est.pilot_samples:,}), more than the budget of {est.budget:,}: raise "
@@ -424,20 +351,23 @@ def _print_result(plan, r, every_n: bool = False) -> None:
 
 def _stopped_over(res) -> str:
     """Why the values of a continuation stopped: 'samples (every value)', or each reason with
-    its values ('precision at 0.001, 0.0019; budget at 0.02')."""
+    its values ('precision at 0.001, 0.0019; budget at 0.02'; over a grid, the points)."""
     reasons: dict = {}
-    for value, r in zip(res.values, res.results, strict=True):
-        reasons.setdefault(str(r.stopped), []).append(value)
+    for r in res.results:
+        reasons.setdefault(str(r.stopped), []).append(r.at)
     if len(reasons) == 1:
         return f"{next(iter(reasons))} (every value)"
-    return "; ".join(f"{reason} at " + (", ".join(f"{v:.4g}" for v in values)
-                                        if len(values) <= 6 else counted(len(values), "value"))
-                     for reason, values in reasons.items())
+    return "; ".join(f"{reason} at " + (
+        ", ".join(" ".join(f"{v:.4g}" for v in at.values()) for at in where)
+        if len(where) <= 6 else counted(len(where), "value")) for reason, where in reasons.items())
 
 
 def _print_over(plan, res) -> None:
     first = res.results[0]
-    say(console, f"[bold]coin fractions[/] over {res.parameter} ({len(res.values)} values), "
+    names = " and ".join(res.parameters)
+    size = f"{len(res.results)} values" if len(res.parameters) == 1 else \
+        f"{' x '.join(str(n) for n in res.shape)} = {len(res.results)} points"
+    say(console, f"[bold]coin fractions[/] over {names} ({size}), "
                  f"the same samples at every value ({plan.sampling.sampler}, seed "
                  f"{plan.sampling.seed})")
     say(console, f"drawn: {plan.sampling.describe()}")
@@ -450,22 +380,25 @@ def _print_over(plan, res) -> None:
     # at 80 columns: P(standing) named once, in the title, and why each value stopped said
     # under the table, not in a column
     table = Table(show_edge=False, pad_edge=False)
-    unit = PARAMETER_UNITS[res.parameter]
-    cols = [(f"{res.parameter} ({unit})", "right")]
-    if res.parameter in ("thickness", "diameter"):
+    cols = [(f"{name} ({PARAMETER_UNITS[name]})", "right") for name in res.parameters]
+    shaped = bool({"thickness", "diameter"} & set(res.parameters))
+    if shaped:
         cols.append(("t/d", "right"))
-    cols += [("samples", "right"), ("P", "right"), ("95 % interval", "right"),
-             ("uncertain", "right")]
+    # a grid's samples, the same at every point, said in the title (a column less at 80)
+    alike = len(res.parameters) > 1 and len({r.samples for r in res.results}) == 1
+    cols += [*([] if alike else [("samples", "right")]), ("P", "right"),
+             ("95 % interval", "right"), ("uncertain", "right")]
     for col, just in cols:
         table.add_column(col, justify=just, no_wrap=True)
-    for value, r in zip(res.values, res.results, strict=True):
-        row = [f"{value:.4g}"]
-        if res.parameter in ("thickness", "diameter"):
+    for r in res.results:
+        row = [f"{value:.4g}" for value in r.at.values()]
+        if shaped:
             row.append(f"{r.scene['coin']['thickness'] / r.scene['coin']['diameter']:.3g}")
-        row += [f"{r.samples:,}", percent(r.standing["probability"]), interval(r.standing),
-                percent(r.uncertain["probability"], 3)]
+        row += [*([] if alike else [f"{r.samples:,}"]), percent(r.standing["probability"]),
+                interval(r.standing), percent(r.uncertain["probability"], 3)]
         table.add_row(*row)
-    print_table(console, table, f"P(standing) over the {basis}, 95 % Wilson intervals")
+    each = f", {first.samples:,} samples a point" if alike else ""
+    print_table(console, table, f"P(standing) over the {basis}{each}, 95 % Wilson intervals")
     say(console, f"stopped: {_stopped_over(res)}")
     cost = res.cost
     if cost.get("computed"):
@@ -477,3 +410,120 @@ def _print_over(plan, res) -> None:
 
 
 __all__ = ["fractions_command"]
+
+
+def _run(plan, where_to, quiet: bool, *, store, **options):
+    """The run with its progress bars, its live recording and two-step Ctrl-C: (its result,
+    the recorder or None). A store that cannot be written, a lost scheduler: one line."""
+    from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
+
+    from .. import api
+    from .progress import Bars, RateColumn
+
+    wide = err_console.width >= 100  # at 80 columns the rate goes: the estimate matters more
+    bar_width = 20 if wide else 8
+    progress = Bars(
+        TextColumn("{task.fields[value]}"), BarColumn(bar_width=bar_width),
+        TextColumn("{task.fields[detail]}"), *([RateColumn("traj")] if wide else []),
+        TimeElapsedColumn(), console=err_console, disable=quiet, transient=False)
+    tasks: dict[int, int] = {}
+    grid_samples: dict[int, int] = {}  # a grid's points: samples counted, and expected
+    grid_expected: dict[int, int] = {}
+    label_width = 0
+
+    def show(update) -> None:
+        nonlocal label_width
+        v = update.value
+        p, lo, hi = update.standing
+        estimate = "-" if math.isnan(p) else \
+            f"{100 * p:.3g} % ({100 * lo:.2g}-{100 * hi:.2g})"
+        width = "" if update.precision is None or math.isnan(update.widest) else \
+            f"±{100 * update.widest:.2g}→{100 * update.precision:.2g} pp"
+        samples, total = update.samples, max(update.expected, update.samples, 1)
+        if len(plan.parameters) > 1:  # a grid: one bar, every point's samples
+            grid_samples[v], grid_expected[v] = update.samples, total
+            label = f"{' x '.join(plan.parameters)}: {update.values_done}/{update.values}"
+            samples = sum(grid_samples.values())
+            total = max(samples, sum(grid_expected.values())
+                        + total * (update.values - len(grid_expected)))
+            v = 0
+        else:
+            label = "" if update.values == 1 else \
+                f"{plan.parameter} = {plan.values[v]:g} ({v + 1}/{update.values})"
+        label_width = max(label_width, len(label))
+        # what fits beside the label, the bar, the rate and the clock (rich cuts a line short)
+        room = (err_console.width - label_width - bar_width - len("0:00:00")
+                - (len("99,999 traj/s") + 1 if wide else 0) - 4)
+        detail = fit(room, f"{samples:,}/{total:,}", f"P(standing) {estimate}", width,
+                     short=f"P {estimate}")
+        if v not in tasks:
+            tasks[v] = progress.add_task("fractions", total=total, value=label, detail=detail)
+        progress.update(tasks[v], completed=samples, total=total, detail=detail, value=label)
+        if recorder is not None:
+            recorder.progress(update)
+
+    from ..io.fractions_run import StoreIncomplete
+    from ..sweeps.executors import SchedulerLost
+
+    recorder = None
+    if where_to is not None:
+        from ..io.fractions_view import FractionsRecorder  # Rerun's code only when asked for
+
+        recorder = FractionsRecorder(plan, where_to)
+    try:
+        stop = interruptions.GracefulStop("finishing the batches in flight, then stopping "
+                                          "(rerun the same command with --store to resume)")
+        with user_errors(), _naming(store), stop, recorder or contextlib.nullcontext(), \
+                progress:
+            result = api.run_fractions(plan, store=store, progress=show, stop=stop.event,
+                                       **options)
+            if recorder is not None:
+                recorder.result(result)
+    except StoreIncomplete as exc:
+        say(err_console, f"[bold red]error:[/] {escape(str(exc))}")
+        raise typer.Exit(code=1) from None
+    except SchedulerLost as exc:
+        fail(interruptions.lost_scheduler(exc, "every batch received"))
+        raise typer.Exit(code=interruptions.SCHEDULER_LOST) from None
+    return result, recorder
+
+
+def _report(plan, result, *, store, plot, json_out: bool, every_n: bool, recorder, where_to,
+            no_viewer: bool) -> None:
+    """The result (a table, or JSON), its picture, where the recording went, and the exit: 130
+    interrupted, 1 short of the precision asked for."""
+    from .. import api
+
+    if plot is not None:
+        with user_errors():
+            api.render_fractions(result, plot)
+    if json_out:
+        print_json({"version": __version__, **result.to_dict()})
+    elif not plan.parameters:
+        _print_result(plan, result, every_n)
+    else:
+        _print_over(plan, result)
+    if plot is not None and not json_out:
+        say(console, f"wrote {plot}")
+    if recorder is not None and recorder.error is None and not json_out:
+        say(console, recording.recorded(where_to))
+    if result.interrupted:
+        say(err_console, f"[yellow]stopped:[/] {interruptions.stopped_by()}interrupted; the "
+                         "estimates above are from the "
+                         "samples done" + (f"; rerun the same command to resume {store}"
+                                           if store is not None else ""))
+        recording.finish(recorder, no_viewer, exit_code=None)
+        raise typer.Exit(code=130)
+    runs = result.results if plan.parameters else [result]
+    short = [r for r in runs if r.stopped is StopReason.BUDGET]
+    if short:
+        where = "" if not plan.parameters else \
+            f" at {len(short)} of {len(runs)} values of {' and '.join(plan.parameters)}"
+        say(err_console, f"[yellow]stopped short:[/] the budget of "
+                         f"{plan.goal.max_samples:,} samples was spent before the precision "
+                         f"asked for{where}; raise --max-samples (the same command with "
+                         "--store resumes from the samples done) or ask for less precision")
+        recording.finish(recorder, no_viewer, exit_code=None)
+        raise typer.Exit(code=1)
+    recording.finish(recorder, no_viewer)
+

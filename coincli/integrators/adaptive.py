@@ -81,14 +81,14 @@ FIRST_STEP = 0.5  # the first step of a contact phase, in units of 1 / omega
 NO_EVENT = 2.0  # theta of a step without an event
 
 
-@kernel(inline=True)
+@kernel
 def corner_rates(p, vy, vphi, c, s):
     """Vertical speeds vy + vphi d_xi of the four corners (c, s: trig of the angle)."""
     return (vy + vphi * corner_offset(p, 0, c, s)[0], vy + vphi * corner_offset(p, 1, c, s)[0],
             vy + vphi * corner_offset(p, 2, c, s)[0], vy + vphi * corner_offset(p, 3, c, s)[0])
 
 
-@kernel(inline=True)
+@kernel
 def dense_corners(p, rc, theta, c, s):
     """(heights, vertical speeds) of the corners at fraction theta of the step (c, s: trig of
     the angle at its start)."""
@@ -97,7 +97,7 @@ def dense_corners(p, rc, theta, c, s):
     return corner_heights(p, point[1], cp, sp), corner_rates(p, point[4], point[5], cp, sp)
 
 
-@kernel(inline=True)
+@kernel
 def illinois(p, rc, c, s, i, speed, level, lo, hi, f_lo, f_hi, h, tolerance):
     """Illinois regula falsi on the continuous extension for a sign change, on [lo, hi], of
     corner i's height minus ``level`` (or, if ``speed``, of its vertical speed), whose values
@@ -222,7 +222,7 @@ def crossing_in(p, rc, h, mode, lo, hi, before, after, v_before, v_after, c, s):
     return theta_event, event_mask
 
 
-@kernel(inline=True)
+@kernel
 def find_event(p, rc, h, mode, pieces, heights_start, heights_end, rates_start, rates_end, c,
                s):
     """Earliest contact event inside an accepted step, scanned in ``pieces``: (theta, mask of

@@ -23,7 +23,7 @@ from .pairs import integrate_adaptive_dop853
 NO_LABEL = NO_WELL  # quarter_turns of a cell without a count (int16 fill of the stores)
 
 
-@kernel
+@kernel(inline=True)  # in the batch runners, a run costs no call and no reference counting
 def integrate(p, settings, state, samples, events, final, control):
     """Run one trajectory from ``state`` with ``settings`` (a RunSettings); returns a RunResult
     and writes the final state into ``final``. Setting ``control[0]`` (from another thread)
@@ -233,9 +233,8 @@ def label_states(p, settings, states, control=None) -> Labels:
 
 def unrecorded():
     """(no_samples, no_events, final): what a run that records nothing on the way is given, the
-    arrays typed as the batch kernels pass them on. Made here rather than in the kernels: code
-    that allocates arrays brings numba's array module with it, which loading it from the cache
-    then imports (0.05 s of every command's start)."""
+    arrays typed as the batch kernels pass them on. Made here, once per batch, rather than in
+    the kernels, once per run."""
     return np.empty((0, SAMPLE_COLUMNS)), np.empty((0, EVENT_COLUMNS)), np.empty(6)
 
 
@@ -267,82 +266,28 @@ def dop853_sample_run():
 
 
 def compile_dop853_driver() -> None:
-    """Compile the DOP853 driver into the cache (what :func:`_compile_beside` runs in another
-    process)."""
+    """Compile the DOP853 driver, the largest kernel, into the cache, as the specialisation
+    integrate calls (:func:`_run_once`)."""
     _run_once(integrate_adaptive_dop853, *dop853_sample_run())
-
-
-def compile_beside_main(parent: int) -> None:
-    """The helper process of :func:`_compile_beside`: compile the DOP853 driver unless the
-    process ``parent`` that started it is gone. Ctrl-C reaches the whole process group: the
-    helper ignores it, so that a first Ctrl-C (the command then stops after the compilation)
-    does not leave the parent to compile both drivers; warm_up kills it when the parent is
-    interrupted for good, and on Linux the kernel kills it when the parent dies otherwise
-    (kill, kill -9), so that no compilation outlives the command that needed it."""
-    import os
-    import signal
-    import sys
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    if sys.platform.startswith("linux"):
-        import ctypes
-
-        PR_SET_PDEATHSIG = 1
-        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL))
-    if os.getppid() != parent:  # the parent died before the line above took effect
-        return
-    compile_dop853_driver()
-
-
-def _compile_beside():
-    """Start compiling the DOP853 driver in another process, on the other core: it takes two
-    thirds of a first compilation (195 of 298 s on a loaded host, Dormand-Prince 5(4)'s 91 s),
-    so both drivers compile at once. None if no process can be started (this one then compiles
-    both)."""
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    code = ("from coincli.integrators.batch import compile_beside_main; "
-            f"compile_beside_main({os.getpid()})")
-    # this process's coincli first on the helper's path, whatever put it on this one's: the
-    # same sources, so the same cache
-    package_root = str(Path(__file__).parents[2])  # as numba keys the cache: unresolved
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        part for part in (package_root, os.environ.get("PYTHONPATH")) if part)}
-    try:
-        return subprocess.Popen([sys.executable, "-c", code], env=env, stdin=subprocess.DEVNULL,
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    except OSError:
-        return None
 
 
 def warm_up(p, settings, state, runs=None) -> None:
     """Load the compiled kernels behind ``runs`` (some of final_state, label_states and
     verified_labels; default all three) from numba's cache before a clock starts. Each is
     loaded by a short call whose arrays have the same types as in every real call, so the same
-    specialisations load. A command loads only those it runs (after the first, each costs
-    another 0.03 s), except on the first run of this version on this machine, which compiles
-    all three at once, as the notice before it says (:func:`coincli.jit.kernels_cached`), the
-    two integration drivers in two processes (:func:`_compile_beside`); if the other process
-    fails, this one compiles its driver too, when integrate needs it."""
+    specialisations load. A command loads only those it runs (the first load also imports what
+    numba needs to load machine code, 0.3 s; each after it 0.03 s), except on the first run of
+    these sources on this machine, which compiles all three at once, as the notice before it
+    says (:func:`coincli.jit.kernels_cached`), and marks them compiled."""
     from ..integrators.ladder import Ladder
 
     every = (final_state, label_states, verified_labels)
     first = not kernels_cached()
     runs = every if runs is None or first else runs
     if first:
-        beside = _compile_beside()
-        try:
-            _run_once(integrate_adaptive, p,
-                      settings._replace(method=int(Method.EVENT), t_end=settings.dt * 4), state)
-            if beside is not None:
-                beside.wait()
-        finally:
-            if beside is not None and beside.poll() is None:  # interrupted: stop it too
-                beside.kill()
-                beside.wait()
+        # the largest compilation first, while the process holds the least: the lowest peak
+        # memory (docs/performance.md, "First compile")
+        compile_dop853_driver()
     short = settings._replace(t_end=settings.dt * 4)
     states = np.array([state], dtype=np.float64)
     if final_state in runs:

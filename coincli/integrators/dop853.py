@@ -159,7 +159,7 @@ def controller_memory(err):
     return math.sqrt(math.sqrt(math.sqrt(math.sqrt(math.sqrt(max(err, 1e-4))))))
 
 
-@kernel(inline=True)
+@kernel
 def step_factor(err, memory, largest):
     """The factor for the next step, 0.9 err^(-1/8) err_prev^(1/32) within [0.2, largest]
     (three square roots, no pow()): Gustafsson's PI control, beta = 1/32 (Hairer's dop853.f
@@ -195,7 +195,7 @@ def dense_coefficients(p, mode, start, end, h, stages, c, s):
             combine(ZERO, h, D6, every), combine(ZERO, h, D7, every))
 
 
-@kernel(inline=True)
+@kernel
 def dense_point(rc, theta):
     """The state at fraction theta of the step, from its dense coefficients."""
     r0, f0, f1, f2, f3, f4, f5, f6 = rc

@@ -119,7 +119,7 @@ def controller_memory(err):
     return 1.0
 
 
-@kernel(inline=True)
+@kernel
 def step_factor(err, memory, largest):
     """The factor for the next step, 0.9 err^(-1/ORDER) within [0.2, largest] (err: the error
     norm of the step just tried; memory: unused, see :func:`controller_memory`). err^(-1/5) by
@@ -155,7 +155,7 @@ def dense_coefficients(p, mode, start, end, h, stages, c, s):
     return (start, r1, r2, r3, combine(ZERO, h, D, stages))
 
 
-@kernel(inline=True)
+@kernel
 def dense_point(rc, theta):
     """The state at fraction theta of the step, from its dense coefficients."""
     r0, r1, r2, r3, r4 = rc

@@ -1,5 +1,6 @@
-"""P(outcome) against the parameter of a continuation, with 95 % interval bands (matplotlib,
-loaded lazily; PNG, SVG or PDF by the file's suffix)."""
+"""P(outcome) against the parameter of a continuation, with 95 % interval bands, and over a grid
+of two parameters, maps of P(standing) with a level line and its band (matplotlib, loaded
+lazily; PNG, SVG or PDF by the file's suffix)."""
 
 from __future__ import annotations
 
@@ -8,8 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..montecarlo import PARAMETER_UNITS, FractionsOver, pender_uhrin
+from ..montecarlo import PARAMETER_UNITS, pender_uhrin
 from .charts import PANELS_HINT, figure_axes
+from .fractions_over import FractionsOver
 from .paths import check_figure_path, save_figure
 
 
@@ -116,4 +118,131 @@ def _plot_outcomes(bottom, result: FractionsOver, x: np.ndarray) -> None:
     bottom.grid(True, alpha=0.3)
 
 
-__all__ = ["PANELS", "plot_over"]
+
+
+MAP_TOP = 0.5  # P(standing) at the top of a map's colour scale (above: its colour)
+GRID_PANELS = ("certain", "decided", "uncertain")  # P(standing) over each basis; uncertain
+GRID_TITLES = {"certain": "P(standing), certain labels",
+               "decided": "P(standing), all decided labels",
+               "uncertain": "uncertain (of all samples)"}
+
+
+def plot_grid(result: FractionsOver, out=None, *, level: float = 1 / 3,
+              title: str | None = None, dpi: int = 150, ax=None,
+              panels=("certain", "decided")):
+    """A grid of two parameters as maps, one a panel (of :data:`GRID_PANELS`): P(standing)
+    over the certain labels, over all decided labels, and the uncertain share, the first
+    parameter across (as t/d when it is the thickness or the diameter), the second up (on a
+    log scale when it spans more than a decade). On P(standing): the line P = ``level`` and
+    the lines where the 95 % intervals' low and high ends cross it (its 95 % band); across t/d,
+    where the no-bounce geometric limit (2/pi) arctan(t/d) and Pender and Uhrin's planar die
+    reach the level. Drawn in a new Figure or into ``ax`` (one Axes a panel), returned;
+    written to ``out`` (.png, .svg, .pdf) unless None."""
+    if out is not None:
+        out = check_figure_path(Path(out), "plot")
+    if len(result.parameters) != 2:
+        raise ValueError(f"a map draws a grid of two parameters, got {len(result.parameters)}")
+    panels = tuple(panels)
+    unknown = [p for p in panels if p not in GRID_PANELS]
+    if unknown or not panels:
+        raise ValueError(f"unknown panel {unknown[0] if unknown else '(none)'!r}; panels are "
+                         f"{', '.join(GRID_PANELS)}")
+    fig, axes, own = figure_axes(ax, len(panels), (5.2 * len(panels), 4.4), hint=PANELS_HINT,
+                                 ncols=len(panels), sharey=True)
+    x, x_label, ratio = _across(result)
+    y = np.asarray(result.axes[1], dtype=float)
+    ox, oy = np.argsort(x), np.argsort(y)  # the values as given, drawn in order
+    x, y = x[ox], y[oy]
+
+    def ordered(field: np.ndarray) -> np.ndarray:
+        return field.reshape(result.shape)[ox][:, oy]
+    log_y = bool(np.all(y > 0) and y.max() / y.min() > 10)
+    x_edges, y_edges = _edges(x, False), _edges(y, log_y)
+    for name, one in zip(panels, axes, strict=True):
+        if name == "uncertain":
+            share = np.array([r.uncertain["probability"] for r in result.results])
+            mesh = one.pcolormesh(x_edges, y_edges, ordered(share).T,
+                                  cmap="Greys", vmin=0, vmax=1, shading="flat")
+            fig.colorbar(mesh, ax=one, label="uncertain share")
+        else:
+            p, low, high = (ordered(f) for f in np.moveaxis(result.estimate(name), -1, 0))
+            mesh = one.pcolormesh(x_edges, y_edges, p.T, cmap="viridis", vmin=0,
+                                  vmax=MAP_TOP, shading="flat")
+            fig.colorbar(mesh, ax=one, label="P(standing)", extend="max")
+            handles = _level_lines(one, x, y, p, low, high, level, ratio)
+            if handles and name == next(n for n in panels if n != "uncertain"):
+                one.legend(handles=handles, fontsize=7, loc="upper left",
+                           bbox_to_anchor=(0, -0.14), ncol=2, frameon=False)
+        one.set_title(GRID_TITLES[name], fontsize=9)
+        one.set_xlabel(x_label)
+        if log_y:
+            one.set_yscale("log")
+        if one is axes[0] or not own:
+            second = result.parameters[1]
+            one.set_ylabel(f"{second} ({PARAMETER_UNITS[second]})")
+    if own or title:
+        samples = sorted({r.samples for r in result.results})
+        count = f"{samples[0]:,}" if len(samples) == 1 else f"{samples[0]:,}-{samples[-1]:,}"
+        fig.suptitle(title or f"P(standing) over {' and '.join(result.parameters)}: {count} "
+                     f"samples a point, the same points at every point; lines: P = "
+                     f"{level:.3g} and its 95 % band", fontsize=9)
+    if out is not None:
+        save_figure(fig, out, dpi)
+    return fig
+
+
+def _across(result: FractionsOver) -> tuple[np.ndarray, str, bool]:
+    """The first parameter's values as drawn across, their label, and whether they are t/d
+    (the thickness or the diameter, the other dimension the same at every point)."""
+    name = result.parameters[0]
+    x = np.asarray(result.axes[0], dtype=float)
+    coins = [r.scene["coin"] for r in result.results]
+    other = {"thickness": "diameter", "diameter": "thickness"}.get(name)
+    if other is not None and len({c[other] for c in coins}) == 1:
+        ratio = np.array([c["thickness"] / c["diameter"] for c in coins[::len(result.axes[1])]])
+        return ratio, f"t / d ({name} across)", True
+    return x, f"{name} ({PARAMETER_UNITS[name]})", False
+
+
+def _edges(centres: np.ndarray, log: bool) -> np.ndarray:
+    """Cell edges around sorted centres: halfway between neighbours (geometrically on a log
+    scale), the outer ones as far out as the inner."""
+    c = np.log(centres) if log else np.asarray(centres, dtype=float)
+    if c.size == 1:
+        edges = np.array([c[0] - 0.5, c[0] + 0.5])
+    else:
+        mid = (c[1:] + c[:-1]) / 2
+        edges = np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
+    return np.exp(edges) if log else edges
+
+
+def _level_lines(ax, x, y, p, low, high, level: float, ratio: bool) -> list:
+    """The line P = level and its 95 % band (where the intervals' ends cross it); across t/d,
+    the t/d at which the geometric limit and Pender and Uhrin reach the level. Their legend's
+    handles."""
+    from matplotlib.lines import Line2D
+
+    handles = []
+    if x.size > 1 and y.size > 1:
+        for field, style, label in ((p, "-", f"P = {level:.3g}"),
+                                    (low, "--", "95 % band (low, high ends)"), (high, "--", None)):
+            if np.nanmin(field) < level < np.nanmax(field):
+                ax.contour(x, y, field.T, levels=[level], colors="white", linestyles=style,
+                           linewidths=1.6 if style == "-" else 1.0)
+                if label:
+                    handles.append(Line2D([], [], color="black", ls=style, label=label))
+    if ratio:
+        from scipy.optimize import brentq
+
+        for t_d, style, label in (
+                (math.tan(level * math.pi / 2), ":", "no bounce, (2/pi) arctan(t/d)"),
+                (brentq(lambda q: pender_uhrin(q) - level, 1e-3, 1.0) if level < 0.5 else None,
+                 "-.", "Pender & Uhrin, planar die")):
+            if t_d is not None and x.min() <= t_d <= x.max():
+                ax.axvline(t_d, color="#ff7f0e", ls=style, lw=1.2)
+                handles.append(Line2D([], [], color="#ff7f0e", ls=style,
+                                      label=f"{label}: {t_d:.3f}"))
+    return handles
+
+
+__all__ = ["GRID_PANELS", "PANELS", "plot_grid", "plot_over"]

@@ -16,7 +16,6 @@ from ..integrators.batch import verified_labels, warm_up
 from ..montecarlo import (
     BatchTask,
     Draws,
-    FractionsOver,
     Progression,
     Tally,
     compute_batch,
@@ -30,6 +29,7 @@ from ..montecarlo import (
 from ..montecarlo.plan import FractionsPlan, FractionsProgress
 from ..params import ParameterError, state_array
 from ..sweeps.executors import SchedulerLost, executor_for, hard_stop
+from .fractions_over import FractionsOver
 
 
 class BatchQueue:
@@ -138,14 +138,17 @@ def compute_value_batch(specs, task: BatchTask, control=None):
 def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None,
                   overwrite: bool = False, threads: int | None = None,
                   workers: int | None = None, scheduler: str | None = None,
-                  progress: Callable[[FractionsProgress], None] | None = None, stop=None):
+                  progress: Callable[[FractionsProgress], None] | None = None, stop=None,
+                  worker_timeout: float | None = None):
     """Run a planned Monte Carlo run (see :func:`coincli.fractions`); a Fractions for a plain run, a
-    FractionsOver for a continuation. Several processes may run the same plan on one store at
-    once: they share the batches by claims, and each ends with the same results and store."""
-    from .basin_store import check_store_writable
+    FractionsOver for a continuation (along one parameter, or over a grid of two: every point is
+    a value, counted flat, the first parameter outermost). Several processes may run the same
+    plan on one store at once: they share the batches by claims, and each ends with the same
+    results and store."""
+    from .basin_layout import check_store_writable
     from .fractions_store import FractionsStore, Layout, run_record
 
-    executor = executor_for(threads, workers, scheduler)
+    executor = executor_for(threads, workers, scheduler, worker_timeout)
     started = time.time()
     sampling, goal = plan.sampling, plan.goal
     size = sampling.batch
@@ -154,17 +157,15 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     progs = [Progression(goal, size, verified) for _ in plan.scenes]
     draws = Draws(sampling)
     n_values = len(plan.scenes)
-    layout = Layout(size, goal.batches(size),
-                    () if plan.parameter is None else (n_values,),
-                    () if plan.parameter is None else (plan.parameter,))
+    layout = Layout(size, goal.batches(size), plan.shape, plan.parameters)
     target = claims = None
     damaged: list[tuple[int, int]] = []
     kept = [0] * n_values  # batches the store held whole from batch 0 when the run started
     if store is not None:
         check_store_writable(store)
         target = FractionsStore(store)
-        filled = target.prepare(plan.attrs, layout, None if plan.values is None
-                                else [np.asarray(plan.values)], overwrite=overwrite)
+        filled = target.prepare(plan.attrs, layout, [np.asarray(a) for a in plan.axes] or None,
+                                overwrite=overwrite)
         filled = filled.reshape(n_values, -1)
         damaged = _resume(plan, progs, draws, target, filled)
         kept = _whole_prefix(plan, filled, damaged)
@@ -250,13 +251,11 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     results = []
     for v, (prog, s) in enumerate(zip(progs, plan.scenes, strict=True)):
         stopped = prog.reason if prog.done else StopReason.INTERRUPTED
-        cost = total_cost if plan.parameter is None else {"cpu_seconds": cpu[v]}
-        results.append(make_result(prog, sampling, s, stopped, cost, path, plan.parameter,
-                                   None if plan.values is None else plan.values[v]))
-    if plan.parameter is None:
+        cost = {"cpu_seconds": cpu[v]} if plan.parameters else total_cost
+        results.append(make_result(prog, sampling, s, stopped, cost, path, plan.at(v)))
+    if not plan.parameters:
         return results[0]
-    return FractionsOver(plan.parameter, list(plan.values), results, plan.note, total_cost,
-                         path)
+    return FractionsOver(plan.parameters, plan.axes, results, plan.note, total_cost, path)
 
 
 def _progress(progs, v: int, goal, size: int, computed: int, wall0: float) -> FractionsProgress:

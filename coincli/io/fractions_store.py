@@ -54,9 +54,9 @@ import numpy as np
 from ..montecarlo.plan import STORE_FORMAT
 from ..params import ParameterError
 from ..sweeps.claims import Claims
-from ..sweeps.schema import VARIABLES
+from ..sweeps.schema import VARIABLES, resumable_as
+from .basin_layout import check_is_store, cost_dir, read_runs, record_run
 from .basin_metadata import flatten_attrs, show_value
-from .basin_store import check_is_store, cost_dir, read_runs, record_run
 from .zarr_v3 import (
     ArraySpec,
     create_store,
@@ -263,11 +263,16 @@ class FractionsStore:
             raise ParameterError(f"{path} is a Zarr store but not of coin fractions; "
                                  "overwrite replaces it", parameters=("overwrite",))
         fmt = stored[MARK].get("format") if isinstance(stored[MARK], dict) else None
+        if isinstance(fmt, int) and fmt > FORMAT:  # its data are good: never advised away
+            raise ParameterError(f"{path} was written by a newer coin: a fractions store of "
+                                 f"format {fmt}, where this version writes format {FORMAT}; "
+                                 "upgrade coincli to use it (pip install --upgrade coincli)")
         if fmt != FORMAT:
             raise ParameterError(f"{path} is a coin fractions store of format {fmt}, this "
                                  f"version writes format {FORMAT}: overwrite starts it again",
                                  parameters=("overwrite",))
-        diff = differences(stored, attrs)
+        earlier = resumable_as(stored, attrs)  # a store of an earlier version: resumed as is
+        diff = differences(stored, attrs if earlier is None else earlier)
         if diff:
             raise ParameterError(f"{path} holds other samples: {'; '.join(diff[:4])}"
                                  f"{' ...' if len(diff) > 4 else ''}. Run again with the "
@@ -393,6 +398,24 @@ class FractionsStore:
                     f.unlink()
             removed += 1
         return removed
+
+    def held_samples(self, plan) -> list[int] | None:
+        """The samples of the run of ``plan`` this store holds, per value (None if it holds
+        another run): those of the batches the run can use that are whole in the store (a
+        batch missing or cut short is to compute, whatever the store holds beyond the run)."""
+        try:
+            filled = self.read_filled()
+            stored = self.attrs()
+        except Exception:  # noqa: BLE001 - an unreadable store is the run's to report
+            return None
+        earlier = resumable_as(stored, plan.attrs)
+        if differences(stored, plan.attrs if earlier is None else earlier):
+            return None
+        rows = filled.reshape(len(plan.scenes), -1)
+        goal, batch = plan.goal, plan.sampling.batch
+        uses = [goal.count(b, batch) for b in range(goal.batches(batch))]
+        return [sum(n for n, held in zip(uses, row, strict=False) if held >= n)
+                for row in rows]
 
     # -- its records ----------------------------------------------------------------------------
     def record_run(self, run: dict) -> None:

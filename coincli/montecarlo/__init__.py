@@ -10,7 +10,8 @@ The public entry point is :func:`coincli.fractions` (:func:`coincli.api.fraction
 This package holds the pure computation (no files, no threads, no terminal): the distributions
 and their parsing and draws (:mod:`.sampling`: scrambled Sobol points or a seeded generator),
 one batch's labels (:mod:`.batch`), the counts, intervals and stop rule (:mod:`.tally`), the
-scenes of a continuation (:mod:`.continuation`) and the results (:mod:`.results`).
+scenes of a continuation (:mod:`.continuation`) and the results (:mod:`.results`; a
+continuation's, with their Dataset: :mod:`coincli.io.fractions_over`).
 :mod:`coincli.io.fractions_run` runs batches on threads or Dask and
 :mod:`coincli.io.fractions_store` keeps them in a Zarr store.
 
@@ -53,16 +54,18 @@ from .continuation import (
     PARAMETER_UNITS,
     PARAMETERS,
     continuation_note,
+    corner_restitution,
     disc_density,
     disc_inertia,
     lamina_inertia,
     parse_over,
     pender_uhrin,
+    point_scene,
     scene_at,
 )
 from .results import (
     Fractions,
-    FractionsOver,
+    level_crossing,
     make_result,
 )
 from .sampling import (
@@ -105,10 +108,11 @@ __all__ = [
     "CONFIDENCE", "DEFAULT_BATCH", "DEFAULT_DISTRIBUTIONS", "DEFAULT_MAX_SAMPLES",
     "DEFAULT_PRECISION", "GOALS", "IC5", "INTERVAL_NOTE", "LABEL_NAMES", "PARAMETER_UNITS",
     "PARAMETERS", "SAMPLERS", "SOBOL_MAX", "UNITS", "BatchResult", "BatchTask", "check_box",
-    "compute_batch", "continuation_note", "disc_density", "disc_inertia", "Dist", "Draws",
-    "Fractions", "FractionsOver", "FractionSpec", "Goal", "half_widths", "initial_states",
-    "lamina_inertia", "make_fraction_spec", "make_goal", "make_result", "make_sampling",
+    "compute_batch", "continuation_note", "corner_restitution", "disc_density", "disc_inertia",
+    "Dist", "Draws", "Fractions", "FractionSpec", "Goal", "half_widths", "initial_states",
+    "lamina_inertia", "level_crossing", "make_fraction_spec", "make_goal", "make_result",
+    "make_sampling",
     "max_reach", "parse_count", "parse_dist", "parse_over", "parse_precision", "pender_uhrin",
-    "precise", "Progression", "samples_needed", "Sampling", "scene_at", "summary", "Tally",
-    "widest", "wilson_arrays"
+    "point_scene", "precise", "Progression", "samples_needed", "Sampling", "scene_at",
+    "summary", "Tally", "widest", "wilson_arrays"
 ]

@@ -1,5 +1,5 @@
-"""The scenes along one physical parameter, mass and inertia following a solid disc, and
-Pender & Uhrin's prediction for comparison."""
+"""The scenes along one or more physical parameters, mass and inertia following a solid disc,
+a corner's coefficient of restitution, and Pender & Uhrin's prediction for comparison."""
 
 from __future__ import annotations
 
@@ -13,18 +13,31 @@ from ..params import ParameterError, Scene, validate
 
 
 def parse_over(text: str) -> tuple[str, np.ndarray]:
-    """``thickness=0.001:0.02:20`` -> ('thickness', linspace(0.001, 0.02, 20))."""
-    m = re.fullmatch(r"\s*([a-z_]+)\s*=\s*([^:]+):([^:]+):([^:]+)\s*", str(text), re.IGNORECASE)
-    if m is None:
+    """``thickness=0.001:0.02:20`` -> ('thickness', linspace(0.001, 0.02, 20));
+    ``c=0.1,0.5,2`` -> ('c', [0.1, 0.5, 2]) (values listed, e.g. spaced unevenly)."""
+    m = re.fullmatch(r"\s*([a-z_]+)\s*=\s*(.+?)\s*", str(text), re.IGNORECASE | re.DOTALL)
+    if m is None or ("," not in m.group(2) and m.group(2).count(":") != 2):
         raise ParameterError(f"over '{text}' is not NAME=LO:HI:STEPS (e.g. "
-                             "thickness=0.001:0.02:20)", parameters=("over",))
+                             "thickness=0.001:0.02:20) or NAME=V1,V2,... (e.g. c=0.1,0.5,2)",
+                             parameters=("over",))
     name = m.group(1).lower()
     if name not in PARAMETERS:
         raise ParameterError(f"over {name}: not a physical parameter; one of "
                              f"{', '.join(PARAMETERS)}", parameters=("over",))
+    if "," in m.group(2):
+        try:
+            values = np.array([float(v) for v in m.group(2).split(",")])
+        except ValueError:
+            raise ParameterError(f"over '{text}': the values V1,V2,... must be numbers",
+                                 parameters=("over",)) from None
+        if not np.isfinite(values).all() or len(set(values.tolist())) != values.size:
+            raise ParameterError(f"over '{text}': the values must be finite and differ",
+                                 parameters=("over",))
+        return name, values
+    lo, hi, steps = m.group(2).split(":")
     try:
-        lo, hi = float(m.group(2)), float(m.group(3))
-        steps = float(m.group(4))
+        lo, hi = float(lo), float(hi)
+        steps = float(steps)
     except ValueError:
         raise ParameterError(f"over '{text}': LO, HI and STEPS must be numbers",
                              parameters=("over",)) from None
@@ -55,29 +68,41 @@ def lamina_inertia(mass: float, diameter: float, thickness: float) -> float:
 
 
 def scene_at(scene: Scene, parameter: str, value: float, keep: tuple[str, ...] = ()) -> Scene:
-    """The scene with ``parameter`` set to ``value``. For thickness and diameter, the mass and
-    the inertia follow a uniform solid disc of the base coin's density (m = rho pi (d/2)^2 t,
-    I = m (3 (d/2)^2 + t^2) / 12), except those named in ``keep``, which keep the scene's."""
-    if parameter not in PARAMETERS:
-        raise ParameterError(f"cannot vary '{parameter}'; one of {', '.join(PARAMETERS)}")
-    new = scene.with_overrides(**{parameter: float(value)})
-    if parameter in ("thickness", "diameter"):
+    """The scene with ``parameter`` set to ``value`` (see :func:`point_scene`)."""
+    return point_scene(scene, {parameter: value}, keep)
+
+
+def point_scene(scene: Scene, at: dict[str, float], keep: tuple[str, ...] = ()) -> Scene:
+    """The scene with each parameter of ``at`` set to its value. For thickness and diameter,
+    the mass and the inertia follow a uniform solid disc of the base coin's density
+    (m = rho pi (d/2)^2 t, I = m (3 (d/2)^2 + t^2) / 12), except those named in ``keep`` or
+    set in ``at``, which keep their values."""
+    for parameter in at:
+        if parameter not in PARAMETERS:
+            raise ParameterError(f"cannot vary '{parameter}'; one of {', '.join(PARAMETERS)}")
+    new = scene.with_overrides(**{name: float(value) for name, value in at.items()})
+    if {"thickness", "diameter"} & set(at):
         c = new.coin
-        mass = c.mass if "mass" in keep else \
+        fixed = set(keep) | set(at)
+        mass = c.mass if "mass" in fixed else \
             disc_density(scene) * math.pi * c.r_d ** 2 * c.thickness
-        inertia = c.inertia if "inertia" in keep else \
+        inertia = c.inertia if "inertia" in fixed else \
             disc_inertia(mass, c.diameter, c.thickness)
         new = new.with_overrides(mass=mass, inertia=inertia)
     return validate(new)
 
 
-def continuation_note(scene: Scene, parameter: str, keep: tuple[str, ...] = ()) -> str | None:
+def continuation_note(scene: Scene, parameters: str | tuple[str, ...],
+                      keep: tuple[str, ...] = ()) -> str | None:
     """What a user must know about the scenes of a continuation in thickness or diameter."""
-    if parameter not in ("thickness", "diameter"):
+    parameters = (parameters,) if isinstance(parameters, str) else tuple(parameters)
+    shaped = [p for p in parameters if p in ("thickness", "diameter")]
+    if not shaped:
         return None
-    follow = [name for name in ("mass", "inertia") if name not in keep]
+    follow = [name for name in ("mass", "inertia") if name not in (*keep, *parameters)]
     if not follow:
-        return "mass and inertia are held at the scene's values at every " + parameter
+        return "mass and inertia are held at the scene's values at every " + \
+            " and ".join(shaped)
     c = scene.coin
     disc_i = disc_inertia(c.mass, c.diameter, c.thickness)
     text = (f"{' and '.join(follow)} follow{'s' if len(follow) == 1 else ''} a uniform solid "
@@ -91,6 +116,26 @@ def continuation_note(scene: Scene, parameter: str, keep: tuple[str, ...] = ()) 
     if keep:
         text += f"; {' and '.join(keep)} held at the scene's value"
     return text
+
+
+def corner_restitution(scene: Scene, lever: float = 0.0) -> float:
+    """The coefficient of restitution of one corner of the coin struck straight down on the
+    foundation, ``lever`` m horizontally from the centroid. Over the brief contact the corner
+    is a damped oscillator: its vertical force -k y - c y' (eqs. 1-2) accelerates it by
+    F (1/m + lever^2 / I) (the centroid by F / m, the turn by lever F / I), so its mass is
+    m_eff = 1 / (1/m + lever^2 / I), zeta = c / (2 sqrt(k m_eff)), and it leaves the surface
+    (y = 0 again) after half a damped period with e = exp(-pi zeta / sqrt(1 - zeta^2)) of its
+    speed; 0 from critical damping (zeta >= 1) on, where it never comes back up. Gravity,
+    the turn during the contact and the horizontal damper are left out (lever = 0, a corner
+    under the centroid, with no spin and no sliding, is exact but for gravity)."""
+    coin, k, c = scene.coin, float(scene.foundation.k), float(scene.foundation.c)
+    if c <= 0:
+        return 1.0
+    m_eff = 1.0 / (1.0 / coin.mass + lever ** 2 / coin.inertia)
+    zeta = c / (2.0 * math.sqrt(k * m_eff))
+    if zeta >= 1.0:
+        return 0.0
+    return math.exp(-math.pi * zeta / math.sqrt(1.0 - zeta * zeta))
 
 
 def pender_uhrin(ratio) -> np.ndarray:

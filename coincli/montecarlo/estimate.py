@@ -1,11 +1,13 @@
 """How much a Monte Carlo run will cost before it starts: a pilot of a few hundred samples of
-the run's own first batch, at up to three of its values, timed and counted. From the pilot's
+the run's own first batch, at a few of its values (along one parameter the first, the middle and
+the last; over a grid its corners and its centre), timed and counted. From the pilot's
 labels, the normal approximation at its estimates gives the samples the stop rule will need
 (a precision goal), and whether the sample budget suffices; from its CPU time, how long the
 samples left take."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -19,7 +21,6 @@ from .sampling import Draws, initial_states
 from .tally import Tally, samples_needed
 
 PILOT_SAMPLES = 512  # samples a piloted value computes: the first of its first batch
-PILOT_VALUES = 3  # values piloted in a continuation: the first, the middle and the last
 
 
 @dataclass(frozen=True)
@@ -42,6 +43,16 @@ class FractionsEstimate:
         return self.needed is None or self.needed <= self.budget
 
 
+def pilot_values(shape: tuple[int, ...]) -> list[int]:
+    """The values a pilot runs (flat indices): the corners of the grid (along one parameter,
+    its ends) and its centre; 0 for a plain run."""
+    if not shape:
+        return [0]
+    points = {tuple(p) for p in itertools.product(*[(0, n - 1) for n in shape])}
+    points.add(tuple(n // 2 for n in shape))
+    return sorted(int(np.ravel_multi_index(p, shape)) for p in points)
+
+
 def estimate_fractions(plan: FractionsPlan, workers: int | None,
                        held: list[int] | None = None) -> FractionsEstimate:
     """Estimate a planned run: ``workers`` threads or Dask workers (None: CPU time, for a
@@ -51,7 +62,7 @@ def estimate_fractions(plan: FractionsPlan, workers: int | None,
     n_values = len(plan.scenes)
     if held and all(h >= budget for h in held):  # the store holds the whole run: no pilot
         return FractionsEstimate(0, None, budget, math.nan, 0.0, workers, 0, sum(held))
-    piloted = sorted({0, n_values // 2, n_values - 1})[:PILOT_VALUES]
+    piloted = pilot_values(plan.shape)
     count = min(PILOT_SAMPLES, sampling.batch, budget)
     points = Draws(sampling).batch(0)[:count]
     cpu, needs = 0.0, []
@@ -77,4 +88,4 @@ def estimate_fractions(plan: FractionsPlan, workers: int | None,
                              count * len(piloted), sum(held))
 
 
-__all__ = ["FractionsEstimate", "PILOT_SAMPLES", "estimate_fractions"]
+__all__ = ["FractionsEstimate", "PILOT_SAMPLES", "estimate_fractions", "pilot_values"]

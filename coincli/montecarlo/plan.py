@@ -3,6 +3,7 @@ stop, and the attributes its store carries; and what a run reports after every b
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -12,7 +13,7 @@ from ..grid import method_attrs
 from ..integrators import check_step
 from ..params import ParameterError, Scene, validate
 from ..version import __version__
-from .continuation import PARAMETERS, continuation_note, parse_over, scene_at
+from .continuation import PARAMETERS, continuation_note, parse_over, point_scene
 from .sampling import DEFAULT_BATCH, SOBOL_MAX, Sampling, check_box, make_sampling
 from .tally import DEFAULT_MAX_SAMPLES, Goal, make_goal
 
@@ -20,22 +21,104 @@ STORE_FORMAT = 3  # of a fractions store (coincli.io.fractions_store): 2, a chun
 # 3: certainty 3 = undecided (before, undecided labels were 0, uncertain, like chaotic ones)
 
 
+MAX_PARAMETERS = 2  # a continuation varies one parameter, or a grid of two
+
+
 @dataclass(frozen=True)
 class FractionsPlan:
-    """A validated Monte Carlo run: the scene of each value (one for a plain run), how samples
+    """A validated Monte Carlo run: the scene of each value (one for a plain run; over a grid of
+    two parameters, one a point, counted flat with the first parameter outermost), how samples
     are drawn, when to stop, and the attributes its store carries."""
 
     scenes: tuple[Scene, ...]
     sampling: Sampling
     goal: Goal
-    parameter: str | None
-    values: tuple[float, ...] | None
+    parameters: tuple[str, ...]  # the parameters varied (none for a plain run)
+    axes: tuple[tuple[float, ...], ...]  # the values of each
     note: str | None
     attrs: dict
 
     @property
     def scene(self) -> Scene:
         return self.scenes[0]
+
+    @property
+    def parameter(self) -> str | None:
+        """The parameter of a continuation along one (None for a plain run or a grid)."""
+        return self.parameters[0] if len(self.parameters) == 1 else None
+
+    @property
+    def values(self) -> tuple[float, ...] | None:
+        """The values of a continuation along one parameter (None for a plain run or a
+        grid)."""
+        return self.axes[0] if len(self.parameters) == 1 else None
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """How many values each parameter takes (() for a plain run)."""
+        return tuple(len(values) for values in self.axes)
+
+    def at(self, value: int) -> dict[str, float]:
+        """The parameters' values at flat index ``value`` ({} for a plain run)."""
+        if not self.parameters:
+            return {}
+        index = np.unravel_index(value, self.shape)
+        return {name: values[i] for name, values, i in
+                zip(self.parameters, self.axes, index, strict=True)}
+
+    def label(self, value: int) -> str:
+        """'thickness = 0.002, c = 0.5': where value ``value`` is ('' for a plain run)."""
+        return ", ".join(f"{name} = {v:g}" for name, v in self.at(value).items())
+
+
+def parse_grid(over) -> list[tuple[str, tuple[float, ...]]]:
+    """The (name, values) of each parameter of ``over``: ``'NAME=LO:HI:STEPS'`` (or
+    ``'NAME=V1,V2,...'``), ``(name, values)``, a dict ``{name: values}``, or a list of
+    these (strings or pairs), the first parameter outermost."""
+    if isinstance(over, str):
+        items = [over]
+    elif isinstance(over, dict):
+        items = list(over.items())
+    elif isinstance(over, tuple | list) and len(over) == 2 and isinstance(over[0], str) \
+            and not isinstance(over[1], str):
+        items = [tuple(over)]
+    elif isinstance(over, tuple | list):
+        items = list(over)
+    else:
+        raise ParameterError(f"over: give 'NAME=LO:HI:STEPS', (name, values) or "
+                             f"{{name: values}}, got {type(over).__name__}",
+                             parameters=("over",))
+    grid = []
+    for item in items:
+        if isinstance(item, str):
+            name, values = parse_over(item)
+        elif isinstance(item, tuple | list) and len(item) == 2 and isinstance(item[0], str):
+            name, values = item
+        else:
+            raise ParameterError(f"over: {item!r} is neither 'NAME=LO:HI:STEPS' nor a "
+                                 "(name, values) pair", parameters=("over",))
+        if name not in PARAMETERS:
+            raise ParameterError(f"cannot vary '{name}'; one of {', '.join(PARAMETERS)}",
+                                 parameters=("over",))
+        try:
+            values = tuple(float(v) for v in np.atleast_1d(np.asarray(values, dtype=float)))
+        except (TypeError, ValueError):
+            raise ParameterError(f"{name}: its values must be numbers",
+                                 parameters=("over",)) from None
+        if not values or not all(math.isfinite(v) for v in values):
+            raise ParameterError(f"{name}: give finite values to vary it over",
+                                 parameters=("over",))
+        grid.append((name, values))
+    names = [name for name, _ in grid]
+    if not names:
+        raise ParameterError("over: name a parameter to vary", parameters=("over",))
+    if len(set(names)) != len(names):
+        raise ParameterError(f"over: {names[0] if names.count(names[0]) > 1 else names[1]} "
+                             "is given twice", parameters=("over",))
+    if len(names) > MAX_PARAMETERS:
+        raise ParameterError(f"over: at most {MAX_PARAMETERS} parameters at once, got "
+                             f"{len(names)} ({', '.join(names)})", parameters=("over",))
+    return grid
 
 
 def plan_fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
@@ -45,8 +128,8 @@ def plan_fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=N
                    ) -> FractionsPlan:
     """Check everything about a Monte Carlo run before any work: the distributions (see
     :func:`coincli.fractions.parse_dist`), that no sample can start too deep in the foundation,
-    the goal, and for a continuation (``over``: ``(name, values)`` or ``'NAME=LO:HI:STEPS'``)
-    every value's scene and step."""
+    the goal, and for a continuation (``over``: see :func:`parse_grid`; two parameters make a
+    grid of every pair of their values) every value's scene and step."""
     validate(scene)
     sampling = make_sampling(scene, sampler=sampler, seed=seed, batch=batch, y0=y0, phi0=phi0,
                              vx=vx, vy=vy, vphi=vphi)
@@ -58,45 +141,46 @@ def plan_fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=N
     for name in keep:
         if name not in ("mass", "inertia"):
             raise ParameterError(f"keep: '{name}' is not mass or inertia")
-    parameter = values = note = None
-    if over is not None:
-        parameter, values = parse_over(over) if isinstance(over, str) else over
-        values = tuple(float(v) for v in np.atleast_1d(np.asarray(values, dtype=float)))
-        if parameter not in PARAMETERS:
-            raise ParameterError(f"cannot vary '{parameter}'; one of {', '.join(PARAMETERS)}")
-        if not values or not all(math.isfinite(v) for v in values):
-            raise ParameterError(f"{parameter}: give finite values to vary it over")
-        scenes = tuple(scene_at(scene, parameter, v, keep) for v in values)
-        note = continuation_note(scene, parameter, keep)
-    else:
-        scenes = (scene,)
+    grid = [] if over is None else parse_grid(over)
+    names = tuple(name for name, _ in grid)
+    axes = tuple(values for _, values in grid)
+    note = continuation_note(scene, names, keep) if grid else None
+    scenes = tuple(point_scene(scene, dict(zip(names, point, strict=True)), keep)
+                   for point in itertools.product(*axes)) if grid else (scene,)
     for s in scenes:
         check_box(s, sampling)
         method = check_step(s, force=force)
     parameters = scene.to_dict()
     for name in sampling.random_names:
         parameters["initial"][name] = None  # drawn: see sampling
-    if parameter is not None:  # varied: see over (the base scene's value is in the note)
-        if parameter == "g":
+    for name in names:  # varied: see over (the base scene's value is in the note)
+        if name == "g":
             parameters["g"] = None
         else:
-            section = "foundation" if parameter in ("k", "c") else "coin"
-            parameters[section][parameter] = None
+            section = "foundation" if name in ("k", "c") else "coin"
+            parameters[section][name] = None
+    if len(names) == 1:  # as 0.9.0 wrote it (its stores resume)
+        described = {"parameter": names[0], "values": list(axes[0]), "keep": list(keep),
+                     "note": note}
+    elif names:
+        described = {"parameters": list(names), "values": [list(v) for v in axes],
+                     "keep": list(keep), "note": note}
+    else:
+        described = None
     attrs = {"coin_fractions": {"format": STORE_FORMAT, "command": "coin fractions"},
              "version": __version__, "parameters": parameters,
              "sampling": sampling.to_dict(), "method": method_attrs(scene, method),
-             "over": None if parameter is None else {
-                 "parameter": parameter, "values": list(values), "keep": list(keep),
-                 "note": note}}
-    return FractionsPlan(scenes, sampling, goal, parameter, values, note, attrs)
+             "over": described}
+    return FractionsPlan(scenes, sampling, goal, names, axes, note, attrs)
 
 
 @dataclass(frozen=True)
 class FractionsProgress:
     """Passed to a Monte Carlo run's ``progress`` callback after every batch."""
 
-    value: int  # index of the value whose batch just finished (0 for a plain run)
-    values: int  # number of values (1 for a plain run)
+    value: int  # index of the value whose batch just finished (0 for a plain run; over a
+    # grid, the point counted flat, the first parameter outermost: FractionsPlan.at)
+    values: int  # number of values (1 for a plain run; the points of a grid)
     values_done: int  # values whose goal is met
     samples: int  # samples counted for this value so far (the prefix of batches, in order)
     standing: tuple[float, float, float]  # P(standing), low, high over that prefix

@@ -1,8 +1,10 @@
-"""What a Monte Carlo run returns: :class:`Fractions` and, along a parameter,
-:class:`FractionsOver`."""
+"""What a Monte Carlo run returns at one value: :class:`Fractions`; and where an estimate along a
+parameter crosses a level (:func:`level_crossing`; a continuation's results, along a parameter
+or over a grid of two, are :class:`coincli.io.fractions_over.FractionsOver`)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -10,7 +12,6 @@ import numpy as np
 from ..enums import StopReason
 from ..params import Scene
 from ..stats import proportion
-from .continuation import PARAMETER_UNITS
 from .sampling import Sampling
 from .tally import INTERVAL_NOTE, Progression, summary, widest
 
@@ -42,17 +43,19 @@ class Fractions:
     scene: dict
     cost: dict = field(default_factory=dict)
     store: str | None = None
-    parameter: str | None = None  # of a continuation: the parameter and this value
+    parameter: str | None = None  # along one parameter: the parameter and this value
     value: float | None = None
     all_decided: dict = field(default_factory=dict)
+    at: dict | None = None  # of a continuation (one parameter or a grid): {name: value}
 
     @property
     def interrupted(self) -> bool:
         return self.stopped is StopReason.INTERRUPTED
 
     def __repr__(self) -> str:  # one line in a notebook; the numbers: to_dict()
-        at = "" if self.parameter is None else f"{self.parameter} = {self.value:g}: "
-        return (f"Fractions({at}P(standing) = {_pct(self.standing)}, "
+        at = "" if not self.at else \
+            ", ".join(f"{name} = {value:g}" for name, value in self.at.items()) + ": "
+        return (f"Fractions({at}P(standing) = {percent_text(self.standing)}, "
                 f"{self.samples:,} samples, {self.counted:,} counted, uncertain "
                 f"{100 * self.uncertain['probability']:.3g} %, stopped: {self.stopped})")
 
@@ -74,12 +77,14 @@ class Fractions:
             "interval": INTERVAL_NOTE, "sampling": self.sampling, "parameters": self.scene,
             "cost": self.cost, "store": self.store,
         }
+        if self.at:
+            out = {"at": dict(self.at), **out}
         if self.parameter is not None:
             out = {"parameter": self.parameter, "value": self.value, **out}
         return out
 
 
-def _pct(row: dict) -> str:
+def percent_text(row: dict) -> str:
     """'0.76 % [0.66, 0.87]': a probability and its 95 % interval, in percent."""
     return (f"{100 * row['probability']:.3g} % [{100 * row['low']:.3g}, "
             f"{100 * row['high']:.3g}]")
@@ -87,8 +92,8 @@ def _pct(row: dict) -> str:
 
 def make_result(progression: Progression, sampling: Sampling, scene: Scene,
                 stopped: StopReason,
-                cost: dict, store: str | None = None, parameter: str | None = None,
-                value: float | None = None) -> Fractions:
+                cost: dict, store: str | None = None, at: dict | None = None) -> Fractions:
+    """The result of one value (``at``: its parameters' values, of a continuation)."""
     s = summary(progression.tally, progression.verified)
     return Fractions(samples=s["samples"], counted=s["counted"], standing=s["standing"],
                      lying=s["lying"], uncertain=s["uncertain"], outcomes=s["outcomes"],
@@ -98,41 +103,45 @@ def make_result(progression: Progression, sampling: Sampling, scene: Scene,
                      goal=progression.goal.to_dict(),
                      achieved=widest(progression.tally, progression.goal.of),
                      sampling=sampling.to_dict(), scene=scene.to_dict(), cost=cost,
-                     store=store, parameter=parameter, value=value)
+                     store=store, at=at or None,
+                     parameter=next(iter(at)) if at and len(at) == 1 else None,
+                     value=next(iter(at.values())) if at and len(at) == 1 else None)
 
 
-@dataclass
-class FractionsOver:
-    """A continuation: the outcome probabilities at each value of one physical parameter, the
-    same sample points at every value."""
+BASES = {"certain": lambda r: r.standing, "decided": lambda r: r.all_decided["standing"],
+         "labelled": lambda r: r.all_labelled["standing"]}
 
-    parameter: str
-    values: list[float]
-    results: list[Fractions]
-    note: str | None
-    cost: dict = field(default_factory=dict)
-    store: str | None = None
 
-    @property
-    def standing(self) -> np.ndarray:
-        """(values, 3): P(standing), low, high at each value."""
-        return np.array([[r.standing["probability"], r.standing["low"], r.standing["high"]]
-                         for r in self.results])
+def _rise(x: np.ndarray, f: np.ndarray, level: float, last: bool) -> float:
+    """x where f rises through level, linearly between the values around it: the first rise
+    (``last``: the rise after which f stays at or above the level); NaN if f does not rise
+    through it within x."""
+    below = np.flatnonzero(~(f >= level))  # NaN counts as below
+    if below.size == 0 or below[-1] == f.size - 1 and last:
+        return math.nan
+    if last:
+        i = below[-1]
+    else:
+        above = np.flatnonzero(f >= level)
+        if above.size == 0 or above[0] == 0:
+            return math.nan
+        i = above[0] - 1
+        if not f[i] < level:  # NaN before the rise
+            return math.nan
+    return float(x[i] + (level - f[i]) * (x[i + 1] - x[i]) / (f[i + 1] - f[i]))
 
-    @property
-    def interrupted(self) -> bool:
-        return any(r.interrupted for r in self.results)
 
-    def __repr__(self) -> str:
-        unit = PARAMETER_UNITS[self.parameter]
-        rows = "; ".join(f"{v:g}: {_pct(r.standing)}" for v, r in
-                         zip(self.values, self.results, strict=True))
-        if len(rows) > 300:
-            rows = rows[:300].rsplit(";", 1)[0] + "; ..."
-        return (f"FractionsOver({self.parameter} ({unit}), {len(self.values)} values, "
-                f"P(standing) {rows})")
+def level_crossing(x, p, low, high, level: float = 1 / 3) -> tuple[float, float, float]:
+    """Where an estimate p(x) that rises with x (x ascending) crosses ``level``, with an
+    interval: (at, from, to). ``at``: the first rise of p through the level; ``from``: the
+    first rise of the intervals' high end (below it p is below the level, at 95 % each);
+    ``to``: the last rise of their low end (beyond it p stays above). Linear interpolation
+    between neighbouring values; NaN where the rise is not within x (the level is crossed
+    before the first value, or after the last)."""
+    x = np.asarray(x, dtype=np.float64)
+    return (_rise(x, np.asarray(p, dtype=np.float64), level, False),
+            _rise(x, np.asarray(high, dtype=np.float64), level, False),
+            _rise(x, np.asarray(low, dtype=np.float64), level, True))
 
-    def to_dict(self) -> dict:
-        return {"parameter": self.parameter, "units": PARAMETER_UNITS[self.parameter],
-                "values": list(self.values), "note": self.note, "cost": self.cost,
-                "store": self.store, "results": [r.to_dict() for r in self.results]}
+
+__all__ = ["BASES", "Fractions", "level_crossing", "make_result", "percent_text"]

@@ -103,6 +103,7 @@ def analyze_command(
     from ...grid import parse_range
     from ...io.basin_store import BasinStore
     from ...io.paths import check_figure_path, check_rrd_path
+    from ...sweeps.executors import check_where
 
     with user_errors():
         span = parse_range("eps", eps)
@@ -114,7 +115,7 @@ def analyze_command(
             check_rrd_path(figure)  # a writable file path
         store = BasinStore.open(path)
         basin = store.read()
-        api.check_where(threads, None, None)
+        check_where(threads, None, None)
     metadata_note(store)
     where_to, no_viewer = recording.destination(rrd, spawn, connect)
     n_points = DEFAULT_POINTS if points is None else points

@@ -13,6 +13,7 @@ from ...params import ParameterError
 from .. import recording
 from ..common import (
     INIT,
+    RUN,
     COpt,
     DiameterOpt,
     DtOpt,
@@ -24,11 +25,14 @@ from ..common import (
     MaxStepsOpt,
     MethodOpt,
     PresetOpt,
+    QuietOpt,
     RtolOpt,
     SinglePassOpt,
     StopOpt,
     TEndOpt,
     ThicknessOpt,
+    ThreadsOpt,
+    WorkersOpt,
     WorkerTimeoutOpt,
     build_scene,
     compile_first,
@@ -37,7 +41,6 @@ from ..common import (
     fail,
     in_cli_words,
     user_errors,
-    whole_option,
 )
 from ..recording import LiveConnectOpt, LiveRrdOpt, LiveSpawnOpt
 from ..text import (
@@ -50,7 +53,6 @@ from .group import basin_app, tile_list
 SWEEP = "Sweep"
 
 
-RUN = "Where it runs"
 
 
 def _ic(name: str, help_text: str, default_note: str = ""):
@@ -107,23 +109,14 @@ def sweep_command(
                                             help="Replace an existing store "
                                             "instead of resuming it.",
                                             rich_help_panel=SWEEP)] = False,
-    threads: Annotated[int | None, typer.Option("--threads", help="Threads computing tiles "
-                                                "on this machine (default: one per core).",
-                                                rich_help_panel=RUN, parser=whole_option,
-                                                metavar="N")] = None,
-    workers: Annotated[int | None, typer.Option("--workers", help="Start a local Dask "
-                                                "cluster of N worker processes and run the "
-                                                "tiles on it.", rich_help_panel=RUN,
-                                                parser=whole_option, metavar="N")] = None,
-    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Run the tiles as Dask "
-                                                  "tasks on the cluster at this address "
-                                                  "(tcp://HOST:PORT); every worker writes its "
-                                                  "tiles to PATH, so PATH must be the same "
-                                                  "shared directory on all of them.",
-                                                  rich_help_panel=RUN)] = None,
+    threads: ThreadsOpt = None, workers: WorkersOpt = None,
+    scheduler: Annotated[str | None, typer.Option(
+        "--scheduler", metavar="ADDRESS", rich_help_panel=RUN,
+        help="Run the tiles as Dask tasks on the cluster at this address (tcp://HOST:PORT); "
+             "every worker writes its tiles to STORE, so STORE must be the same shared "
+             "directory on all of them.")] = None,
     worker_timeout: WorkerTimeoutOpt = None,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", metavar="", help="No progress bar.",
-                                        rich_help_panel=RUN)] = False,
+    quiet: QuietOpt = False,
     yes: Annotated[bool, typer.Option("--yes", "-y", metavar="",
                                       help="Start a sweep estimated to take "
                                       "more than 12 hours anyway.",
@@ -145,6 +138,7 @@ def sweep_command(
     coin basin out.zarr --vy 0:2 --vphi -20:20 --res 512
     """  # noqa: E501
     from ... import api
+    from ...sweeps.executors import check_where
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
@@ -154,7 +148,7 @@ def sweep_command(
         plan = api.plan_sweep(scene, res=res, chunk=chunk, force=force,
                               mirror=not no_mirror, x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy,
                               vphi=vphi)
-        api.check_where(threads, workers, scheduler, worker_timeout)
+        check_where(threads, workers, scheduler, worker_timeout)
     where_to, no_viewer = recording.destination(rrd, spawn, connect)
     # before the sweep: its pilot estimate is the first run of the kernels (a store that
     # is already complete on a fresh install is the one case compiled for without need)
