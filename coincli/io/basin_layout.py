@@ -18,7 +18,7 @@ import numpy as np
 from ..defaults import IC_NAMES
 from ..grid import Axis, Grid
 from ..params import ParameterError
-from ..sweeps.claims import HOST, pid_alive
+from ..sweeps.claims import HOST, Claims, pid_alive
 from ..sweeps.schema import (
     COMPARED_ATTRS,
     COORD_NOTE,
@@ -168,6 +168,31 @@ def record_run(path: str | os.PathLike, run: dict) -> None:
     target.parent.mkdir(parents=True, exist_ok=True)
     with open(target, "a") as fh:
         fh.write(json.dumps(run) + "\n")
+
+
+class SideRecords:
+    """What a store (basin or fractions) keeps beside it, in ``STORE.cost/``: the records of
+    its runs and the claims of the processes that share it. Its owner sets ``path``."""
+
+    path: Path
+
+    @property
+    def cost_dir(self) -> Path:
+        return cost_dir(self.path)
+
+    @property
+    def claims_dir(self) -> Path:
+        return self.cost_dir / "claims"
+
+    def claims(self) -> Claims:
+        """This process's claims on the store's pieces of work (close them when done)."""
+        return Claims(self.claims_dir)
+
+    def record_run(self, run: dict) -> None:
+        record_run(self.path, run)
+
+    def runs(self) -> list[dict]:
+        return read_runs(self.path)
 
 
 def check_store_writable(path: str | os.PathLike) -> None:

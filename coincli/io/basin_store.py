@@ -65,7 +65,6 @@ import numpy as np
 from ..grid import Grid, TileResult
 from ..params import ParameterError
 from ..stats import BasinCounts, BasinStats
-from ..sweeps.claims import Claims
 from ..sweeps.engine import Prepared
 from ..sweeps.schema import (
     FILLS,
@@ -76,13 +75,11 @@ from ..sweeps.schema import (
 from . import basin_metadata as meta
 from .basin_layout import (
     ARRAY_NAMES,
+    SideRecords,
     StoreView,
     check_store_writable,
-    cost_dir,
-    read_runs,
     read_tile,
     read_view,
-    record_run,
     remove_dead_probes,
     root_lost,
     template,
@@ -145,7 +142,7 @@ class StoreCheck:
                 f"{len(self.metadata)} metadata files differing)")
 
 
-class BasinStore:
+class BasinStore(SideRecords):
     """A basin store at ``path``: opened (its metadata read, once) on first use, by
     :meth:`open`, or by :meth:`create_or_resume` for a sweep about to write to it (which is
     what the sweep engine's :meth:`prepare` does). Picklable: a Dask worker writes its tiles
@@ -294,19 +291,6 @@ class BasinStore:
         store._set_view(self.view)
         return store
 
-    # -- where its records are ----------------------------------------------------------------
-    @property
-    def cost_dir(self) -> Path:
-        return cost_dir(self.path)
-
-    @property
-    def claims_dir(self) -> Path:
-        return self.cost_dir / "claims"
-
-    def claims(self) -> Claims:
-        """This process's claims on the store's tiles (close them when done)."""
-        return Claims(self.claims_dir)
-
     # -- reading ------------------------------------------------------------------------------
     def read_chunk(self, name: str, tile: tuple[int, int]) -> np.ndarray:
         """One tile's chunk of array ``name``, cut to the tile (ChunkError, OSError if it
@@ -414,7 +398,7 @@ class BasinStore:
                         seconds[i, j] = json.loads(f.read_text())["cpu_seconds"]
                 except (ValueError, KeyError, TypeError, OSError):
                     pass  # a damaged cost record loses the cost, never the results
-        return seconds, read_runs(self.path)
+        return seconds, self.runs()
 
     # -- checking and repairing ---------------------------------------------------------------
     def damaged_metadata(self) -> list[str]:
@@ -482,9 +466,6 @@ class BasinStore:
                          json.dumps(cost).encode())
         self.specs["done"].write(self.path, tile,
                                  np.array([[tile_digest(tile, result.arrays, parameters)]]))
-
-    def record_run(self, run: dict) -> None:
-        record_run(self.path, run)
 
 
 __all__ = ["BasinStore", "StoreCheck", "Tile"]

@@ -53,9 +53,8 @@ import numpy as np
 
 from ..montecarlo.plan import STORE_FORMAT
 from ..params import ParameterError
-from ..sweeps.claims import Claims
 from ..sweeps.schema import VARIABLES, resumable_as
-from .basin_layout import check_is_store, cost_dir, read_runs, record_run
+from .basin_layout import SideRecords, check_is_store
 from .basin_metadata import flatten_attrs, show_value
 from .zarr_v3 import (
     ArraySpec,
@@ -148,7 +147,7 @@ def run_record(started: float, wall: float, cpu: float, samples: int, mode: str,
             "mode": mode, "workers": workers, "interrupted": interrupted}
 
 
-class FractionsStore:
+class FractionsStore(SideRecords):
     """The store of a Monte Carlo run at ``path``; :meth:`prepare` creates or opens it for a
     run of a layout, after which it reads and writes that run's batches."""
 
@@ -159,17 +158,6 @@ class FractionsStore:
 
     def __repr__(self) -> str:
         return f"FractionsStore({str(self.path)!r})"
-
-    @property
-    def cost_dir(self) -> Path:
-        return cost_dir(self.path)
-
-    @property
-    def claims_dir(self) -> Path:
-        return self.cost_dir / "claims"
-
-    def claims(self) -> Claims:
-        return Claims(self.claims_dir)
 
     def exists(self) -> bool:
         return is_store(self.path)
@@ -416,13 +404,6 @@ class FractionsStore:
         uses = [goal.count(b, batch) for b in range(goal.batches(batch))]
         return [sum(n for n, held in zip(uses, row, strict=False) if held >= n)
                 for row in rows]
-
-    # -- its records ----------------------------------------------------------------------------
-    def record_run(self, run: dict) -> None:
-        record_run(self.path, run)
-
-    def runs(self) -> list[dict]:
-        return read_runs(self.path)
 
     def dataset(self):
         """The store as an xarray Dataset, in memory: ``initial`` ([value,] sample, ic) and the
