@@ -212,6 +212,16 @@ def test_the_map_draws_p_and_its_line_at_one_third(tmp_path):
         coincli.render_fractions(result, panels=["outcomes"])
 
 
+def test_no_cell_of_a_positive_parameter_is_drawn_below_zero(grid):
+    """c = 0.5 and 2 as cells as wide as their gap would reach c = -0.25: the axis goes log,
+    ticked at the two values; t/d 0.1 and 0.2 stay linear (their cells end at 0.05)."""
+    fig = coincli.render_fractions(grid[0])
+    first = fig.axes[0]
+    assert first.get_yscale() == "log" and first.get_ylim()[0] > 0
+    assert list(first.get_yticks()) == [0.5, 2.0]
+    assert first.get_xscale() == "linear" and first.get_xlim()[0] == pytest.approx(0.05)
+
+
 def test_level_crossing_interpolates_and_says_nan_outside():
     x = np.arange(5.0)
     p = np.array([0.0, 0.2, 0.4, 0.6, 0.8])

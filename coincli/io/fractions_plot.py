@@ -121,6 +121,7 @@ def _plot_outcomes(bottom, result: FractionsOver, x: np.ndarray) -> None:
 
 
 MAP_TOP = 0.5  # P(standing) at the top of a map's colour scale (above: its colour)
+FEW_TICKS = 6  # a log axis of this many values or fewer is ticked at its values
 GRID_PANELS = ("certain", "decided", "uncertain")  # P(standing) over each basis; uncertain
 GRID_TITLES = {"certain": "P(standing), certain labels",
                "decided": "P(standing), all decided labels",
@@ -133,7 +134,9 @@ def plot_grid(result: FractionsOver, out=None, *, level: float = 1 / 3,
     """A grid of two parameters as maps, one a panel (of :data:`GRID_PANELS`): P(standing)
     over the certain labels, over all decided labels, and the uncertain share, the first
     parameter across (as t/d when it is the thickness or the diameter), the second up (on a
-    log scale when it spans more than a decade). On P(standing): the line P = ``level`` and
+    log scale when it spans more than a decade). Either is on a log scale too where cells as
+    wide as the gaps between its values would reach zero: no cell of a positive parameter is
+    drawn at a negative value. On P(standing): the line P = ``level`` and
     the lines where the 95 % intervals' low and high ends cross it (its 95 % band); across t/d,
     where the no-bounce geometric limit (2/pi) arctan(t/d) and Pender and Uhrin's planar die
     reach the level. Drawn in a new Figure or into ``ax`` (one Axes a panel), returned;
@@ -156,8 +159,8 @@ def plot_grid(result: FractionsOver, out=None, *, level: float = 1 / 3,
 
     def ordered(field: np.ndarray) -> np.ndarray:
         return field.reshape(result.shape)[ox][:, oy]
-    log_y = bool(np.all(y > 0) and y.max() / y.min() > 10)
-    x_edges, y_edges = _edges(x, False), _edges(y, log_y)
+    log_x, log_y = _logarithmic(x, decades=False), _logarithmic(y, decades=True)
+    x_edges, y_edges = _edges(x, log_x), _edges(y, log_y)
     for name, one in zip(panels, axes, strict=True):
         if name == "uncertain":
             share = np.array([r.uncertain["probability"] for r in result.results])
@@ -175,8 +178,10 @@ def plot_grid(result: FractionsOver, out=None, *, level: float = 1 / 3,
                            bbox_to_anchor=(0, -0.14), ncol=2, frameon=False)
         one.set_title(GRID_TITLES[name], fontsize=9)
         one.set_xlabel(x_label)
+        if log_x:
+            _log_scale(one, "x", x)
         if log_y:
-            one.set_yscale("log")
+            _log_scale(one, "y", y)
         if one is axes[0] or not own:
             second = result.parameters[1]
             one.set_ylabel(f"{second} ({PARAMETER_UNITS[second]})")
@@ -184,7 +189,7 @@ def plot_grid(result: FractionsOver, out=None, *, level: float = 1 / 3,
         samples = sorted({r.samples for r in result.results})
         count = f"{samples[0]:,}" if len(samples) == 1 else f"{samples[0]:,}-{samples[-1]:,}"
         fig.suptitle(title or f"P(standing) over {' and '.join(result.parameters)}: {count} "
-                     f"samples a point, the same points at every point; lines: P = "
+                     f"samples a point, the same samples at every point; lines: P = "
                      f"{level:.3g} and its 95 % band", fontsize=9)
     if out is not None:
         save_figure(fig, out, dpi)
@@ -202,6 +207,25 @@ def _across(result: FractionsOver) -> tuple[np.ndarray, str, bool]:
         ratio = np.array([c["thickness"] / c["diameter"] for c in coins[::len(result.axes[1])]])
         return ratio, f"t / d ({name} across)", True
     return x, f"{name} ({PARAMETER_UNITS[name]})", False
+
+
+def _logarithmic(centres: np.ndarray, *, decades: bool) -> bool:
+    """Whether sorted centres are drawn on a log scale: all positive, and with cells of linear
+    edges reaching zero or below (or, with ``decades``, spanning more than a decade)."""
+    if centres.size < 2 or not np.all(centres > 0):
+        return False
+    return bool((decades and centres[-1] / centres[0] > 10) or _edges(centres, False)[0] <= 0)
+
+
+def _log_scale(ax, which: str, centres: np.ndarray) -> None:
+    """A log scale on ``ax``'s x or y axis; with a few values, ticked at those values alone
+    (the powers of ten between two or three values say little and crowd)."""
+    from matplotlib.ticker import NullLocator
+
+    getattr(ax, f"set_{which}scale")("log")
+    if centres.size <= FEW_TICKS:
+        getattr(ax, f"set_{which}ticks")(centres, labels=[f"{v:.3g}" for v in centres])
+        getattr(ax, f"{which}axis").set_minor_locator(NullLocator())
 
 
 def _edges(centres: np.ndarray, log: bool) -> np.ndarray:
