@@ -145,117 +145,170 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     a value, counted flat, the first parameter outermost). Several processes may run the same
     plan on one store at once: they share the batches by claims, and each ends with the same
     results and store."""
-    from .basin_layout import check_store_writable
-    from .fractions_store import FractionsStore, Layout, run_record
+    run = FractionsRun(plan, executor_for(threads, workers, scheduler, worker_timeout))
+    try:
+        if store is not None:
+            run.open_store(store, overwrite)
+        lost = run.compute(progress, stop)
+    finally:
+        run.close()
+    run.record()
+    if lost is not None:
+        raise lost  # after recording the run: the batches received are written already
+    return run.results()
 
-    executor = executor_for(threads, workers, scheduler, worker_timeout)
-    started = time.time()
-    sampling, goal = plan.sampling, plan.goal
-    size = sampling.batch
-    specs = [make_fraction_spec(s) for s in plan.scenes]
-    verified = specs[0].ladder.verified
-    progs = [Progression(goal, size, verified) for _ in plan.scenes]
-    draws = Draws(sampling)
-    n_values = len(plan.scenes)
-    layout = Layout(size, goal.batches(size), plan.shape, plan.parameters)
-    target = claims = None
-    damaged: list[tuple[int, int]] = []
-    kept = [0] * n_values  # batches the store held whole from batch 0 when the run started
-    if store is not None:
+
+class FractionsRun:
+    """One run of a plan in this process: each value's progression (what its stop rule has
+    counted), the store if the run has one (resumed, claimed, written, sealed), and what this
+    process computed and what it found computed (in the store when it started, or by other
+    processes since)."""
+
+    def __init__(self, plan: FractionsPlan, executor):
+        self.plan, self.executor = plan, executor
+        self.goal, self.size = plan.goal, plan.sampling.batch
+        self.specs = [make_fraction_spec(s) for s in plan.scenes]
+        self.verified = self.specs[0].ladder.verified
+        self.progs = [Progression(self.goal, self.size, self.verified) for _ in plan.scenes]
+        self.draws = Draws(plan.sampling)
+        self.target = self.claims = None
+        self.path: str | None = None  # the store as the caller named it
+        self.damaged: list[tuple[int, int]] = []
+        values = len(plan.scenes)
+        self.kept = [0] * values  # batches the store held whole from batch 0 when the run started
+        self.cpu = [0.0] * values
+        self.started = time.time()
+        self.wall = 0.0
+        self.computed = self.from_store = self.from_others = 0
+        self.interrupted = False
+
+    def open_store(self, store: str | os.PathLike, overwrite: bool) -> None:
+        """Create the store, or resume it: count every whole batch it holds (also those past a
+        gap), note the damaged ones (computed again) and the whole prefix of each value."""
+        from .basin_layout import check_store_writable
+        from .fractions_store import FractionsStore, Layout
+
+        plan = self.plan
         check_store_writable(store)
-        target = FractionsStore(store)
-        filled = target.prepare(plan.attrs, layout, [np.asarray(a) for a in plan.axes] or None,
-                                overwrite=overwrite)
-        filled = filled.reshape(n_values, -1)
-        damaged = _resume(plan, progs, draws, target, filled)
-        kept = _whole_prefix(plan, filled, damaged)
-    # read from the store: every whole batch, also those past a gap
-    from_store = sum(t.samples for p in progs for t in p.tallies.values())
-    found_elsewhere = [0]
+        self.target, self.path = FractionsStore(store), str(store)
+        layout = Layout(self.size, self.goal.batches(self.size), plan.shape, plan.parameters)
+        filled = self.target.prepare(plan.attrs, layout,
+                                     [np.asarray(a) for a in plan.axes] or None,
+                                     overwrite=overwrite).reshape(len(plan.scenes), -1)
+        self.damaged = _resume(plan, self.progs, self.draws, self.target, filled)
+        self.kept = _whole_prefix(plan, filled, self.damaged)
+        self.from_store = sum(t.samples for p in self.progs for t in p.tallies.values())
 
-    def make_task(v: int, index: int) -> BatchTask:
-        count = goal.count(index, size)
-        states = initial_states(plan.scenes[v], sampling, draws.batch(index)[:count])
+    def count(self, v: int, index: int, labels) -> None:
+        """A batch's labels counted in its value's progression."""
+        self.progs[v].add(index, Tally.of(labels["quarter_turns"], labels["status"],
+                                          labels["certainty"], self.verified))
+
+    def make_task(self, v: int, index: int) -> BatchTask:
+        count = self.goal.count(index, self.size)
+        states = initial_states(self.plan.scenes[v], self.plan.sampling,
+                                self.draws.batch(index)[:count])
         return BatchTask(v, index, count, states)
 
-    def found(v: int, index: int) -> bool:  # a batch another process wrote: counted here
-        count = goal.count(index, size)
-        if target.filled_count(v, index) != count:
-            return False  # its count does not read back: computed again
-        labels, _ = target.read_batches(v, [index], [count])
+    def found(self, v: int, index: int) -> bool:
+        """Whether a batch another process wrote reads back whole; if so it is counted here
+        (if not, it is computed again)."""
+        count = self.goal.count(index, self.size)
+        if self.target.filled_count(v, index) != count:
+            return False
+        labels, _ = self.target.read_batches(v, [index], [count])
         if index not in labels:
-            return False  # its samples do not read back: computed again
-        lab = labels[index]
-        progs[v].add(index, Tally.of(lab["quarter_turns"], lab["status"], lab["certainty"],
-                                     verified))
-        found_elsewhere[0] += count
+            return False
+        self.count(v, index, labels[index])
+        self.from_others += count
         return True
 
-    if target is not None:
-        claims = target.claims()
-        queue = BatchQueue(progs, make_task, claims, target.batch_written, found)
-    else:
-        queue = BatchQueue(progs, make_task)
-    lost = None
-    try:
-        if not executor.dask and any(p.peek() is not None for p in progs):
-            for spec, s in zip(specs, plan.scenes, strict=True):
-                warm_up(spec.params, spec.settings, np.asarray(state_array(s)),
+    def queue(self) -> BatchQueue:
+        if self.target is None:
+            return BatchQueue(self.progs, self.make_task)
+        self.claims = self.target.claims()
+        return BatchQueue(self.progs, self.make_task, self.claims, self.target.batch_written,
+                          self.found)
+
+    def compute(self, progress, stop) -> SchedulerLost | None:
+        """Compute the batches the stop rules still need, each written to the store as it
+        comes back (an interrupted run keeps it), then seal the store if every goal is met.
+        Returns the lost scheduler of a Dask run that lost it, else None."""
+        queue = self.queue()
+        if not self.executor.dask and any(p.peek() is not None for p in self.progs):
+            for spec, scene in zip(self.specs, self.plan.scenes, strict=True):
+                warm_up(spec.params, spec.settings, np.asarray(state_array(scene)),
                         (verified_labels,))
-        runner = executor.run(partial(compute_value_batch, specs), queue, stop,
-                              name=lambda t: f"fractions-{t.value}-{t.batch}")
-        cpu = [0.0] * n_values
-        computed = 0
+        runner = self.executor.run(partial(compute_value_batch, self.specs), queue, stop,
+                                   name=lambda t: f"fractions-{t.value}-{t.batch}")
         wall0 = time.perf_counter()
-        interrupted = False
+        lost = None
         try:
             for result in runner:
-                v = result.value
-                computed += result.count
-                cpu[v] += result.cpu_seconds
-                if target is not None:  # every batch at once: an interrupted run keeps it
-                    target.write_batch(v, result.batch, result.states, result.labels)
-                    claims.release((v, result.batch))
-                lab = result.labels
-                progs[v].add(result.batch, Tally.of(lab["quarter_turns"], lab["status"],
-                                                    lab["certainty"], verified))
+                self.take(result)
                 if progress is not None:
-                    progress(_progress(progs, v, goal, size, computed, wall0))
+                    progress(_progress(self.progs, result.value, self.goal, self.size,
+                                       self.computed, wall0))
             # ``stop`` set: the runner hands out nothing more and ends with the batches in
             # flight, which are written above
             runner.close()
         except KeyboardInterrupt:
-            interrupted = True
+            self.interrupted = True
             hard_stop(runner)  # the batches in flight stop now, unwritten (a second Ctrl-C)
         except SchedulerLost as exc:  # the batches received are written already
-            interrupted, lost = True, exc
-        interrupted = interrupted or not all(p.done for p in progs)
-        if target is not None and not interrupted:
-            _seal(target, progs, goal, size, lambda v, index: claims.path((v, index)).exists(),
-                  kept)
-    finally:
-        if claims is not None:
-            claims.close()
-    wall = time.perf_counter() - wall0
-    if target is not None and computed:
-        target.record_run(run_record(started, wall, sum(cpu), computed, executor.mode,
-                                     executor.workers, interrupted))
-    if lost is not None:
-        raise lost
-    total_cost = {"computed": computed, "cpu_seconds": sum(cpu), "wall_seconds": wall,
-                  "trajectories_per_second": computed / wall if wall > 0 else math.nan,
-                  "cpu_ms_per_trajectory": 1e3 * sum(cpu) / computed if computed else math.nan,
-                  "mode": executor.mode, "workers": executor.workers, "from_store": from_store,
-                  "from_others": found_elsewhere[0], "damaged_batches": len(damaged)}
-    path = None if store is None else str(store)
-    results = []
-    for v, (prog, s) in enumerate(zip(progs, plan.scenes, strict=True)):
-        stopped = prog.reason if prog.done else StopReason.INTERRUPTED
-        cost = {"cpu_seconds": cpu[v]} if plan.parameters else total_cost
-        results.append(make_result(prog, sampling, s, stopped, cost, path, plan.at(v)))
-    if not plan.parameters:
-        return results[0]
-    return FractionsOver(plan.parameters, plan.axes, results, plan.note, total_cost, path)
+            self.interrupted, lost = True, exc
+        self.wall = time.perf_counter() - wall0
+        self.interrupted = self.interrupted or not all(p.done for p in self.progs)
+        if self.target is not None and not self.interrupted:
+            _seal(self.target, self.progs, self.goal, self.size,
+                  lambda v, index: self.claims.path((v, index)).exists(), self.kept)
+        return lost
+
+    def take(self, result) -> None:
+        """A computed batch: written to the store (its claim released), then counted."""
+        v = result.value
+        self.computed += result.count
+        self.cpu[v] += result.cpu_seconds
+        if self.target is not None:
+            self.target.write_batch(v, result.batch, result.states, result.labels)
+            self.claims.release((v, result.batch))
+        self.count(v, result.batch, result.labels)
+
+    def close(self) -> None:
+        if self.claims is not None:
+            self.claims.close()
+
+    def record(self) -> None:
+        """The run's line beside the store, if it computed anything."""
+        from .fractions_store import run_record
+
+        if self.target is not None and self.computed:
+            self.target.record_run(run_record(
+                self.started, self.wall, sum(self.cpu), self.computed, self.executor.mode,
+                self.executor.workers, self.interrupted))
+
+    def cost(self) -> dict:
+        computed, cpu, wall = self.computed, sum(self.cpu), self.wall
+        return {"computed": computed, "cpu_seconds": cpu, "wall_seconds": wall,
+                "trajectories_per_second": computed / wall if wall > 0 else math.nan,
+                "cpu_ms_per_trajectory": 1e3 * cpu / computed if computed else math.nan,
+                "mode": self.executor.mode, "workers": self.executor.workers,
+                "from_store": self.from_store, "from_others": self.from_others,
+                "damaged_batches": len(self.damaged)}
+
+    def results(self):
+        """A Fractions for a plain run; a FractionsOver for a continuation."""
+        plan = self.plan
+        total = self.cost()
+        results = []
+        for v, (prog, scene) in enumerate(zip(self.progs, plan.scenes, strict=True)):
+            stopped = prog.reason if prog.done else StopReason.INTERRUPTED
+            cost = {"cpu_seconds": self.cpu[v]} if plan.parameters else total
+            results.append(make_result(prog, plan.sampling, scene, stopped, cost, self.path,
+                                       plan.at(v)))
+        if not plan.parameters:
+            return results[0]
+        return FractionsOver(plan.parameters, plan.axes, results, plan.note, total, self.path)
 
 
 def _progress(progs, v: int, goal, size: int, computed: int, wall0: float) -> FractionsProgress:
