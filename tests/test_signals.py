@@ -272,6 +272,57 @@ def test_a_claim_made_as_a_signal_came_is_released_too(tmp_path):
     assert not (tmp_path / "claims").exists()
 
 
+@pytest.mark.parametrize("when", ["before", "after"])
+def test_a_claim_interrupted_as_it_is_made_leaves_no_file(tmp_path, monkeypatch, when):
+    """A signal (the `coin` command raises KeyboardInterrupt for each) just before or just
+    after a claim is linked into place: no claim is ever empty (one created, then left unwritten
+    by a SIGHUP, was nobody's to remove), and the process's close removes what is its own."""
+    import os
+
+    from coincli.sweeps import claims as module
+
+    link = os.link
+
+    def interrupted(source, target):
+        if when == "after":
+            link(source, target)
+        raise KeyboardInterrupt
+
+    folder = tmp_path / "claims"
+    claims = module.Claims(folder, heartbeat=3600)
+    monkeypatch.setattr(module.os, "link", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        claims.try_claim((0, 1))
+    monkeypatch.undo()
+    left = list(folder.iterdir())
+    assert [p.name for p in left] == (["tile_0_1"] if when == "after" else [])
+    assert all(module.read_claim(p)[0]["token"] == claims.token for p in left)
+    claims.close()
+    assert not folder.exists()
+
+
+def test_claims_without_hard_links_are_made_in_place(tmp_path, monkeypatch):
+    """A file system without hard links (exFAT, some shares): the claim is created exclusively,
+    then written; still one owner a tile."""
+    import errno
+
+    from coincli.sweeps import claims as module
+
+    def refused(source, target):
+        raise OSError(errno.EPERM, "Operation not permitted")
+
+    monkeypatch.setattr(module.os, "link", refused)
+    folder = tmp_path / "claims"
+    first, second = module.Claims(folder, heartbeat=3600), module.Claims(folder, heartbeat=3600)
+    assert first.try_claim((0, 1)) and not second.try_claim((0, 1))
+    assert module.read_claim(folder / "tile_0_1")[0]["token"] == first.token
+    assert [p.name for p in folder.iterdir()] == ["tile_0_1"]  # no draft left
+    first.close()
+    assert second.try_claim((0, 1))
+    second.close()
+    assert not folder.exists()
+
+
 def _die(code: int, control=None) -> None:
     import os
 
@@ -279,7 +330,11 @@ def _die(code: int, control=None) -> None:
 
 
 def test_workers_that_keep_dying_are_one_error_not_a_traceback():
+    # distributed's defaults into dask's config before the set below: were they loaded inside
+    # it, its exit would remove the whole "distributed" section it found missing, and every
+    # later Dask run in this process would fail on a missing key
     import dask
+    import distributed  # noqa: F401
 
     from coincli.sweeps.executors import Dask, ItemQueue, WorkersLost
 

@@ -348,17 +348,23 @@ def test_the_count_after_an_interrupt_is_what_the_store_holds(tmp_path, monkeypa
     mirror image too): the report counts the tiles in the store, not the tiles it was told of
     (a SIGTERM run printed 56/64 tiles done while the store held 58)."""
     plan = coincli.plan_sweep(coincli.load_preset("paper"), res=8, chunk=4)  # 2 mirror pairs
-    gate, first = threading.Event(), []
+    gate, at_gate, first, lock = threading.Event(), threading.Event(), [], threading.Lock()
     write = BasinStore.write_tile
 
     def slow_second(self, result, parameters=None):
-        if not first:
-            first.append(threading.get_ident())
-        if threading.get_ident() != first[0]:
-            gate.wait(10)  # the other task writes once the stop has come
+        task = result.mirror_of or result.tile  # the tile its task computed
+        with lock:
+            first[:] = first or [task]
+        if task != first[0]:  # the second task's tiles: written once the stop has come
+            at_gate.set()
+            gate.wait(10)
         return write(self, result, parameters)
 
     def stop(update):
+        # the first task's tiles are written: the stop comes once the second has computed its
+        # own and is writing them, however loaded the machine (else the stop would cut it off
+        # before its write, and nothing would be left to count)
+        assert at_gate.wait(10)
         gate.set()
         raise KeyboardInterrupt
 

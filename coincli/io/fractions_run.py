@@ -99,12 +99,13 @@ class BatchQueue:
         if self.watched and time.monotonic() - self._last_look >= self.poll:
             self._last_look = time.monotonic()
             for v, index in sorted(self.watched, key=lambda item: item[1]):
-                if self.progs[v].done:
-                    self.watched.discard((v, index))
-                elif self._elsewhere(v, index):
+                if self.progs[v].done or self._elsewhere(v, index):
                     self.watched.discard((v, index))
                 elif self.claims.try_claim((v, index)):
                     self.watched.discard((v, index))
+                    if self._elsewhere(v, index):  # written and let go between look and claim
+                        self.claims.release((v, index))
+                        continue
                     return self._hand_out(v, index)
         return None
 

@@ -2,9 +2,9 @@
 machine or several sharing the store's file system) can run the same work together without
 computing a piece twice.
 
-A claim is a file ``out.zarr.cost/claims/tile_I_J`` created with ``O_CREAT | O_EXCL`` (exactly
-one process can create it) holding its owner: host, pid, the pid's start time and a random
-token. While the owner computes the tile a heartbeat thread touches the file every
+A claim is a file ``out.zarr.cost/claims/tile_I_J`` holding its owner: host, pid, the pid's
+start time and a random token; it is written to a draft and hard-linked into place, which fails
+if the claim exists (exactly one process can create it), so a claim is never seen empty. While the owner computes the tile a heartbeat thread touches the file every
 :data:`HEARTBEAT` seconds; the owner removes it once the tile is written (or abandoned). A claim
 is *stale*, and taken over by whoever needs the tile, when its heartbeat is older than
 :data:`STALE` seconds, or at once when its owner ran on this host and its process is gone (a
@@ -23,6 +23,7 @@ the middle of the tiles it has left, so processes spread over the grid rather th
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import os
 import secrets
@@ -36,6 +37,8 @@ from pathlib import Path
 HEARTBEAT = 10.0  # s between touches of the claims a process holds
 STALE = 60.0  # s without a heartbeat after which a claim is taken over
 POLL = 0.5  # s between looks at the tiles other processes hold
+# what os.link raises on a file system without hard links (FAT, exFAT, some network shares)
+NO_HARD_LINKS = {errno.EPERM, errno.EOPNOTSUPP, errno.ENOTSUP, errno.ENOSYS}
 
 HOST = socket.gethostname()
 _live_tokens: set[str] = set()  # claims held by this process (any TileQueue)
@@ -145,7 +148,7 @@ class Claims:
         for _ in range(3):
             path = self.path(tile)
             try:
-                fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+                self._create(path, tile)
             except FileNotFoundError:  # the folder went with another process's last claim
                 self.folder.mkdir(parents=True, exist_ok=True)
                 continue
@@ -157,18 +160,40 @@ class Claims:
                     return False
                 self._take_over(path, mtime)
                 continue
-            try:
-                os.write(fd, self._content(tile))
-            except BaseException:
-                os.close(fd)
-                with contextlib.suppress(OSError):
-                    os.unlink(path)
-                raise
-            os.close(fd)
             with self._lock:
                 self.held[tile] = self.token
             return True
         return False
+
+    def _create(self, path: Path, tile: tuple[int, int]) -> None:
+        """Make the claim ``path``, with our content, whole or not at all (FileExistsError if it
+        exists): written to a draft of ours, then linked into place, so that no claim is ever
+        empty, not even one a signal (a KeyboardInterrupt in the `coin` command) interrupted
+        between its creation and its write, which nobody could then tell as ours. A draft such
+        a signal leaves carries our token: :meth:`close` removes it. Where the file system has
+        no hard links, the claim is created exclusively, then written."""
+        draft = path.with_name(f".{path.name}.draft-{self.token}")
+        try:
+            draft.write_bytes(self._content(tile))
+            os.link(draft, path)
+        except OSError as exc:
+            if exc.errno not in NO_HARD_LINKS:
+                raise
+            self._create_in_place(path, tile)
+        finally:
+            with contextlib.suppress(OSError):
+                os.unlink(draft)
+
+    def _create_in_place(self, path: Path, tile: tuple[int, int]) -> None:
+        fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        try:
+            os.write(fd, self._content(tile))
+        except BaseException:
+            os.close(fd)
+            with contextlib.suppress(OSError):
+                os.unlink(path)
+            raise
+        os.close(fd)
 
     def _take_over(self, path: Path, seen_mtime: float) -> None:
         """Move a stale claim out of the way, unless it changed since it was judged."""
@@ -223,8 +248,8 @@ class Claims:
         for tile in tiles:
             with contextlib.suppress(OSError):
                 self.release(tile)
-        # a claim made as a signal came (its file written, not yet recorded as held) is ours
-        # all the same: it carries our token
+        # a claim made as a signal came (linked into place, not yet recorded as held), or its
+        # draft, is ours all the same: it carries our token
         with contextlib.suppress(OSError):
             for path in self.folder.iterdir():
                 owner, _ = read_claim(path)
