@@ -4,13 +4,14 @@ computing a piece twice.
 
 A claim is a file ``out.zarr.cost/claims/tile_I_J`` holding its owner: host, pid, the pid's
 start time and a random token; it is written to a draft and hard-linked into place, which fails
-if the claim exists (exactly one process can create it), so a claim is never seen empty. While the owner computes the tile a heartbeat thread touches the file every
-:data:`HEARTBEAT` seconds; the owner removes it once the tile is written (or abandoned). A claim
-is *stale*, and taken over by whoever needs the tile, when its heartbeat is older than
-:data:`STALE` seconds, or at once when its owner ran on this host and its process is gone (a
-``kill -9``, a crash, a reboot). Taking over renames the stale file out of the way, checks that
-what it moved is the claim it judged stale (restoring it otherwise), and then claims as usual,
-so two processes taking over the same tile cannot both win.
+if the claim exists (exactly one process can create it), so a claim is never seen empty. While
+the owner computes the tile a heartbeat thread touches the file every :data:`HEARTBEAT`
+seconds; the owner removes it once the tile is written (or abandoned). A claim is *stale*, and
+taken over by whoever needs the tile, when its heartbeat is older than :data:`STALE` seconds,
+or at once when its owner ran on this host and its process is gone (a ``kill -9``, a crash, a
+reboot). Taking over renames the stale file out of the way, checks that what it moved is the
+claim it judged stale (restoring it otherwise), and then claims as usual, so two processes
+taking over the same tile cannot both win.
 
 :class:`TileQueue` hands out the tiles one process should compute: it claims each before handing
 it out and checks, once claimed, that nobody finished it meanwhile; tiles claimed by live others
