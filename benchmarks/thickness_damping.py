@@ -15,7 +15,8 @@ without the store). With ``--landing N`` it also follows N throws of the same bo
 a few dampings (single passes, with their contact events): the well the coin first lands in
 (the well of its angle at its first contact) against the one it ends in, and how it left the
 first: after leaving the foundation again (a bounce), or rolling over a corner without leaving
-it (about 2 minutes for N = 2000).
+it; and over more dampings, how many of the throws that land in a standing well, and in a
+lying one, stay there (about 6 minutes for N = 2000).
 
 For each c: the t/d at which P(standing) = 1/3, over the certain labels and over all decided
 ones, each with the interval where the 95 % intervals of the grid cross 1/3
@@ -164,23 +165,28 @@ def draw(result, rows: list[dict], out: Path) -> None:
     fig.savefig(out, dpi=150)
 
 
-LANDING_C = (0.5, 8, 32, 128)
+LANDING = [(t_d, c) for t_d in (0.6, 0.8) for c in (0.5, 8, 32, 128)]  # the landing table's
+WELLS = [(t_d, c) for t_d in (0.5, 0.8) for c in (0.5, 1, 2, 4, 8, 16, 32, 128)]  # the wells'
 
 
-def landing(n: int, t_d: float) -> list[dict]:
-    """Where N throws of the box first land and where they end, at each of LANDING_C."""
+def landing(n: int, points) -> dict[tuple[float, float], dict]:
+    """Where N throws of the box first land and where they end, at each (t/d, c) of
+    ``points``: how many end where they landed, how many leave it after a bounce or rolling,
+    and how many of those that land in a standing well, and in a lying one, end in it."""
     from coincli.model import well_index
     from coincli.montecarlo import Draws, initial_states, make_sampling
     from coincli.params import model_params
 
     base = coincli.load_preset("paper")
-    out = []
-    for c in LANDING_C:
+    out = {}
+    for t_d, c in points:
         scene = point_scene(base, {"thickness": D * t_d, "c": c})
         p = model_params(scene)
         sampling = make_sampling(scene, **BOX)
         counts = dict.fromkeys(("stays", "bounced", "rolled"), 0)
-        lands_standing = ends_standing = 0
+        landed = {True: 0, False: 0}  # by whether the coin first lands standing
+        stayed = {True: 0, False: 0}
+        ends_standing = 0
         for state in initial_states(scene, sampling, Draws(sampling).batch(0)[:n]):
             throw = coincli.simulate(scene, verify=False, record_events=True, y0=state[1],
                                      phi0=state[2], vx=state[3], vy=state[4], vphi=state[5])
@@ -189,13 +195,18 @@ def landing(n: int, t_d: float) -> list[dict]:
             airborne = bool(np.any(np.cumsum(kinds)[1:] == 0))  # no corner touching, later
             end = throw.quarter_turns
             counts["stays" if end == lands else "bounced" if airborne else "rolled"] += 1
-            lands_standing += lands % 2 != 0
+            standing = bool(lands % 2 != 0)
+            landed[standing] += 1
+            stayed[standing] += end == lands
             ends_standing += end % 2 != 0
-        out.append({"c": c, "t_d": t_d, "throws": n, "lands_standing": lands_standing / n,
-                    "ends_standing": ends_standing / n,
-                    **{key: value / n for key, value in counts.items()},
-                    "e_under_centroid": corner_restitution(scene),
-                    "e_flat": corner_restitution(scene, lever=scene.coin.r_d)})
+        out[(t_d, c)] = {
+            "c": c, "t_d": t_d, "throws": n, "lands_standing": landed[True] / n,
+            "ends_standing": ends_standing / n,
+            **{key: value / n for key, value in counts.items()},
+            "stays_if_standing": stayed[True] / max(landed[True], 1),
+            "stays_if_lying": stayed[False] / max(landed[False], 1),
+            "e_under_centroid": corner_restitution(scene),
+            "e_flat": corner_restitution(scene, lever=scene.coin.r_d)}
     return out
 
 
@@ -211,11 +222,22 @@ def landing_table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def wells_table(rows: list[dict]) -> str:
+    lines = ["| t/d | c (N s/m) | e (under the centroid / flat) | ends standing | of those "
+             "landing standing, stay | of those landing lying, stay |", "|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['t_d']:g} | {r['c']:g} | {r['e_under_centroid']:.2g} / "
+                     f"{r['e_flat']:.2g} | {100 * r['ends_standing']:.1f} % | "
+                     f"{100 * r['stays_if_standing']:.1f} % | "
+                     f"{100 * r['stays_if_lying']:.1f} % |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("store", help="the store of the run of docs/thickness-damping.md")
     parser.add_argument("--landing", type=int, default=0, metavar="N",
-                        help="also follow N throws one by one at t/d 0.6 and 0.8")
+                        help="also follow N throws one by one at t/d 0.5, 0.6 and 0.8")
     args = parser.parse_args()
     result = run(args.store)
     if result.cost.get("computed"):
@@ -238,13 +260,13 @@ def main() -> None:
     points = [{"at": r.at, "t_d": r.scene["coin"]["thickness"] / D, "samples": r.samples,
                "certain": r.standing, "all_decided": r.all_decided["standing"],
                "uncertain": r.uncertain} for r in result.results]
-    landed = [row for t_d in (0.6, 0.8) for row in landing(args.landing, t_d)] \
-        if args.landing else []
+    landed = landing(args.landing, dict.fromkeys(LANDING + WELLS)) if args.landing else {}
     if landed:
-        print(landing_table(landed), end="\n\n")
+        print(landing_table([landed[point] for point in LANDING]), end="\n\n")
+        print(wells_table([landed[point] for point in WELLS]), end="\n\n")
     out = {"command": "python benchmarks/thickness_damping.py STORE --landing "
                       f"{args.landing}", "samples": SAMPLES, "box": BOX, "crossing": rows,
-           "points": points, "runs": records, "landing": landed}
+           "points": points, "runs": records, "landing": list(landed.values())}
     (ROOT / "benchmarks" / "thickness-damping.json").write_text(json.dumps(out, indent=1))
 
 
