@@ -210,26 +210,24 @@ def landing(n: int, points) -> dict[tuple[float, float], dict]:
     return out
 
 
-def landing_table(rows: list[dict]) -> str:
-    lines = ["| t/d | c (N s/m) | e (under the centroid / flat) | lands standing | ends standing "
-             "| ends where it landed | leaves after a bounce | rolls out without leaving |",
-             "|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        lines.append(f"| {r['t_d']:g} | {r['c']:g} | {r['e_under_centroid']:.2g} / "
-                     f"{r['e_flat']:.2g} | {100 * r['lands_standing']:.1f} % | "
-                     f"{100 * r['ends_standing']:.1f} % | {100 * r['stays']:.1f} % | "
-                     f"{100 * r['bounced']:.1f} % | {100 * r['rolled']:.1f} % |")
-    return "\n".join(lines)
+LANDING_SHARES = {"lands_standing": "lands standing", "ends_standing": "ends standing",
+                  "stays": "ends where it landed", "bounced": "leaves after a bounce",
+                  "rolled": "rolls out without leaving"}
+WELLS_SHARES = {"ends_standing": "ends standing",
+                "stays_if_standing": "of those landing standing, stay",
+                "stays_if_lying": "of those landing lying, stay"}
 
 
-def wells_table(rows: list[dict]) -> str:
-    lines = ["| t/d | c (N s/m) | e (under the centroid / flat) | ends standing | of those "
-             "landing standing, stay | of those landing lying, stay |", "|---|---|---|---|---|---|"]
+def shares_table(rows: list[dict], shares: dict[str, str]) -> str:
+    """Rows of :func:`landing` as a markdown table: the point, its corners' restitution, and
+    the ``shares`` (key: header) in per cent."""
+    head = ["t/d", "c (N s/m)", "e (under the centroid / flat)", *shares.values()]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
-        lines.append(f"| {r['t_d']:g} | {r['c']:g} | {r['e_under_centroid']:.2g} / "
-                     f"{r['e_flat']:.2g} | {100 * r['ends_standing']:.1f} % | "
-                     f"{100 * r['stays_if_standing']:.1f} % | "
-                     f"{100 * r['stays_if_lying']:.1f} % |")
+        cells = [f"{r['t_d']:g}", f"{r['c']:g}",
+                 f"{r['e_under_centroid']:.2g} / {r['e_flat']:.2g}",
+                 *(f"{100 * r[key]:.1f} %" for key in shares)]
+        lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
@@ -262,8 +260,8 @@ def main() -> None:
                "uncertain": r.uncertain} for r in result.results]
     landed = landing(args.landing, dict.fromkeys(LANDING + WELLS)) if args.landing else {}
     if landed:
-        print(landing_table([landed[point] for point in LANDING]), end="\n\n")
-        print(wells_table([landed[point] for point in WELLS]), end="\n\n")
+        print(shares_table([landed[point] for point in LANDING], LANDING_SHARES), end="\n\n")
+        print(shares_table([landed[point] for point in WELLS], WELLS_SHARES), end="\n\n")
     out = {"command": "python benchmarks/thickness_damping.py STORE --landing "
                       f"{args.landing}", "samples": SAMPLES, "box": BOX, "crossing": rows,
            "points": points, "runs": records, "landing": list(landed.values())}
