@@ -62,6 +62,25 @@ def test_a_gap_in_the_batches_is_filled_and_nothing_after_it_is_lost(tmp_path, w
     assert again.cost["computed"] == 0  # the store is whole: nothing recomputed
 
 
+def test_a_dead_writers_temporary_files_go_with_the_resume(tmp_path, whole):
+    """A writer killed midway leaves a chunk's temporary file (NAME.HOST-PID-THREAD.partial)
+    in a batch it never finished: the resume that computes that batch removes it, and the
+    store is the uninterrupted run's, file for file (a `kill -9` left `rung/c/4....partial`
+    for good)."""
+    reference, clean = whole
+    store = tmp_path / "f.zarr"
+    coincli.fractions(PAPER, samples=6144, store=store, **RUN)
+    _remove_batch(store, 4)
+    orphans = [store / "rung" / "c" / "4.somehost-123-456.partial",
+               store / "initial" / "c" / "4" / "0.somehost-123-456.partial"]
+    for orphan in orphans:
+        orphan.write_bytes(b"half a chunk")
+    resumed = coincli.fractions(PAPER, samples=6144, store=store, **RUN)
+    assert resumed.cost["computed"] == 256 and resumed.standing == reference.standing
+    assert not any(orphan.exists() for orphan in orphans)
+    assert _files(store) == _files(clean)
+
+
 def test_batches_beyond_the_stop_are_kept_until_the_goal_is_met_then_removed(tmp_path):
     """A precision run that finds more batches than its stop rule needs (an interrupted run's
     batches in flight, another writer's) counts up to its stop and leaves the store as an
@@ -77,6 +96,8 @@ def test_batches_beyond_the_stop_are_kept_until_the_goal_is_met_then_removed(tmp
                       phi0="-pi:pi", batch=256)
     assert int((FractionsStore(store).read_filled() > 0).sum()) == used + 6
     _remove_batch(store, used // 2)  # and a gap below the stop
+    # and a dead writer's temporary file in a batch past the stop: removed with the batch
+    (store / "rung" / "c" / f"{used + 3}.somehost-123-456.partial").write_bytes(b"half")
     resumed = coincli.fractions(PAPER, store=store, threads=1, **kw)
     assert resumed.cost["computed"] == 256  # the gap; on one thread, nothing past the stop
     assert resumed.standing == reference.standing and resumed.samples == reference.samples

@@ -48,7 +48,6 @@ those it was computed with, and the copies that differ from them are damage, reb
 
 from __future__ import annotations
 
-import contextlib
 import enum
 import json
 import math
@@ -91,6 +90,7 @@ from .zarr_v3 import (
     ArraySpec,
     create_store,
     is_store,
+    remove_partials,
     tidy,
     write_atomically,
 )
@@ -442,11 +442,7 @@ class BasinStore(SideRecords):
         """Temporary chunk files of this tile's chunks left by a writer that died (only the
         owner of a tile's claim writes it, so any such file is an orphan)."""
         for name in (*ARRAY_NAMES, "done"):
-            folder = self.path / name / "c" / str(tile[0])
-            if folder.is_dir():
-                for leftover in folder.glob(f"{tile[1]}.*{PARTIAL}"):
-                    with contextlib.suppress(OSError):
-                        leftover.unlink()
+            remove_partials(self.specs[name].file(self.path, tile))
 
     def write_tile(self, result: TileResult, parameters: bytes | None = None) -> None:
         """Write one tile's arrays, its cost, and last its ``done`` digest, which binds the

@@ -67,6 +67,7 @@ from .zarr_v3 import (
     is_store,
     json_bytes,
     load_json,
+    remove_partials,
     write_atomically,
 )
 
@@ -328,8 +329,15 @@ class FractionsStore(SideRecords):
         except (OSError, ValueError):  # damaged: the batch counts as not written
             return 0
 
+    def _remove_partials(self, value: int, batch: int) -> None:
+        """Temporary files of this batch's chunks left by a writer that died (only the owner
+        of a batch's claim writes it, so any such file is an orphan)."""
+        for f in self._files(value, batch):
+            remove_partials(f)
+
     def write_batch(self, value: int, batch: int, states: np.ndarray, labels: dict) -> None:
         """One batch's samples (``states``: N x 6) and labels, then its ``filled`` count."""
+        self._remove_partials(value, batch)
         at = self.layout.at(value)
         lead = (1,) * len(at)
         self.specs["initial"].write(self.path, (*at, batch, 0),
@@ -378,6 +386,7 @@ class FractionsStore(SideRecords):
         for batch in range(keep, self.layout.batches):
             if held is not None and held(value, batch):
                 continue
+            self._remove_partials(value, batch)
             files = self._files(value, batch)
             if not any(f.exists() for f in files):
                 continue

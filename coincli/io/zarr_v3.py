@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import glob
 import json
 import math
 import os
@@ -228,6 +229,15 @@ def write_atomically(target: Path, data: bytes) -> None:
         out.write_bytes(data)
 
 
+def remove_partials(target: Path) -> None:
+    """Remove the temporary files of writes of ``target`` (:func:`write_atomically`'s): call
+    only where no other live writer can be writing it (a chunk of a tile or batch whose claim
+    the caller holds), so that they are the orphans of a writer that died."""
+    for leftover in target.parent.glob(f"{glob.escape(target.name)}.*{PARTIAL}"):
+        with contextlib.suppress(OSError):
+            leftover.unlink()
+
+
 def write_files(root: Path, files: dict[str, bytes]) -> None:
     for key, data in files.items():
         target = root / key
@@ -325,5 +335,5 @@ def create_store(path: Path, files: Callable[[], dict[str, bytes]], *,
 __all__ = ["CODECS", "PARTIAL", "ArraySpec", "ChunkError", "codecs_of", "create_store",
            "creating_name", "creation_lock", "decode_chunk", "dig", "encode_chunk",
            "fill_json", "fill_value", "group_files", "group_metadata", "is_store",
-           "json_bytes", "load_json", "remove_orphans", "tidy", "write_atomically",
-           "write_files"]
+           "json_bytes", "load_json", "remove_orphans", "remove_partials", "tidy",
+           "write_atomically", "write_files"]
