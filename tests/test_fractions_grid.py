@@ -8,13 +8,12 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
+from test_fractions_store import run_together
 from typer.testing import CliRunner
 
 import coincli
@@ -172,16 +171,11 @@ def test_an_interrupted_grid_resumes_to_the_store_of_one_run(grid, tmp_path):
 def test_several_writers_share_the_batches_of_a_grid(grid, tmp_path):
     clean, clean_store = grid
     store = tmp_path / "shared.zarr"
-    args = [sys.executable, "-m", "coincli", "fractions", "--phi0", "-pi:pi", "--samples",
-            "1024", "--batch", "512", "--threads", "1", "--over", "thickness=0.002,0.004",
-            "--over", "c=0.5,2", "--mass", str(PAPER.coin.mass), "--inertia",
-            str(PAPER.coin.inertia), "--store", str(store), "--json", "-q"]
-    procs = [subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT)
-             for _ in range(2)]
-    outs = [p.communicate(timeout=240) for p in procs]
-    for proc, (out, err) in zip(procs, outs, strict=True):
-        assert proc.returncode == 0, err.decode()[-2000:]
-        data = json.loads(out)
+    args = ["fractions", "--phi0", "-pi:pi", "--samples", "1024", "--batch", "512",
+            "--threads", "1", "--over", "thickness=0.002,0.004", "--over", "c=0.5,2", "--mass",
+            str(PAPER.coin.mass), "--inertia", str(PAPER.coin.inertia), "--store", str(store),
+            "-q"]
+    for data in run_together(args, 2):
         assert [r["standing"] for r in data["results"]] == [r.standing for r in clean.results]
     assert sum(run["samples"] for run in FractionsStore(store).runs()) == 4096  # each once
     assert _files(store) == _files(clean_store)

@@ -34,6 +34,18 @@ def _remove_batch(store: Path, batch: int) -> None:
     assert FractionsStore.open(store).trim(0, batch, lambda v, b: b != batch) == 1
 
 
+def run_together(args: list[str], processes: int) -> list[dict]:
+    """`coin ARGS --json` in several processes started at once: each one's JSON, once every
+    one has exited 0."""
+    command = [sys.executable, "-m", "coincli", *args, "--json"]
+    procs = [subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT)
+             for _ in range(processes)]
+    outs = [p.communicate(timeout=240) for p in procs]
+    for proc, (_, err) in zip(procs, outs, strict=True):
+        assert proc.returncode == 0, err.decode()[-2000:]
+    return [json.loads(out) for out, _ in outs]
+
+
 def _computed(store: Path) -> list[int]:
     return [run["samples"] for run in FractionsStore(store).runs()]
 
@@ -173,15 +185,9 @@ def test_several_writers_started_at_once_share_the_batches(tmp_path, whole):
     the store is the one a single run makes."""
     reference, clean = whole
     store = tmp_path / "shared.zarr"
-    args = [sys.executable, "-m", "coincli", "fractions", "--samples", "6144", "--batch",
-            "256", "--phi0", "-pi:pi", "--threads", "1", "--store", str(store), "--json",
-            "-q"]
-    procs = [subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=ROOT)
-             for _ in range(3)]
-    outs = [p.communicate(timeout=240) for p in procs]
-    for proc, (out, err) in zip(procs, outs, strict=True):
-        assert proc.returncode == 0, err.decode()[-2000:]
-        data = json.loads(out)
+    args = ["fractions", "--samples", "6144", "--batch", "256", "--phi0", "-pi:pi",
+            "--threads", "1", "--store", str(store), "-q"]
+    for data in run_together(args, 3):
         assert data["standing"] == reference.standing
         assert data["samples"] == 6144
     assert sum(_computed(store)) == 6144  # each batch once

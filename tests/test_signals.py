@@ -272,11 +272,12 @@ def test_a_claim_made_as_a_signal_came_is_released_too(tmp_path):
     assert not (tmp_path / "claims").exists()
 
 
-@pytest.mark.parametrize("when", ["before", "after"])
+@pytest.mark.parametrize("when", ["writing", "before", "after"])
 def test_a_claim_interrupted_as_it_is_made_leaves_no_file(tmp_path, monkeypatch, when):
-    """A signal (the `coin` command raises KeyboardInterrupt for each) just before or just
-    after a claim is linked into place: no claim is ever empty (one created, then left unwritten
-    by a SIGHUP, was nobody's to remove), and the process's close removes what is its own."""
+    """A signal (the `coin` command raises KeyboardInterrupt for each) while a claim's draft is
+    written, just before or just after the claim is linked into place: no claim is ever empty
+    (one created, then left unwritten by a SIGHUP, was nobody's to remove), and the process's
+    close removes what is its own, an empty draft too (our token names it)."""
     import os
 
     from coincli.sweeps import claims as module
@@ -288,13 +289,19 @@ def test_a_claim_interrupted_as_it_is_made_leaves_no_file(tmp_path, monkeypatch,
             link(source, target)
         raise KeyboardInterrupt
 
+    def draft_cut_off(self, data):  # the draft created, its content never written
+        self.touch()
+        raise KeyboardInterrupt
+
     folder = tmp_path / "claims"
     claims = module.Claims(folder, heartbeat=3600)
     monkeypatch.setattr(module.os, "link", interrupted)
+    if when == "writing":
+        monkeypatch.setattr(module.Path, "write_bytes", draft_cut_off)
     with pytest.raises(KeyboardInterrupt):
         claims.try_claim((0, 1))
     monkeypatch.undo()
-    left = list(folder.iterdir())
+    left = [p for p in folder.iterdir() if not p.name.startswith(".")]  # claims, not drafts
     assert [p.name for p in left] == (["tile_0_1"] if when == "after" else [])
     assert all(module.read_claim(p)[0]["token"] == claims.token for p in left)
     claims.close()

@@ -7,6 +7,7 @@ sweep's attributes (:mod:`coincli.io.basin_metadata`) and from the tiles themsel
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import json
 import os
@@ -244,8 +245,9 @@ class StoreView:
     problems: tuple[str, ...] = ()
     proof: str = "agree"
 
-    @property
+    @functools.cached_property
     def specs(self) -> dict[str, ArraySpec]:
+        """The arrays' specs, made once (every tile read and written goes through them)."""
         return array_specs(self.attrs, self.grid)
 
 

@@ -148,10 +148,9 @@ class BasinStore(SideRecords):
     what the sweep engine's :meth:`prepare` does). Picklable: a Dask worker writes its tiles
     through the same object."""
 
-    def __init__(self, path: str | os.PathLike):
+    def __init__(self, path: str | os.PathLike, view: StoreView | None = None):
         self.path = Path(path)
-        self._view: StoreView | None = None
-        self._specs: dict[str, ArraySpec] | None = None
+        self._view = view  # its metadata as read (None: read on first use)
         self.read_only = False  # a complete store that cannot be written: a sweep only reads it
 
     def __repr__(self) -> str:
@@ -179,18 +178,12 @@ class BasinStore(SideRecords):
         one a computed tile verifies under is the one the tiles were computed with; without
         any tile, the one that matches its digest. The copies that differ from it are listed
         in ``problems`` (a resume rewrites them)."""
-        store = cls(path)
-        store._set_view(read_view(store.path, grid, wanted))
-        return store
-
-    def _set_view(self, view: StoreView) -> None:
-        self._view = view
-        self._specs = view.specs
+        return cls(path, read_view(Path(path), grid, wanted))
 
     @property
     def view(self) -> StoreView:
         if self._view is None:
-            self._set_view(read_view(self.path))
+            self._view = read_view(self.path)
         return self._view
 
     @property
@@ -211,8 +204,7 @@ class BasinStore(SideRecords):
 
     @property
     def specs(self) -> dict[str, ArraySpec]:
-        self.view  # noqa: B018 - opened, which sets them
-        return self._specs
+        return self.view.specs
 
     def create_or_resume(self, attrs: dict, grid: Grid,
                          overwrite: bool = False) -> StoreCheck:
@@ -236,7 +228,7 @@ class BasinStore(SideRecords):
         elif not self.read_only:
             tidy(path)
             remove_dead_probes(path)
-        self._set_view(read_view(path, grid, wanted=attrs))
+        self._view = read_view(path, grid, wanted=attrs)
         earlier = resumable_as(self.attrs, attrs)  # a store of an earlier version: resumed as is
         if earlier is not None and not meta.differences(self.attrs, earlier):
             attrs = root_attrs(earlier)
@@ -287,9 +279,7 @@ class BasinStore(SideRecords):
     def shared(self) -> BasinStore:
         """The store as Dask workers open it: by its absolute path (the same on every machine
         of a cluster sharing its file system)."""
-        store = BasinStore(self.path.resolve())
-        store._set_view(self.view)
-        return store
+        return BasinStore(self.path.resolve(), self.view)
 
     # -- reading ------------------------------------------------------------------------------
     def read_chunk(self, name: str, tile: tuple[int, int]) -> np.ndarray:

@@ -134,6 +134,10 @@ class Claims:
                                         name="coin-claims-heartbeat")
         self._thread.start()
 
+    @property
+    def _draft_suffix(self) -> str:
+        return f".draft-{self.token}"
+
     def path(self, tile: tuple[int, int]) -> Path:
         return self.folder / claim_name(tile)
 
@@ -173,7 +177,7 @@ class Claims:
         between its creation and its write, which nobody could then tell as ours. A draft such
         a signal leaves carries our token: :meth:`close` removes it. Where the file system has
         no hard links, the claim is created exclusively, then written."""
-        draft = path.with_name(f".{path.name}.draft-{self.token}")
+        draft = path.with_name(f".{path.name}{self._draft_suffix}")
         try:
             draft.write_bytes(self._content(tile))
             os.link(draft, path)
@@ -249,12 +253,14 @@ class Claims:
         for tile in tiles:
             with contextlib.suppress(OSError):
                 self.release(tile)
-        # a claim made as a signal came (linked into place, not yet recorded as held), or its
-        # draft, is ours all the same: it carries our token
+        # a claim made as a signal came (linked into place, not yet recorded as held) is ours
+        # all the same: it carries our token; so is a draft, which our token names (one a
+        # signal cut off before its content was written is empty)
         with contextlib.suppress(OSError):
             for path in self.folder.iterdir():
                 owner, _ = read_claim(path)
-                if owner is not None and owner.get("token") == self.token:
+                if path.name.endswith(self._draft_suffix) or (
+                        owner is not None and owner.get("token") == self.token):
                     with contextlib.suppress(OSError):
                         path.unlink()
         _live_tokens.discard(self.token)
