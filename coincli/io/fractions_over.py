@@ -46,8 +46,7 @@ class FractionsOver:
     @property
     def standing(self) -> np.ndarray:
         """(*shape, 3): P(standing), low, high at each value (over the certain labels)."""
-        return np.array([[r.standing["probability"], r.standing["low"], r.standing["high"]]
-                         for r in self.results]).reshape(*self.shape, 3)
+        return self.estimate("certain")
 
     @property
     def interrupted(self) -> bool:
