@@ -29,8 +29,8 @@ import numpy
 stamps.append(("numpy imported", time.monotonic()))
 import coincli.cli as cli
 stamps.append(("CLI imported", time.monotonic()))
-from coincli.io.basin_store import BasinStore
-from coincli.sweeps import engine
+from coincli.stores.basin_store import BasinStore
+from coincli.engines import basin as engine
 
 
 def stamped(owner, name, label):

@@ -245,7 +245,7 @@ def main() -> None:
     table, rows = crossing_table(result, base)
     print(table, end="\n\n")
     print(slice_table(result), end="\n\n")
-    from coincli.io.fractions_store import FractionsStore
+    from coincli.stores.fractions_store import FractionsStore
 
     records = FractionsStore(args.store).runs()
     cpu = sum(r["cpu_seconds"] for r in records)

@@ -1,6 +1,6 @@
 #!/usr/bin/env python
 """What writing a sweep's tiles through zarr-python would cost the default 512 x 512 map, side by
-side with the one Zarr route of the package (coincli.io.zarr_v3), and why the stores do not use it.
+side with the one Zarr route of the package (coincli.stores.zarr_v3), and why the stores do not use it.
 
     python benchmarks/zarr_route.py [--rounds 5] [--json] [--write]
 
@@ -40,8 +40,8 @@ def main() -> None:
 
     import coincli
     from coincli.grid import TileResult
-    from coincli.io.basin_layout import ARRAY_NAMES
-    from coincli.io.basin_store import BasinStore
+    from coincli.stores.basin_layout import ARRAY_NAMES
+    from coincli.stores.basin_store import BasinStore
 
     work = Path(tempfile.mkdtemp(prefix="coin-zarr-route-"))
     try:
@@ -117,7 +117,7 @@ def main() -> None:
             f"The default 512 x 512 map ({result['tiles']} tiles of {result['chunks_per_tile']} "
             f"chunks), medians of {args.rounds} rounds: the whole command "
             f"{result['command_seconds']:.2f} s; its tiles written through "
-            f"`coincli.io.zarr_v3` {result['write_seconds_ours']:.3f} s (one thread), through "
+            f"`coincli.stores.zarr_v3` {result['write_seconds_ours']:.3f} s (one thread), through "
             f"zarr-python {result['write_seconds_zarr']:.3f} s, and importing zarr-python "
             f"{result['zarr_import_seconds']:.2f} s: the command would take "
             f"{result['command_through_zarr_ratio']:.2f} times as long through zarr-python.")

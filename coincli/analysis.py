@@ -19,7 +19,7 @@ whole map's. alpha is the slope of log f against log eps, D = 2 - alpha the boun
 box-counting dimension.
 
 Pure computation: arrays and the store's attributes in, dataclasses out; the API reads stores,
-:mod:`coincli.io.analysis_charts` draws, the CLI prints.
+:mod:`coincli.charts.analysis` draws, the CLI prints.
 """
 
 from __future__ import annotations

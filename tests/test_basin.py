@@ -22,13 +22,13 @@ from typer.testing import CliRunner
 
 import coincli
 from coincli.cli import app
+from coincli.engines.basin import run_tile_task
 from coincli.grid import compute_tile, make_grid, make_spec, parse_pair, parse_range
 from coincli.integrators import NO_LABEL, info
-from coincli.io.basin_store import BasinStore
 from coincli.params import ParameterError, Scene
 from coincli.stats import basin_stats, wilson
-from coincli.sweeps.engine import run_tile_task
-from coincli.sweeps.schema import basin_attrs
+from coincli.engines.basin_plan import sweep_attrs
+from coincli.stores.basin_store import BasinStore
 
 runner = CliRunner()
 SMALL = ["--res", "8", "--chunk", "4", "-q"]
@@ -288,7 +288,7 @@ def test_task_function_is_importable_and_writes_its_tile(tmp_path):
     path = tmp_path / "s.zarr"
     grid = make_grid(Scene(), {"vy": (0.1, 0.5), "vphi": (-5.0, 5.0)}, (4, 4), (2, 2))
     spec = make_spec(Scene(), grid)
-    BasinStore(path).create_or_resume(basin_attrs(Scene(), info("event"), spec), spec.grid)
+    BasinStore(path).create_or_resume(sweep_attrs(Scene(), info("event"), spec), spec.grid)
     store = BasinStore.open(path)
     done = run_tile_task(store, spec, store.parameters, (1, 0))
     assert done.tile == (1, 0) and done.cpu_seconds >= 0 and done.written
@@ -307,7 +307,7 @@ def _partial_store(tmp_path, verify=True) -> Path:
     grid = make_grid(scene, {"vy": (0.3, 1.9), "vphi": (-15.0, 15.0)}, (8, 8), (4, 4),
                      use_mirror=False)
     spec = make_spec(scene, grid)
-    attrs = basin_attrs(scene, info("event"), spec)
+    attrs = sweep_attrs(scene, info("event"), spec)
     BasinStore(path).create_or_resume(attrs, spec.grid)
     store = BasinStore.open(path)
     for tile in ((0, 0), (1, 1)):
@@ -358,7 +358,7 @@ def test_render_and_stats_of_an_empty_store(tmp_path):
     path = tmp_path / "empty.zarr"
     grid = make_grid(Scene(), {"vy": (0.1, 0.5), "vphi": (-5.0, 5.0)}, (4, 4), (2, 2))
     spec = make_spec(Scene(), grid)
-    BasinStore(path).create_or_resume(basin_attrs(Scene(), info("event"), spec), spec.grid)
+    BasinStore(path).create_or_resume(sweep_attrs(Scene(), info("event"), spec), spec.grid)
     coin_ok("render", str(path), "-o", str(tmp_path / "e.png"), "--dpi", "40")
     stats = json.loads(coin_ok("stats", str(path), "--json").output)  # valid JSON: no NaN
     assert stats["computed"] == 0 and stats["standing"]["probability"] is None

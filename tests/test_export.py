@@ -14,15 +14,15 @@ from matplotlib.figure import Figure
 from typer.testing import CliRunner
 
 import coincli
+from coincli.charts import export
 from coincli.cli import app
+from coincli.engines.basin import run_tile_task
 from coincli.enums import Status
 from coincli.grid import make_grid, make_spec
 from coincli.integrators import NO_LABEL, info
-from coincli.io import export
-from coincli.io.basin_store import BasinStore
 from coincli.params import ParameterError, Scene
-from coincli.sweeps.engine import run_tile_task
-from coincli.sweeps.schema import basin_attrs
+from coincli.engines.basin_plan import sweep_attrs
+from coincli.stores.basin_store import BasinStore
 
 runner = CliRunner()
 RANGES = {"vy": (0.3, 1.9), "vphi": (-15.0, 15.0)}
@@ -35,7 +35,7 @@ def partial(tmp_path_factory):
     scene = Scene()
     grid = make_grid(scene, RANGES, (8, 8), (4, 4), use_mirror=False)
     spec = make_spec(scene, grid)
-    BasinStore(path).create_or_resume(basin_attrs(scene, info("event"), spec), spec.grid)
+    BasinStore(path).create_or_resume(sweep_attrs(scene, info("event"), spec), spec.grid)
     store = BasinStore.open(path)
     for tile in ((0, 0), (0, 1)):
         run_tile_task(store, spec, store.parameters, tile)

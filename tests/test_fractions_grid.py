@@ -18,11 +18,11 @@ from typer.testing import CliRunner
 
 import coincli
 from coincli.cli import app
-from coincli.io.fractions_store import FractionsStore
 from coincli.montecarlo import corner_restitution, parse_over
 from coincli.montecarlo.estimate import pilot_values
 from coincli.montecarlo.results import level_crossing
 from coincli.params import ParameterError, model_params
+from coincli.stores.fractions_store import FractionsStore
 
 PAPER = coincli.load_preset("paper")
 ROOT = Path(__file__).parent.parent

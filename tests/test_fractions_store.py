@@ -16,8 +16,8 @@ from typer.testing import CliRunner
 
 import coincli
 from coincli.cli import app
-from coincli.io.fractions_store import FractionsStore
 from coincli.montecarlo.tally import Tally, samples_needed
+from coincli.stores.fractions_store import FractionsStore
 
 PAPER = coincli.load_preset("paper")
 ROOT = Path(__file__).parent.parent
@@ -144,7 +144,7 @@ def test_a_watched_batch_written_as_it_is_claimed_is_not_computed_again():
     computed again (three writers on one store once computed 6,400 samples of 6,144)."""
     from types import SimpleNamespace
 
-    from coincli.io.fractions_run import BatchQueue
+    from coincli.engines.fractions import BatchQueue
     from coincli.montecarlo.tally import Goal, Progression, Tally
 
     written: set[tuple[int, int]] = set()

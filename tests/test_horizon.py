@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 import coincli
+from coincli.charts.basin_render import UNCERTAIN, UNDECIDED, basin_rgba
 from coincli.enums import Certainty, Status
 from coincli.integrators.batch import verified_labels
 from coincli.integrators.ladder import ladder_of
-from coincli.io.basin_render import UNCERTAIN, UNDECIDED, basin_rgba
-from coincli.io.dataset import from_dataset
 from coincli.model import CAP_FACTOR, decision_time, horizon_text, scene_horizon
 from coincli.params import ParameterError, model_params, run_settings, validate
+from coincli.stores.dataset import from_dataset
 
 # the coin of the issue: d = 2 cm, t = 1 cm (t/d = 0.5), mass and inertia of a solid disc of the
 # paper coin's density
@@ -119,7 +119,7 @@ def test_fractions_report_the_decided_estimate_and_the_causes():
 def test_an_old_store_is_refused_with_a_clear_message(tmp_path):
     import json
 
-    from coincli.sweeps.schema import FORMAT
+    from coincli.stores.basin_schema import FORMAT
 
     scene = coincli.load_preset("paper")
     store = tmp_path / "b.zarr"

@@ -265,7 +265,7 @@ def test_spawn_without_a_display_or_a_file_suggests_rrd(tmp_path, monkeypatch):
 
 
 def test_write_recording_refuses_to_spawn_without_a_display(monkeypatch):
-    from coincli.io.rrd import write_recording
+    from coincli.recordings.rrd import write_recording
 
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
@@ -283,12 +283,12 @@ def test_a_recording_that_fails_after_the_run_comes_after_the_outcome(monkeypatc
     then one error line, exit 2."""
     import errno
 
-    import coincli.io.rrd
+    import coincli.recordings.rrd
 
     def full_disk(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device", "coin.rrd")
 
-    monkeypatch.setattr(coincli.io.rrd, "write_recording", full_disk)
+    monkeypatch.setattr(coincli.recordings.rrd, "write_recording", full_disk)
     code = run(["simulate", "--vy", "1.197", "--vphi", "3.508"])
     out, err = capsys.readouterr()
     assert code == 2 and "n = 6" in out, (code, out, err)

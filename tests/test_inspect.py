@@ -13,8 +13,8 @@ from typer.testing import CliRunner
 import coincli
 from coincli.cli import app
 from coincli.enums import Certainty
-from coincli.io.cells import cell_state, mirror_source
 from coincli.params import ParameterError, state_array
+from coincli.stores.cells import cell_state, mirror_source
 
 runner = CliRunner()
 RES, CHUNK = 16, 8
@@ -132,7 +132,7 @@ def test_a_cell_not_computed_is_replayed_but_not_claimed(stores, tmp_path):
 
 def test_a_replay_that_differs_exits_1(stores, monkeypatch):
     """Fault injection: the replay gives another label."""
-    from coincli.io import cells
+    from coincli.stores import cells
 
     path, ds = stores["paper"]
     real = cells.replay

@@ -15,9 +15,9 @@ LAYERS = [
     ("model", {"jit", "model", "statics"}),
     ("integrators", {"integrators"}),
     ("analysis", {"throw", "grid", "stats", "accuracy", "bench", "boundary", "montecarlo",
-                  "verify", "budget", "analysis", "shock"}),
-    ("sweeps", {"sweeps"}),
-    ("io", {"io"}),
+                  "analysis", "shock"}),
+    ("sweeps", {"engines"}),
+    ("io", {"stores", "recordings", "charts", "files"}),
     ("api", {"api", "__init__"}),
     ("cli", {"cli", "__main__"}),
 ]

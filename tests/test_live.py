@@ -1,4 +1,4 @@
-"""Rerun streams of sweeps, stores and estimates (coincli.io.basin_view, fractions_view,
+"""Rerun streams of sweeps, stores and estimates (coincli.recordings.basin_view, fractions_view,
 analysis_view; `coin basin --rrd`, `coin basin show`, `coin fractions --rrd`): the recordings
 are read back with Rerun's own reader and compared with the store and the printed result;
 --spawn without a display."""
@@ -20,12 +20,13 @@ import pytest
 from conftest import outputs_in_a_kernel, reset_sigint, shows_a_widget
 from typer.testing import CliRunner
 
+from coincli.charts.basin_render import n_range, ramp_colours
 from coincli.cli import app
 from coincli.enums import Certainty, Status
 from coincli.integrators import NO_LABEL
-from coincli.io import basin_view, rerun_stream, sweep_recording
-from coincli.io.basin_render import n_range, ramp_colours
-from coincli.io.basin_store import BasinStore
+from coincli.recordings import basin_view, sweep_recording
+from coincli.recordings import stream as rerun_stream
+from coincli.stores.basin_store import BasinStore
 
 rr = pytest.importorskip("rerun")
 from rerun.chunk import RrdReader  # noqa: E402
@@ -460,7 +461,7 @@ def test_a_sweep_in_a_notebook_draws_its_map_in_this_process(tmp_path, monkeypat
     same StoreMap as a recording process: the last map is the store's. (The notebook's viewer
     is replaced by a file here; the next tests send to a viewer.)"""
     import coincli
-    from coincli.io.rerun_stream import open_stream
+    from coincli.recordings.stream import open_stream
 
     pytest.importorskip("rerun_notebook")
     inline = tmp_path / "inline.rrd"
@@ -501,7 +502,7 @@ def test_a_notebook_stream_shows_the_viewer_then_sends_to_it(monkeypatch):
     pytest.importorskip("rerun_notebook")
     from rerun.notebook import Viewer
 
-    from coincli.io.rerun_stream import open_stream
+    from coincli.recordings.stream import open_stream
 
     shown, sent = [], []
     monkeypatch.setattr(Viewer, "display", lambda self, **options: shown.append(options))
@@ -562,7 +563,7 @@ def test_the_answer_of_the_recording_process_does_not_wait_for_its_children():
     """A viewer spawned by the recording process inherits its stdout: the answer goes to a
     copy no child inherits, so reading it to its end does not wait for the viewer."""
     code = ("import os, subprocess, sys\n"
-            "from coincli.io.sweep_recording import answer_line\n"
+            "from coincli.recordings.sweep_recording import answer_line\n"
             "out = answer_line()\n"
             "subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(30)'])\n"
             "out.write('{\"error\": null}\\n'); out.flush(); os._exit(0)")

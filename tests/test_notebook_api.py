@@ -15,12 +15,12 @@ from conftest import outputs_in_a_kernel, shows_a_widget
 import coincli
 from coincli.defaults import DEFAULT_LOG_EVERY
 from coincli.integrators.common import EVENT_COLUMNS, LIFTOFF, ONSET, SAMPLE_COLUMNS
-from coincli.io import rerun_stream
-from coincli.io import rrd as rrd_io
-from coincli.io.frames import build_frames
 from coincli.jit import python
 from coincli.model import energies
 from coincli.params import STATE_NAMES, ParameterError, model_params
+from coincli.recordings import rrd as rrd_io
+from coincli.recordings import stream as rerun_stream
+from coincli.recordings.frames import build_frames
 from coincli.throw import EVENT_NAMES, QUANTITIES, SAMPLE_NAMES
 
 FIG2 = dict(vy=1.197, vphi=3.508)

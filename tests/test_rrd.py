@@ -1,4 +1,4 @@
-"""Rerun recordings of one throw (coincli.io.rrd and `coin simulate --rrd/--no-rrd`): the .rrd is
+"""Rerun recordings of one throw (coincli.recordings.rrd and `coin simulate --rrd/--no-rrd`): the .rrd is
 read back with rerun.chunk.RrdReader and pyarrow and checked against the simulation."""
 
 from __future__ import annotations
@@ -16,12 +16,12 @@ from typer.testing import CliRunner
 
 from coincli import __version__, simulate
 from coincli.cli import app
-from coincli.io import frames as frames_io
-from coincli.io import rrd as rrd_io
 from coincli.model import accelerations
 from coincli.model import energies as model_energies
 from coincli.params import Scene, model_params
 from coincli.presets import load
+from coincli.recordings import frames as frames_io
+from coincli.recordings import rrd as rrd_io
 
 rr = pytest.importorskip("rerun")
 from rerun.chunk import RrdReader  # noqa: E402
@@ -315,7 +315,7 @@ def test_a_full_disk_leaves_no_recording_and_says_so(tmp_path, monkeypatch):
     """Rerun's file sink does not report a failed write; the recording is read back before it
     is renamed into place, so a file cut short (as on a full disk) is a one-line error and
     leaves neither a truncated .rrd nor a temporary file."""
-    from coincli.io import rerun_stream
+    from coincli.recordings import stream as rerun_stream
 
     check = rerun_stream._check_complete
 
@@ -396,6 +396,6 @@ def test_the_smallest_log_every_said_fits_and_is_the_smallest_of_two_digits(hori
 
 
 def test_rerun_is_not_imported_by_the_model():
-    code = ("import sys, coincli.throw, coincli.integrators, coincli.io.rrd, coincli.cli; "
+    code = ("import sys, coincli.throw, coincli.integrators, coincli.recordings.rrd, coincli.cli; "
             "assert 'rerun' not in sys.modules, 'rerun imported'")
     subprocess.run([sys.executable, "-c", code], check=True)

@@ -18,8 +18,8 @@ import pytest
 from test_basin import KILL_ARGS, assert_same_store, coin_ok, start_sweep, wait_for_tiles
 
 from coincli.cli import interruptions
-from coincli.io.basin_store import BasinStore
-from coincli.sweeps.executors import SchedulerLost
+from coincli.engines.executors import SchedulerLost
+from coincli.stores.basin_store import BasinStore
 
 
 @pytest.fixture(scope="module")
@@ -69,7 +69,7 @@ def test_sigterm_mid_fractions_records_and_resumes(tmp_path):
     import numpy as np
 
     from coincli import api
-    from coincli.io.fractions_store import FractionsStore
+    from coincli.stores.fractions_store import FractionsStore
 
     def coin(path: Path) -> subprocess.Popen:
         return subprocess.Popen([sys.executable, "-m", "coincli", *FRACTIONS, "--store",
@@ -99,7 +99,7 @@ def test_sigterm_mid_fractions_records_and_resumes(tmp_path):
 
 
 def batches_written(path: Path) -> bool:
-    from coincli.io.fractions_store import FractionsStore
+    from coincli.stores.fractions_store import FractionsStore
 
     try:
         return bool(FractionsStore(path).read_filled().any())
@@ -199,7 +199,7 @@ def test_scheduler_killed_mid_sweep_is_one_line_and_resumes(tmp_path, clean):
 
 
 def test_dask_executor_reports_a_lost_scheduler_and_the_workers():
-    from coincli.sweeps.executors import Dask, ItemQueue
+    from coincli.engines.executors import Dask, ItemQueue
 
     with dask_cluster() as (address, scheduler):
         executor = Dask(scheduler=address)
@@ -220,7 +220,7 @@ def test_a_call_that_meets_the_scheduler_gone_is_cut_short():
     scheduler killed during one is reported in seconds (a CI run once took 20 s here)."""
     from distributed import Client
 
-    from coincli.sweeps.executors import (
+    from coincli.engines.executors import (
         SCHEDULER_CALL_TIMEOUT,
         close_dask,
         cluster_window,
@@ -258,7 +258,7 @@ def test_a_call_that_meets_the_scheduler_gone_is_cut_short():
 def test_a_claim_made_as_a_signal_came_is_released_too(tmp_path):
     """A signal between a claim file's creation and its record as held (the window of
     Claims.try_claim) must not leave the claim for other hosts to wait out."""
-    from coincli.sweeps.claims import Claims
+    from coincli.engines.claims import Claims
 
     claims = Claims(tmp_path / "claims", heartbeat=3600)
     assert claims.try_claim((0, 1)) and claims.try_claim((2, 3))
@@ -280,7 +280,7 @@ def test_a_claim_interrupted_as_it_is_made_leaves_no_file(tmp_path, monkeypatch,
     close removes what is its own, an empty draft too (our token names it)."""
     import os
 
-    from coincli.sweeps import claims as module
+    from coincli.engines import claims as module
 
     link = os.link
 
@@ -313,7 +313,7 @@ def test_claims_without_hard_links_are_made_in_place(tmp_path, monkeypatch):
     then written; still one owner a tile."""
     import errno
 
-    from coincli.sweeps import claims as module
+    from coincli.engines import claims as module
 
     def refused(source, target):
         raise OSError(errno.EPERM, "Operation not permitted")
@@ -343,7 +343,7 @@ def test_workers_that_keep_dying_are_one_error_not_a_traceback():
     import dask
     import distributed  # noqa: F401
 
-    from coincli.sweeps.executors import Dask, ItemQueue, WorkersLost
+    from coincli.engines.executors import Dask, ItemQueue, WorkersLost
 
     with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
         tasks = Dask(workers=1).run(_die, ItemQueue([3]), name=lambda item: "test-die")

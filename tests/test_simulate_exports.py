@@ -1,6 +1,6 @@
 """`coin simulate --csv FILE` (the sampled time series, names and units in the header) and
 `coin simulate --gif FILE` (an animation drawn with matplotlib: .gif, or .mp4 with ffmpeg), and
-the library functions behind them (coincli.io.timeseries, coincli.io.animation); outputs are
+the library functions behind them (coincli.charts.timeseries, coincli.charts.animation); outputs are
 complete or absent, whatever fails."""
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ import pytest
 from typer.testing import CliRunner
 
 import coincli
+from coincli.charts import animation
+from coincli.charts.timeseries import SERIES_NAMES, csv_header
 from coincli.cli import app
-from coincli.io import animation
-from coincli.io.timeseries import SERIES_NAMES, csv_header
 from coincli.params import ParameterError
 from coincli.throw import QUANTITIES
 

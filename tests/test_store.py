@@ -34,13 +34,14 @@ from typer.testing import CliRunner
 import coincli
 from coincli import api
 from coincli.cli import app
+from coincli.engines import basin as engine
+from coincli.engines import claims as claims_io
+from coincli.engines.basin_plan import pilot_cells
 from coincli.integrators import NO_LABEL
-from coincli.io import basin_layout, zarr_v3
-from coincli.io.basin_layout import cost_dir
-from coincli.io.basin_store import BasinStore
-from coincli.sweeps import claims as claims_io
-from coincli.sweeps import engine, schema
-from coincli.sweeps.plan import pilot_cells
+from coincli.stores import basin_layout, zarr_v3
+from coincli.stores import basin_schema as schema
+from coincli.stores.basin_layout import cost_dir
+from coincli.stores.basin_store import BasinStore
 
 runner = CliRunner()
 # 4 tiles of 16 cells, each computed (these tests are about tiles; mirrored sweeps: see the end)

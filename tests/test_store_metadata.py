@@ -32,9 +32,9 @@ from test_store import (
 
 import coincli
 from coincli import api
-from coincli.io.basin_layout import tile_digest
-from coincli.io.basin_store import BasinStore
-from coincli.sweeps import schema
+from coincli.stores import basin_schema as schema
+from coincli.stores.basin_layout import tile_digest
+from coincli.stores.basin_store import BasinStore
 
 
 @pytest.fixture(scope="module")

@@ -39,13 +39,13 @@ from typer.testing import CliRunner
 
 import coincli
 from coincli.cli import app
-from coincli.io import rerun_stream
-from coincli.io.basin_store import BasinStore
-from coincli.io.fractions_store import FORMAT as FRACTIONS_FORMAT
+from coincli.engines import basin_plan as plan_module
+from coincli.engines import executors
 from coincli.params import ParameterError
-from coincli.sweeps import executors
-from coincli.sweeps import plan as plan_module
-from coincli.sweeps.schema import FORMAT
+from coincli.recordings import stream as rerun_stream
+from coincli.stores.basin_schema import FORMAT
+from coincli.stores.basin_store import BasinStore
+from coincli.stores.fractions_store import FORMAT as FRACTIONS_FORMAT
 
 runner = CliRunner()
 ROOT = Path(__file__).parent.parent

@@ -9,8 +9,8 @@
     coincli.render_basin(ds, "basin.png")
 
 A facade: each function checks its options, builds a plan and calls the one engine of its job (a
-sweep's :func:`coincli.sweeps.engine.run_sweep`, a Monte Carlo run's
-:func:`coincli.io.fractions_run.run_fractions`, the analysis's
+sweep's :func:`coincli.engines.basin.run_sweep`, a Monte Carlo run's
+:func:`coincli.engines.fractions.run_fractions`, the analysis's
 :func:`coincli.analysis.analyze_basin`). Options are keywords; results are named (objects with
 ``to_dict()``, Datasets). One throw, the statics and the compilation are here; basin maps in
 :mod:`.basins`, their boundaries in :mod:`.boundaries`, outcome probabilities in
@@ -21,20 +21,20 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..charts.fractions_over import FractionsOver
+from ..engines.basin import SweepProgress, SweepReport, SweepStart
+from ..engines.basin_plan import SweepEstimate, SweepPlan, SweepTooLong, estimate_sweep, plan_sweep
 from ..enums import Certainty, Engine, Method, Status, StopReason
 from ..integrators import warm_up
-from ..io.fractions_over import FractionsOver
-from ..io.rrd import record
-from ..io.trajectory import Trajectory
 from ..montecarlo import Fractions
 from ..montecarlo.plan import FractionsPlan, FractionsProgress, plan_fractions
 from ..params import ParameterError, Scene, validate
 from ..presets import load
+from ..recordings.rrd import record
+from ..recordings.trajectory import Trajectory
 from ..shock import MinimalShock, minimal_shock
 from ..statics import StabilityReport, analyse
 from ..stats import BasinStats
-from ..sweeps.engine import SweepProgress, SweepReport, SweepStart
-from ..sweeps.plan import SweepEstimate, SweepPlan, SweepTooLong, estimate_sweep, plan_sweep
 from ..throw import Outcome, classify
 from ..throw import simulate as simulate_throw
 from .basins import (
@@ -113,7 +113,7 @@ def viewer(*, width: int | None = None, height: int | None = None):
     ``fractions(..., notebook=v)``, ``analyze(..., notebook=v)``, ``show_basin(ds,
     notebook=v)`` show in it as they run (a viewer made in the cell that runs the work is
     ready only once the cell has run: Jupyter hands the kernel its "ready" between cells)."""
-    from ..io.rerun_stream import notebook_viewer
+    from ..recordings.stream import notebook_viewer
 
     return notebook_viewer(width=width, height=height)
 

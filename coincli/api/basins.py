@@ -10,12 +10,12 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
+from ..engines.basin import SweepProgress, SweepReport, SweepStart, check_progress, run_sweep
+from ..engines.basin_plan import SweepPlan, plan_sweep
+from ..engines.executors import executor_for
 from ..grid import DEFAULT_CHUNK, DEFAULT_RES
 from ..params import ParameterError, Scene
 from ..stats import BasinStats
-from ..sweeps.engine import SweepProgress, SweepReport, SweepStart, check_progress, run_sweep
-from ..sweeps.executors import executor_for
-from ..sweeps.plan import SweepPlan, plan_sweep
 from .recording import both, live_destination, warn_if_failed
 
 
@@ -29,7 +29,7 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
     on ``threads`` threads (default: one per core) or on Dask (``workers`` local processes, or
     the cluster at ``scheduler``; a cluster left without a worker is waited for, saying so on
     the logger ``coincli.dask``, and with ``worker_timeout`` the run stops after that many
-    seconds without one: :class:`coincli.sweeps.executors.NoWorkers`, a SchedulerLost).
+    seconds without one: :class:`coincli.engines.executors.NoWorkers`, a SchedulerLost).
 
     Tiles already in the store are checked first: a damaged one (a chunk that does not read
     back, or data that do not match the tile's digest) is recomputed like a missing one.
@@ -45,7 +45,7 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
     A store with other parameters is refused (ParameterError naming them) unless
     ``overwrite``. OSErrors (a read-only or full disk) are raised as they come; a store or
     output that cannot be written is found before any work."""
-    from ..io.basin_store import BasinStore
+    from ..stores.basin_store import BasinStore
 
     check_progress(progress)
     executor = executor_for(threads, workers, scheduler, worker_timeout)
@@ -94,7 +94,7 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
                                  "give store=PATH")
         return _basin_in_memory(plan, executor_for(threads, workers, scheduler), progress,
                                 stop)
-    from ..io.sweep_recording import sweep_recorder
+    from ..recordings.sweep_recording import sweep_recorder
 
     recorder = sweep_recorder(plan, store, where)
     if recorder is None:
@@ -113,8 +113,8 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
 
 
 def _basin_in_memory(plan: SweepPlan, executor, progress, stop):
-    from ..io.dataset import Basin, to_dataset
-    from ..sweeps.memory import MemoryMap
+    from ..stores.dataset import to_dataset
+    from ..stores.memory import MemoryMap
 
     if executor.dask:
         raise ParameterError("a sweep on Dask writes its tiles to a store: give store=PATH",
@@ -123,8 +123,7 @@ def _basin_in_memory(plan: SweepPlan, executor, progress, stop):
     report = run_sweep(plan, target, executor, progress=progress, stop=stop)
     if report.interrupted:
         raise KeyboardInterrupt("sweep interrupted")
-    return to_dataset(Basin(attrs=plan.attrs, arrays=target.arrays, done=target.done,
-                            tile_seconds=target.tile_seconds, runs=target.runs))
+    return to_dataset(target.basin())
 
 
 def open_basin(store: str | os.PathLike):
@@ -148,15 +147,15 @@ def open_basin(store: str | os.PathLike):
     xarray's ``ds.quarter_turns.plot()`` puts the first dimension on the vertical axis, so
     ``ds.quarter_turns.plot(x=ds.quarter_turns.dims[0])`` (``x="vy"``) draws it as render
     does."""
-    from ..io.dataset import to_dataset
+    from ..stores.dataset import to_dataset
 
     return to_dataset(read_basin(store))
 
 
 def read_basin(path):
     """The Basin of a store, or of a NetCDF export (a file)."""
-    from ..io.basin_store import BasinStore
-    from ..io.export import read_export
+    from ..charts.export import read_export
+    from ..stores.basin_store import BasinStore
 
     if Path(path).is_file():
         return read_export(path)
@@ -170,8 +169,8 @@ def export_basin(basin, path: str | os.PathLike) -> Path:
     coordinates, n, pose, status, certainty, settle_time, steps, rung, header names with
     units, empty fields where a value is missing). An existing file is replaced; the file is
     complete or absent. Returns the path."""
-    from ..io.export import check_export_path
-    from ..io.export import export_basin as export
+    from ..charts.export import check_export_path
+    from ..charts.export import export_basin as export
 
     path = check_export_path(path)
     return export(as_basin(basin), path)
@@ -182,9 +181,9 @@ def basin_attrs(basin) -> dict:
     values: parameters, sweep, method, version, coin_basin and, of a Dataset, runs,
     damaged_tiles, store. A Dataset holds the nested ones as JSON text (NetCDF has no nested
     attributes); this decodes them, whichever route the Dataset came by."""
-    from ..io.basin_store import BasinStore
-    from ..io.dataset import decoded_attrs
-    from ..io.export import open_export
+    from ..charts.export import open_export
+    from ..stores.basin_store import BasinStore
+    from ..stores.dataset import decoded_attrs
 
     if isinstance(basin, str | os.PathLike):
         if Path(basin).is_file():
@@ -198,9 +197,9 @@ def cell_scene(basin, *, cell=None, **values) -> Scene:
     the cell's initial state exactly as the sweep gave it, so that ``simulate`` replays the
     throw the map shows (the label comes out the same). The cell nearest to ``values`` of
     both swept axes (``vy=1.2, vphi=3.5``; ``phi0="pi/2"``), or ``cell=(i, j)`` by index."""
-    from ..io.basin_store import BasinStore
-    from ..io.cells import cell_scene as scene_of
-    from ..io.cells import locate
+    from ..stores.basin_store import BasinStore
+    from ..stores.cells import cell_scene as scene_of
+    from ..stores.cells import locate
 
     if isinstance(basin, str | os.PathLike):
         attrs = BasinStore.open(basin).attrs
@@ -211,16 +210,16 @@ def cell_scene(basin, *, cell=None, **values) -> Scene:
 
 def verify_basin(store: str | os.PathLike):
     """Check a store without computing anything: every tile's chunks (checksums) against its
-    digest, and every metadata file (a :class:`coincli.io.basin_store.StoreCheck`:
+    digest, and every metadata file (a :class:`coincli.stores.basin_store.StoreCheck`:
     ``intact``, ``damaged`` tiles with the reason, ``done`` tiles; ``to_dict()``)."""
-    from ..io.basin_store import BasinStore
+    from ..stores.basin_store import BasinStore
 
     return BasinStore.open(store).check()
 
 
 def as_basin(basin):
     """A Basin view of a Dataset, of a store path (or NetCDF export), or of a Basin."""
-    from ..io.dataset import Basin, from_dataset
+    from ..stores.dataset import Basin, from_dataset
 
     if isinstance(basin, Basin):
         return basin
@@ -237,7 +236,7 @@ def basin_stats(basin) -> BasinStats:
     stats --json`` prints; ``stats["standing"]`` reads it as that mapping). A store is read
     one tile at a time, each checked, so memory stays flat at any resolution; damaged tiles
     count as not computed."""
-    from ..io.basin_store import BasinStore
+    from ..stores.basin_store import BasinStore
 
     if isinstance(basin, str | os.PathLike) and not Path(basin).is_file():
         return BasinStore.open(basin).stats()
@@ -255,7 +254,7 @@ def render_basin(basin, out: str | os.PathLike | None = None, *, ax=None, field:
     the extension). ``marks``: throws to mark on the map, (value of the first swept axis,
     value of the second) pairs, each a white circle with a black edge (:func:`cell_scene`
     gives the Scene of one)."""
-    from ..io.basin_render import render_map
+    from ..charts.basin_render import render_map
 
     try:
         return render_map(as_basin(basin), out, title=title, dpi=dpi, n_max=n_max,
@@ -271,7 +270,7 @@ def show_basin(basin, *, rrd: str | os.PathLike | None = None, spawn: bool = Fal
     unsettled and non-finite cells over it, cells not computed (or damaged) marked; to the
     .rrd file ``rrd``, a new viewer (``spawn``) and/or a running one (``connect``), or alone
     in the notebook's cell (``notebook``)."""
-    from ..io.basin_view import show_basin as show
+    from ..recordings.basin_view import show_basin as show
 
     where = live_destination(rrd, spawn, connect, notebook)
     if where is None:

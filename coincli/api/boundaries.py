@@ -7,8 +7,8 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
+from ..engines.basin import check_progress
 from ..params import ParameterError
-from ..sweeps.engine import check_progress
 from .basins import as_basin
 from .recording import both, live_destination, warn_if_failed
 
@@ -41,7 +41,7 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
     with its bands, each band's f(eps) as it is measured, the fits and the measures; a
     recording that fails is a RuntimeWarning, the analysis is returned all the same."""
     from ..analysis import DEFAULT_POINTS, AnalysisOptions, analyze_basin
-    from ..sweeps.executors import usable_cores
+    from ..engines.executors import usable_cores
 
     check_progress(progress)
     where = live_destination(rrd, spawn, connect, notebook)
@@ -59,7 +59,7 @@ def analyze(basin, *, box: int = 5, bands: int = 4, points: int | None = None,
     if where is None:
         return analyze_basin(a["quarter_turns"], a["status"], a["certainty"], view.attrs,
                              options=opts, progress=progress, on_band=on_band, stop=stop)
-    from ..io.analysis_view import AnalysisRecorder
+    from ..recordings.analysis_view import AnalysisRecorder
 
     with AnalysisRecorder(view, where, bands=opts.bands, eps=opts.eps) as recorder:
         result = analyze_basin(a["quarter_turns"], a["status"], a["certainty"], view.attrs,
@@ -78,7 +78,7 @@ def render_analysis(analysis, out: str | os.PathLike | None = None, *, ax=None,
     "alpha" (alpha by band), side by side in a new Figure, or into ``ax`` (one Axes a panel:
     ``render_analysis(a, ax=ax, panels=["alpha"])``). ``out``: also write it to a PNG, SVG
     or PDF (by the extension)."""
-    from ..io.analysis_charts import plot_analysis
+    from ..charts.analysis import plot_analysis
 
     try:
         return plot_analysis(analysis, None if out is None else Path(out), title=title,

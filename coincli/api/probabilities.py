@@ -1,6 +1,6 @@
 """The public functions of outcome probabilities (`coin fractions`): a Monte Carlo run over the
 initial conditions, its continuation along one or two parameters, the run of a plan (the one
-engine, :func:`coincli.io.fractions_run.run_fractions`), its estimate, its store and its chart."""
+engine, :func:`coincli.engines.fractions.run_fractions`), its estimate, its store and its chart."""
 
 from __future__ import annotations
 
@@ -8,12 +8,13 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from ..io.fractions_over import FractionsOver
+from ..charts.fractions_over import FractionsOver
+from ..engines.basin import check_progress
+from ..engines.executors import check_where
 from ..montecarlo import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, Fractions
+from ..montecarlo.over import Continuation
 from ..montecarlo.plan import FractionsPlan, FractionsProgress, plan_fractions
 from ..params import ParameterError, Scene
-from ..sweeps.engine import check_progress
-from ..sweeps.executors import check_where
 from .recording import both, live_destination, warn_if_failed
 
 
@@ -107,24 +108,34 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     probability with its 95 % band against the samples, or, over a parameter, against the
     parameter as each value finishes. A recording that fails does not fail the run: it is
     said in a RuntimeWarning. ``worker_timeout``: as for :func:`sweep`."""
-    from ..io.fractions_run import run_fractions as run
+    from ..engines.fractions import run_fractions as run
 
     check_progress(progress)
+    target = None
+    if store is not None:
+        from ..stores.fractions_store import FractionsStore
+
+        target = FractionsStore.for_run(store)
     where = live_destination(rrd, spawn, connect, notebook)
     if where is None:
-        return run(plan, store=store, overwrite=overwrite, threads=threads, workers=workers,
-                   scheduler=scheduler, progress=progress, stop=stop,
-                   worker_timeout=worker_timeout)
-    from ..io.fractions_view import FractionsRecorder
+        return _with_views(run(plan, target=target, overwrite=overwrite, threads=threads,
+                               workers=workers, scheduler=scheduler, progress=progress,
+                               stop=stop, worker_timeout=worker_timeout))
+    from ..recordings.fractions_view import FractionsRecorder
 
     with FractionsRecorder(plan, where) as recorder:
-        result = run(plan, store=store, overwrite=overwrite, threads=threads,
-                     workers=workers, scheduler=scheduler,
-                     progress=both(progress, recorder.progress), stop=stop,
-                     worker_timeout=worker_timeout)
+        result = _with_views(run(plan, target=target, overwrite=overwrite, threads=threads,
+                                 workers=workers, scheduler=scheduler,
+                                 progress=both(progress, recorder.progress), stop=stop,
+                                 worker_timeout=worker_timeout))
         recorder.result(result)
     warn_if_failed(recorder)
     return result
+
+
+def _with_views(result):
+    """The engine's result as the API hands it out: a continuation with its Dataset view."""
+    return FractionsOver.of(result) if isinstance(result, Continuation) else result
 
 
 def estimate_fractions(plan: FractionsPlan, *, threads: int | None = None,
@@ -136,15 +147,15 @@ def estimate_fractions(plan: FractionsPlan, *, threads: int | None = None,
     the sample budget covers a precision goal). On ``threads`` threads (default one per core),
     ``workers`` Dask workers, or a cluster (``scheduler``: the estimate is then CPU time);
     samples that ``store`` holds already are not counted."""
+    from ..engines.executors import usable_cores
     from ..montecarlo.estimate import estimate_fractions as estimate
-    from ..sweeps.executors import usable_cores
 
     check_where(threads, workers, scheduler)
     n = None if scheduler is not None else workers or min(threads or usable_cores(),
                                                           usable_cores())
     held = None
     if store is not None and Path(store).is_dir():
-        from ..io.fractions_store import FractionsStore
+        from ..stores.fractions_store import FractionsStore
 
         held = FractionsStore(store).held_samples(plan)
     return estimate(plan, n, held)
@@ -154,7 +165,7 @@ def open_fractions(store: str | os.PathLike):
     """A `coin fractions` store as an xarray Dataset: ``initial`` ([value,] sample, ic) and the
     labels ([value,] sample); batches not written hold the fill values (``filled`` says which
     are)."""
-    from ..io.fractions_store import open_fractions as open_store
+    from ..stores.fractions_store import open_fractions as open_store
 
     return open_store(store)
 
@@ -168,7 +179,7 @@ def render_fractions(result: FractionsOver, out: str | os.PathLike | None = None
     labels), by default both, and "uncertain" (the uncertain share), each P(standing) with its
     line P = 1/3 and that line's 95 % band. Stacked in a new Figure, or into ``ax`` (one Axes
     a panel). ``out``: also write it to a PNG, SVG or PDF (by the extension)."""
-    from ..io.fractions_plot import PANELS, plot_grid, plot_over
+    from ..charts.fractions import PANELS, plot_grid, plot_over
 
     if not isinstance(result, FractionsOver):
         raise TypeError(f"render_fractions draws a continuation (coincli.fractions_over), got "

@@ -11,7 +11,7 @@ def live_destination(rrd, spawn: bool, connect, notebook=False):
     """The checked destination of a live recording (None if none is asked for)."""
     if rrd is None and not spawn and connect is None and notebook is False:
         return None  # Rerun's code is not even imported
-    from ..io.rerun_stream import check_destination
+    from ..recordings.stream import check_destination
 
     return check_destination(rrd, spawn, connect, notebook)
 
@@ -29,7 +29,7 @@ def warn_if_failed(recorder, stacklevel: int = 3) -> None:
     called the public function that calls this (``stacklevel``)."""
     if recorder is None or recorder.error is None:
         return
-    from ..io.paths import explain
+    from ..files import explain
 
     warnings.warn(f"the live recording failed: {explain(recorder.error)}", RuntimeWarning,
                   stacklevel=stacklevel)

@@ -87,7 +87,7 @@ def accuracy_command(
     Trajectory error: the state of five throws ~0.06 s after their first impact against the event method at rtol 1e-12. Label error: the fraction of robust cells of a basin grid whose n differs from that reference; robust cells are those where it agrees with RK4 at h = 2.5e-7.
     """  # noqa: E501
     from .. import accuracy as acc
-    from ..io.paths import check_writable, describe
+    from ..files import check_writable, describe
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
@@ -96,14 +96,14 @@ def accuracy_command(
             run_stability(scene, json_out)
             return
         names = parse_methods(methods)
-        from ..sweeps.executors import usable_cores
+        from ..engines.executors import usable_cores
 
         threads = usable_cores() if threads is None else threads
         if threads < 1:
             raise ParameterError("--threads must be at least 1")
         grid = acc.vy_vphi_grid(scene, parse_range(vy_range, "--vy"),
                                 parse_range(vphi_range, "--vphi"), parse_res(res))
-        from ..io.paths import check_figure_path
+        from ..files import check_figure_path
 
         check_figure_path(out, "chart")
         table = table or out.with_suffix(".json")
@@ -120,7 +120,7 @@ def accuracy_command(
     with console.status("") as status:
         study = acc.run_study(scene, grid, settings, threads,
                               progress=lambda text: status.update(f"accuracy: {text}"))
-    from ..io.charts import plot_study, write_table
+    from ..charts.accuracy import plot_study, write_table
 
     try:
         plot_study(study, out, title=f"coin {scene.coin.diameter * 1e3:g} x "

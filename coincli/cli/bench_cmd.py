@@ -57,7 +57,7 @@ def bench_command(
     from ..accuracy import vy_vphi_grid
 
     with user_errors():
-        from ..sweeps.executors import usable_cores
+        from ..engines.executors import usable_cores
 
         threads = usable_cores() if threads is None else threads
         if threads < 1 or repeats < 1:

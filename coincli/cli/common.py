@@ -218,7 +218,7 @@ def user_errors():
     except ParameterError as exc:
         raise fail(in_cli_words(exc)) from None
     except OSError as exc:  # a read-only or full disk, a missing folder, no permission
-        from ..io.paths import describe
+        from ..files import describe
 
         raise fail(describe(exc)) from None
 

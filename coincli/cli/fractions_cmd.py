@@ -166,8 +166,8 @@ def fractions_command(
     coin fractions --y0 r:5r --phi0 -pi:pi --vx -0.5:0.5 --precision 0.05%
     """  # noqa: E501
     from .. import api
+    from ..engines.executors import check_where
     from ..montecarlo import parse_count, parse_precision
-    from ..sweeps.executors import check_where
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
@@ -177,7 +177,7 @@ def fractions_command(
         if plot is not None and not over:
             raise ParameterError("--plot draws a continuation: give --over NAME=LO:HI:STEPS")
         if plot is not None:
-            from ..io.paths import check_figure_path
+            from ..files import check_figure_path
 
             check_figure_path(plot, "--plot")
         keep = tuple(name for name, given in (("mass", mass), ("inertia", inertia))
@@ -194,7 +194,7 @@ def fractions_command(
     compile_first(quiet)
     with user_errors():
         if store is not None:
-            from ..io.basin_layout import check_store_writable
+            from ..stores.basin_layout import check_store_writable
 
             check_store_writable(store)
         est = api.estimate_fractions(plan, threads=threads, workers=workers,
@@ -214,7 +214,7 @@ MAX_SECONDS = 12 * 3600.0  # a run estimated longer is refused without --yes
 def _naming(store: Path | None):
     """A disk's error while the run writes ``store`` (a full disk) said naming the store, and
     that the batches it holds are kept."""
-    from ..io.paths import DISK_ERRORS, NotWritable, describe
+    from ..files import DISK_ERRORS, NotWritable, describe
 
     try:
         yield
@@ -228,7 +228,7 @@ def _naming(store: Path | None):
 def _check_estimate(est, plan, scheduler, yes: bool, quiet: bool) -> None:
     """Refuse (unless --yes) a run estimated at over 12 hours, or whose stop rule likely needs
     more samples than its budget; otherwise say what a long run will cost."""
-    from ..sweeps.plan import format_duration
+    from ..engines.basin_plan import format_duration
 
     on = (f"on {counted(est.workers, 'core')}" if est.workers
           else f"of CPU time over the cluster at {scheduler}")
@@ -462,12 +462,14 @@ def _run(plan, where_to, quiet: bool, *, store, **options):
         if recorder is not None:
             recorder.progress(update)
 
-    from ..io.fractions_run import StoreIncomplete
-    from ..sweeps.executors import SchedulerLost
+    from ..engines.executors import SchedulerLost
+    from ..engines.fractions import StoreIncomplete
 
     recorder = None
     if where_to is not None:
-        from ..io.fractions_view import FractionsRecorder  # Rerun's code only when asked for
+        from ..recordings.fractions_view import (
+            FractionsRecorder,  # Rerun's code only when asked for
+        )
 
         recorder = FractionsRecorder(plan, where_to)
     try:

@@ -86,8 +86,8 @@ def destination(rrd: Path | None, spawn: bool, connect: str | None):
     its work is done). Fails in one line, before any work, on an unusable path or URL."""
     if rrd is None and not spawn and connect is None:
         return None, False  # nothing asked: Rerun's code is not even imported
-    from ..io.rerun_stream import NO_DISPLAY, check_destination, display_available
     from ..params import ParameterError
+    from ..recordings.stream import NO_DISPLAY, check_destination, display_available
 
     no_viewer = spawn and not display_available()
     try:
@@ -128,10 +128,10 @@ def recorded(where) -> str:
 
 
 def record_throw(run, *, rrd, spawn: bool, connect, log_every: float):
-    """Record one throw (:func:`coincli.io.rrd.write_recording`): (its RecordingInfo, None), or
+    """Record one throw (:func:`coincli.recordings.rrd.write_recording`): (its RecordingInfo, None), or
     (None, why it was not written, in one line) for the command to say after its outcome."""
-    from ..io.paths import describe
-    from ..io.rrd import write_recording
+    from ..files import describe
+    from ..recordings.rrd import write_recording
 
     try:
         return write_recording(run, rrd=rrd, spawn=spawn, connect=connect,
@@ -147,7 +147,7 @@ def finish(recorder, no_viewer: bool, exit_code: int | None = 1) -> None:
     ``exit_code`` (None: leave the exit to the caller) if it did, or if --spawn found no
     display."""
     if recorder is not None and recorder.error is not None:
-        from ..io.paths import explain
+        from ..files import explain
 
         why = explain(recorder.error)
         if exit_code is None:

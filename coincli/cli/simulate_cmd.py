@@ -174,7 +174,7 @@ def _announce(scene) -> None:
     steps = sum(min(budget, math.ceil(horizon / dt)) if math.isfinite(horizon) else budget
                 for budget, dt in zip(ladder.budgets, ladder.dts, strict=True))
     if steps > SLOW_STEPS:
-        from ..sweeps.plan import format_duration
+        from ..engines.basin_plan import format_duration
 
         seconds = steps * 2e-8  # ~20 ns a step compiled, the paper's method
         rungs = (f"{ladder.dts[0]:g} s" if len(ladder) == 1 else
@@ -186,8 +186,8 @@ def _announce(scene) -> None:
 
 def _check_exports(csv, gif) -> None:
     """Fail in one line, before the run, on a path --csv or --gif cannot write."""
-    from ..io.animation import check_animation_path
-    from ..io.paths import check_writable
+    from ..charts.animation import check_animation_path
+    from ..files import check_writable
     from ..params import ParameterError
 
     if csv is not None:
@@ -202,9 +202,9 @@ def _check_exports(csv, gif) -> None:
 def _write_exports(trajectory, csv, gif, not_written: list) -> dict:
     """Write the CSV and the animation asked for: {"csv": path, "animation": path} of those
     written; (what, why) of the others appended to ``not_written``."""
-    from ..io.animation import animate
-    from ..io.paths import describe
-    from ..io.timeseries import write_csv
+    from ..charts.animation import animate
+    from ..charts.timeseries import write_csv
+    from ..files import describe
     from ..params import ParameterError
 
     written = {}
@@ -224,7 +224,7 @@ def _write_exports(trajectory, csv, gif, not_written: list) -> dict:
 
 
 def print_exports(trajectory, written: dict) -> None:
-    from ..io.animation import DEFAULT_FPS, DEFAULT_SECONDS
+    from ..charts.animation import DEFAULT_FPS, DEFAULT_SECONDS
 
     rows = []
     if "csv" in written:

@@ -279,7 +279,7 @@ def warm_up(p, settings, state, runs=None) -> None:
     numba needs to load machine code, 0.3 s; each after it 0.03 s), except on the first run of
     these sources on this machine, which compiles all three at once, as the notice before it
     says (:func:`coincli.jit.kernels_cached`), and marks them compiled."""
-    from ..integrators.ladder import Ladder
+    from .ladder import Ladder
 
     every = (final_state, label_states, verified_labels)
     first = not kernels_cached()

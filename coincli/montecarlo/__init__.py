@@ -11,9 +11,9 @@ This package holds the pure computation (no files, no threads, no terminal): the
 and their parsing and draws (:mod:`.sampling`: scrambled Sobol points or a seeded generator),
 one batch's labels (:mod:`.batch`), the counts, intervals and stop rule (:mod:`.tally`), the
 scenes of a continuation (:mod:`.continuation`) and the results (:mod:`.results`; a
-continuation's, with their Dataset: :mod:`coincli.io.fractions_over`).
-:mod:`coincli.io.fractions_run` runs batches on threads or Dask and
-:mod:`coincli.io.fractions_store` keeps them in a Zarr store.
+continuation's, with their Dataset: :mod:`coincli.charts.fractions_over`).
+:mod:`coincli.engines.fractions` runs batches on threads or Dask and
+:mod:`coincli.stores.fractions_store` keeps them in a Zarr store.
 
 Reproducibility
 ---------------

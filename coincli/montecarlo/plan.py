@@ -17,7 +17,7 @@ from .continuation import PARAMETERS, continuation_note, parse_over, point_scene
 from .sampling import DEFAULT_BATCH, SOBOL_MAX, Sampling, check_box, make_sampling
 from .tally import DEFAULT_MAX_SAMPLES, Goal, make_goal
 
-STORE_FORMAT = 3  # of a fractions store (coincli.io.fractions_store): 2, a chunk a batch;
+STORE_FORMAT = 3  # of a fractions store (coincli.stores.fractions_store): 2, a chunk a batch;
 # 3: certainty 3 = undecided (before, undecided labels were 0, uncertain, like chaotic ones)
 
 

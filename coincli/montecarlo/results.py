@@ -1,6 +1,6 @@
 """What a Monte Carlo run returns at one value: :class:`Fractions`; and where an estimate along a
 parameter crosses a level (:func:`level_crossing`; a continuation's results, along a parameter
-or over a grid of two, are :class:`coincli.io.fractions_over.FractionsOver`)."""
+or over a grid of two, are :class:`coincli.charts.fractions_over.FractionsOver`)."""
 
 from __future__ import annotations
 

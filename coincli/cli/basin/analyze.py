@@ -100,10 +100,10 @@ def analyze_command(
     from ... import api
     from ...analysis import DEFAULT_POINTS
     from ...analysis import eps_values as make_eps
+    from ...engines.executors import check_where
+    from ...files import check_figure_path, check_rrd_path
     from ...grid import parse_range
-    from ...io.basin_store import BasinStore
-    from ...io.paths import check_figure_path, check_rrd_path
-    from ...sweeps.executors import check_where
+    from ...stores.basin_store import BasinStore
 
     with user_errors():
         span = parse_range("eps", eps)
@@ -163,7 +163,7 @@ def _run(basin, where_to, quiet: bool, **options):
 
     recorder = None
     if where_to is not None:
-        from ...io.analysis_view import AnalysisRecorder  # Rerun's code only when asked for
+        from ...recordings.analysis_view import AnalysisRecorder  # Rerun's code only when asked for
 
         recorder = AnalysisRecorder(basin, where_to, bands=options["bands"],
                                     eps=options["eps"])

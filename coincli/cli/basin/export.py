@@ -26,9 +26,9 @@ def export_command(
     NetCDF: the Dataset of coincli.open_basin, which xarray.open_dataset and coincli.open_basin read back (quarter_turns NaN where a cell has no label; nested attributes as JSON text). CSV: one row per cell, the first swept axis outermost: the two swept values, n, pose, status, certainty, settle_time, steps, rung; header names with units; empty fields where a value is missing. Cells of tiles not computed (or damaged) are exported as not computed.
     """  # noqa: E501
     from ... import api
-    from ...io.basin_store import BasinStore
-    from ...io.export import check_export_path
-    from ...io.paths import check_writable, describe
+    from ...charts.export import check_export_path
+    from ...files import check_writable, describe
+    from ...stores.basin_store import BasinStore
 
     with user_errors():
         check_export_path(out)

@@ -164,8 +164,8 @@ def inspect_command(
     coin basin inspect out.zarr --vy 1.2 --vphi 3.5 --rrd throw.rrd
     """  # noqa: E501
     from ...integrators.ladder import ladder_of
-    from ...io.basin_store import BasinStore
-    from ...io.cells import cell_scene, ladder_matches, locate, read_stored_cell, replay
+    from ...stores.basin_store import BasinStore
+    from ...stores.cells import cell_scene, ladder_matches, locate, read_stored_cell, replay
 
     # checked before the replay; --spawn without a display is said now (the outcome and any
     # file still follow, exit 1)

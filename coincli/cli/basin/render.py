@@ -65,8 +65,8 @@ def render_command(
     n < 0 (clockwise) yellow to red, n > 0 (counter-clockwise) green to blue, n = 0 white, standing (odd n) black; uncertain cells grey, no outcome by t_end purple, non-finite magenta, not computed hatched. Works on partial stores.
     """  # noqa: E501
     from ... import api
-    from ...io.basin_store import BasinStore
-    from ...io.paths import check_rrd_path, check_writable, describe
+    from ...files import check_rrd_path, check_writable, describe
+    from ...stores.basin_store import BasinStore
 
     with user_errors():
         if dpi < 10 or dpi > 1200:
@@ -93,8 +93,8 @@ def render_command(
         metadata_note(store)
         damaged_note(path, basin.damaged, "drawn as not computed")
         if rrd is not None:
-            from ...io.basin_view import show_basin
-            from ...io.rerun_stream import Destination  # as `coin basin show --rrd`
+            from ...recordings.basin_view import show_basin
+            from ...recordings.stream import Destination  # as `coin basin show --rrd`
 
             try:
                 show_basin(basin, Destination(rrd=rrd))
@@ -117,14 +117,14 @@ def show_command(
 
     coin basin show out.zarr --rrd out.rrd
     """  # noqa: E501
-    from ...io.basin_store import BasinStore
-    from ...io.basin_view import show_basin
+    from ...recordings.basin_view import show_basin
+    from ...stores.basin_store import BasinStore
 
     with user_errors():
         store = BasinStore.open(path)
         basin = store.read()
     if rrd is None and connect is None:  # a viewer, then, or nothing to do
-        from ...io.rerun_stream import NO_DISPLAY, display_available
+        from ...recordings.stream import NO_DISPLAY, display_available
 
         if not display_available():
             say(err_console, f"[bold red]error:[/] {NO_DISPLAY} here: write the recording "
@@ -138,7 +138,7 @@ def show_command(
     try:
         show_basin(basin, where_to)
     except (OSError, RuntimeError) as exc:
-        from ...io.paths import describe
+        from ...files import describe
 
         raise fail("could not write the recording: "
                    + (describe(exc) if isinstance(exc, OSError) else str(exc))) from None

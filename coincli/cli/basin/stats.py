@@ -46,8 +46,8 @@ def stats_command(
     Count and fraction of each n over the labelled cells and, for a verified sweep, over the certain cells only; P(standing) with and without the uncertain cells; the cells unsettled, non-finite, over budget or not computed; the CPU and wall time of the sweep.
     """  # noqa: E501 (typer keeps a docstring's line breaks)
     from ... import api
-    from ...io.basin_store import BasinStore
-    from ...io.paths import check_writable, describe
+    from ...files import check_writable, describe
+    from ...stores.basin_store import BasinStore
 
     with user_errors():
         view = BasinStore.open(path)
@@ -80,7 +80,7 @@ def stats_command(
 def _write_csv(stats: dict, target: Path) -> None:
     import csv
 
-    from ...io.paths import atomic_output
+    from ...files import atomic_output
 
     certain = {r["n"]: r for r in stats.get("outcomes_certain", [])}
     with atomic_output(target) as tmp, open(tmp, "w", newline="") as fh:

@@ -138,7 +138,7 @@ def sweep_command(
     coin basin out.zarr --vy 0:2 --vphi -20:20 --res 512
     """  # noqa: E501
     from ... import api
-    from ...sweeps.executors import check_where
+    from ...engines.executors import check_where
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
@@ -172,10 +172,10 @@ def _run(plan, path: Path, where_to, *, overwrite: bool, threads, workers, sched
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     from ... import api
-    from ...io.paths import DISK_ERRORS, NotWritable, describe
-    from ...io.sweep_recording import sweep_recorder
-    from ...io.zarr_v3 import is_store
-    from ...sweeps.executors import SchedulerLost
+    from ...engines.executors import SchedulerLost
+    from ...files import DISK_ERRORS, NotWritable, describe
+    from ...recordings.sweep_recording import sweep_recorder
+    from ...stores.zarr_v3 import is_store
     from .. import interruptions
     from ..progress import Bars, RateColumn
 
@@ -291,7 +291,7 @@ MAX_SECONDS = 12 * 3600.0  # a sweep estimated longer is refused without --yes
 
 
 def _estimate_text(est, plan, scheduler) -> str:
-    from ...sweeps.plan import format_duration
+    from ...engines.basin_plan import format_duration
 
     bound = "at least" if est.at_least else "about"
     on = (f"on {est.workers} {'core' if est.workers == 1 else 'cores'}" if est.workers
@@ -304,7 +304,7 @@ def _estimate_text(est, plan, scheduler) -> str:
 
 def _too_long(est, plan, scheduler) -> str:
     """One line: how long, and how to split the sweep."""
-    from ...sweeps.plan import format_duration
+    from ...engines.basin_plan import format_duration
 
     n0, n1 = plan.grid.shape
     scale = math.sqrt(MAX_SECONDS / est.seconds) if est.seconds > 0 else 1.0

@@ -1,1 +1,0 @@
-"""Input/output: Rerun recordings, Zarr stores, charts. Heavy libraries load lazily."""
