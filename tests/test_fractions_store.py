@@ -144,7 +144,8 @@ def test_a_watched_batch_written_as_it_is_claimed_is_not_computed_again():
     computed again (three writers on one store once computed 6,400 samples of 6,144)."""
     from types import SimpleNamespace
 
-    from coincli.engines.fractions import BatchQueue
+    from coincli.engines.claims import ClaimQueue
+    from coincli.engines.fractions import BatchSource
     from coincli.montecarlo.tally import Goal, Progression, Tally
 
     written: set[tuple[int, int]] = set()
@@ -171,8 +172,9 @@ def test_a_watched_batch_written_as_it_is_claimed_is_not_computed_again():
 
     goal = Goal(samples=512)
     progs = [Progression(goal, 256)]
-    queue = BatchQueue(progs, lambda v, index: SimpleNamespace(value=v, batch=index), Claims(),
-                       lambda v, index: (v, index) in written, found, poll=0)
+    source = BatchSource(progs, lambda v, index: SimpleNamespace(value=v, batch=index),
+                         lambda v, index: (v, index) in written, found)
+    queue = ClaimQueue(source, Claims(), poll=0)
     task = queue.take()  # batch 0 is held by the other: watched; batch 1 is ours
     assert (task.value, task.batch) == (0, 1) and queue.watched == {(0, 0)}
     assert queue.take() is None  # claimed as it was written: found, not handed out

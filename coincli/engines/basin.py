@@ -41,7 +41,7 @@ from .basin_plan import (
     estimate_sweep,
     load_kernels,
 )
-from .claims import TileQueue
+from .claims import tile_queue
 from .executors import Dask, SchedulerLost, Threads, hard_stop
 
 
@@ -230,7 +230,7 @@ def run_sweep(plan: SweepPlan, target, executor: Threads | Dask, *, overwrite: b
         return all(finished(u) for u in grid.task_tiles(task))
 
     claims = target.claims()
-    queue = TileQueue(todo, claims, is_done=is_done if claims is not None else None)
+    queue = tile_queue(todo, claims, is_done=is_done if claims is not None else None)
     task = partial(run_tile_task, target.shared() if executor.dask else target, spec,
                    prepared.parameters)
     if not executor.dask:

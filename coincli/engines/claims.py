@@ -13,12 +13,11 @@ reboot). Taking over renames the stale file out of the way, checks that what it 
 claim it judged stale (restoring it otherwise), and then claims as usual, so two processes
 taking over the same tile cannot both win.
 
-:class:`TileQueue` hands out the tiles one process should compute: it claims each before handing
-it out and checks, once claimed, that nobody finished it meanwhile; tiles claimed by live others
-are watched until they are done, or until their claim is dropped or goes stale, in which case it
-claims and computes them itself. So when a queue is :attr:`~TileQueue.finished`, every tile of
-the sweep is done, whoever computed it. A process that meets a tile held by another moves on to
-the middle of the tiles it has left, so processes spread over the grid rather than take turns.
+:class:`ClaimQueue`, the one queue of both engines, hands out the pieces (tiles, batches) one
+process should compute: it claims each before handing it out and checks, once claimed, that
+nobody finished it meanwhile; pieces claimed by live others are watched until they are done, or
+until their claim is dropped or goes stale, in which case it claims and computes them itself. So
+when a queue is :attr:`~ClaimQueue.finished`, every piece is done, whoever computed it.
 """
 
 from __future__ import annotations
@@ -42,7 +41,7 @@ POLL = 0.5  # s between looks at the tiles other processes hold
 NO_HARD_LINKS = {errno.EPERM, errno.EOPNOTSUPP, errno.ENOTSUP, errno.ENOSYS}
 
 HOST = socket.gethostname()
-_live_tokens: set[str] = set()  # claims held by this process (any TileQueue)
+_live_tokens: set[str] = set()  # claims held by this process (any queue)
 
 
 def _start_time(pid: int) -> str | None:
@@ -268,89 +267,143 @@ class Claims:
             self.folder.rmdir()  # empty once nobody holds a claim
 
 
-class TileQueue:
-    """The tiles of a sweep as one process sees them: :meth:`take` hands out a tile this
-    process has claimed (and that is not done), or None when every tile left is held by another
-    live process; those are watched (:attr:`POLL`) until done, or claimed here when their owner
-    lets go or goes stale. :meth:`finished` is True once every tile is done, here or elsewhere.
-    Without ``claims`` (an in-memory sweep) it hands the tiles out in order."""
+class ClaimQueue:
+    """The pieces of one job as one process sees them: a sweep's tiles or a Monte Carlo run's
+    batches, from a *source* that knows which piece comes next and what its task is. Both
+    engines hand their executor such a queue (:mod:`coincli.engines.executors`).
 
-    def __init__(self, tiles: Iterable[tuple[int, int]], claims: Claims | None = None,
-                 is_done: Callable[[tuple[int, int]], bool] | None = None,
-                 poll: float = POLL):
-        self.pending = deque(tuple(t) for t in tiles)
+    :meth:`take` hands out a piece this process has claimed (and that nobody finished since),
+    or None when every piece left is held by another live process; those are *watched*
+    (:attr:`poll`) until done elsewhere, or claimed here once their owner lets go or goes
+    stale. Without ``claims`` (an in-memory sweep, a run without a store) it hands the pieces
+    out in the source's order. :attr:`finished` is True once the source needs nothing more
+    and no piece is out or watched: every piece is done, whoever computed it.
+
+    The source (:class:`TileSource`, :class:`coincli.engines.fractions.BatchSource`) has
+    ``next()`` (the next piece to try, marked as tried, or None), ``needed(key)`` (a watched
+    piece may still be needed), ``done_elsewhere(key)`` (another process finished it: the
+    source takes note), ``task(key)`` and ``key(task)``, ``held(key)`` (another process holds
+    it), ``dropped(key)`` (handed out, but this run will not write it) and ``exhausted()``;
+    ``release_on_settle`` says whether a piece's claim goes when its task returns (a tile's
+    task writes it) or later, once the engine has written it (a batch's result comes back)."""
+
+    def __init__(self, source, claims: Claims | None = None, poll: float = POLL):
+        self.source = source
         self.claims = claims
-        self.is_done = is_done
         self.poll = poll
-        self.watched: list[tuple[int, int]] = []  # held by others
-        self.out: set[tuple[int, int]] = set()  # handed out, not yet settled
-        self.done_elsewhere: list[tuple[int, int]] = []
+        self.watched: set = set()  # held by others
+        self.out: set = set()  # handed out, not yet settled
+        self.done_elsewhere: list = []
         self._last_look = 0.0
 
-    def _finished_elsewhere(self, tile) -> bool:
-        if self.is_done is not None and self.is_done(tile):
-            self.done_elsewhere.append(tile)
+    def _elsewhere(self, key) -> bool:
+        if self.claims is not None and self.source.done_elsewhere(key):
+            self.done_elsewhere.append(key)
             return True
         return False
 
-    def _get(self, tile) -> bool:
-        """Claim ``tile``; True if this process is to compute it."""
+    def _claim(self, key) -> bool | None:
+        """True: claimed here, to compute; False: done elsewhere; None: held by another."""
         if self.claims is None:
             return True
-        if self._finished_elsewhere(tile):
+        if self._elsewhere(key):
             return False
-        if not self.claims.try_claim(tile):
-            self.watched.append(tile)
-            # another process works here: move on to the middle of what is left, so that
-            # processes spread over the grid instead of taking turns tile by tile
-            self.pending.rotate(-(len(self.pending) // 2))
-            return False
-        if self._finished_elsewhere(tile):  # finished between our look and our claim
-            self.claims.release(tile)
+        if not self.claims.try_claim(key):
+            return None
+        if self._elsewhere(key):  # finished between our look and our claim
+            self.claims.release(key)
             return False
         return True
 
-    def take(self) -> tuple[int, int] | None:
-        while self.pending:
-            tile = self.pending.popleft()
-            if self._get(tile):
-                self.out.add(tile)
-                return tile
+    def _hand_out(self, key):
+        self.out.add(key)
+        return self.source.task(key)
+
+    def take(self):
+        """A task to compute, or None for now."""
+        while (key := self.source.next()) is not None:
+            got = self._claim(key)
+            if got:
+                return self._hand_out(key)
+            if got is None:
+                self.watched.add(key)
+                self.source.held(key)
+        self.watched = {key for key in self.watched if self.source.needed(key)}
         if self.watched and time.monotonic() - self._last_look >= self.poll:
             self._last_look = time.monotonic()
-            watched, self.watched = self.watched, []
-            self.pending.extend(watched)
-            while self.pending:
-                tile = self.pending.popleft()
-                if self._get(tile):
-                    self.out.add(tile)
-                    return tile
+            for key in sorted(self.watched):
+                got = self._claim(key)
+                if got is not None:
+                    self.watched.discard(key)
+                if got:
+                    return self._hand_out(key)
         return None
 
-    def settle(self, tile: tuple[int, int]) -> None:
-        """A handed-out tile is written: drop its claim."""
-        self.drop(tile)
+    def settle(self, task) -> None:
+        """A handed-out task is back (its piece written, or to be written by the engine)."""
+        key = self.source.key(task)
+        self.out.discard(key)
+        if self.source.release_on_settle and self.claims is not None:
+            self.claims.release(key)
 
-    def drop(self, tile: tuple[int, int]) -> None:
-        """A handed-out tile is written, or will not be by this run (stopping, failed):
-        release its claim."""
-        self.out.discard(tuple(tile))
+    def drop(self, task) -> None:
+        """A handed-out task that this run will not write (stopping, failed): its claim goes."""
+        key = self.source.key(task)
+        self.out.discard(key)
+        self.source.dropped(key)
         if self.claims is not None:
-            self.claims.release(tile)
+            self.claims.release(key)
 
     @property
     def finished(self) -> bool:
-        return not self.pending and not self.watched and not self.out
-
-    @property
-    def waiting(self) -> bool:
-        """Nothing to hand out now, but tiles held by others are not done yet."""
-        return not self.pending and bool(self.watched)
+        return not self.out and not self.watched and self.source.exhausted()
 
     def pause(self) -> None:
-        """Sleep until the next look at the others' tiles (Ctrl-C interrupts it)."""
+        """Sleep until the next look at the others' pieces (Ctrl-C interrupts it)."""
         time.sleep(max(0.01, self.poll - (time.monotonic() - self._last_look)))
 
 
-__all__ = ["Claims", "HEARTBEAT", "POLL", "STALE", "TileQueue", "describe_owner", "is_stale",
-           "pid_alive", "read_claim"]
+class TileSource:
+    """A sweep's tiles for a :class:`ClaimQueue`, in work order; a tile held by another process
+    sends this one to the middle of the tiles it has left, so that processes spread over the
+    grid rather than take turns tile by tile."""
+
+    release_on_settle = True  # a tile's task writes the tile
+
+    def __init__(self, tiles: Iterable[tuple[int, int]],
+                 is_done: Callable[[tuple[int, int]], bool] | None = None):
+        self.pending = deque(tuple(t) for t in tiles)
+        self.is_done = is_done
+
+    def next(self):
+        return self.pending.popleft() if self.pending else None
+
+    def needed(self, tile) -> bool:
+        return True
+
+    def done_elsewhere(self, tile) -> bool:
+        return self.is_done is not None and self.is_done(tile)
+
+    def held(self, tile) -> None:
+        self.pending.rotate(-(len(self.pending) // 2))
+
+    def task(self, tile):
+        return tile
+
+    def key(self, tile):
+        return tuple(tile)
+
+    def dropped(self, tile) -> None:
+        pass
+
+    def exhausted(self) -> bool:
+        return not self.pending
+
+
+def tile_queue(tiles, claims: Claims | None = None, is_done=None, poll: float = POLL):
+    """The :class:`ClaimQueue` of a sweep's tiles."""
+    return ClaimQueue(TileSource(tiles, is_done), claims, poll)
+
+
+__all__ = ["ClaimQueue", "Claims", "HEARTBEAT", "POLL", "STALE", "TileSource", "describe_owner",
+           "is_stale", "pid_alive", "read_claim", "tile_queue"]

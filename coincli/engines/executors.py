@@ -3,9 +3,10 @@
 ``executor.run(task, queue, stop)`` yields ``task(item, control)`` for each item the queue hands
 out, as each finishes.
 
-A queue (:class:`coincli.engines.claims.TileQueue`, or the batches of `coin fractions`) has
-``take()`` (an item, or None for now), ``settle(item)`` (its result is in), ``drop(item)`` (it
-will not be finished here), ``finished`` and ``pause()`` (wait for work other processes hold).
+A queue (:class:`coincli.engines.claims.ClaimQueue`: a sweep's tiles, or the batches of `coin
+fractions`) has ``take()`` (an item, or None for now), ``settle(item)`` (its result is in),
+``drop(item)`` (it will not be finished here), ``finished`` and ``pause()`` (wait for work
+other processes hold).
 Items are taken only when a thread or a worker is free for them, so that a queue may decide what
 comes next from the results so far, and claims are held only for work in flight.
 

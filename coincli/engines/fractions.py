@@ -28,105 +28,57 @@ from ..montecarlo import (
 from ..montecarlo.over import Continuation
 from ..montecarlo.plan import FractionsPlan, FractionsProgress
 from ..params import ParameterError, state_array
+from .claims import ClaimQueue
 from .executors import SchedulerLost, executor_for, hard_stop
 
 
-class BatchQueue:
-    """The batches of a run as one process sees them, with the interface of
-    :class:`~coincli.engines.claims.TileQueue` (an executor of :mod:`coincli.engines.executors`
-    takes from it): :meth:`take` hands out the lowest batch (over every value) that the stop
-    rules may still need and nobody else computes, claimed first when the run has a store
-    (``claims``); batches other processes hold are watched (:data:`~coincli.engines.claims.POLL`)
-    until they appear in the store, whose labels are then counted here (``found``), or until
-    their claim is dropped or goes stale, when they are claimed and computed here. So when the
-    queue is :attr:`finished`, every value's goal is met, whoever computed its batches."""
+class BatchSource:
+    """The batches of a run for the one claim queue (:class:`coincli.engines.claims.ClaimQueue`):
+    next, the lowest batch (over every value) that the stop rules may still need and that has
+    not been tried; a batch is done elsewhere once another process wrote it whole and it reads
+    back (``written``, ``found``: it is then counted here); a watched batch is needed while its
+    value's goal is not met."""
 
-    def __init__(self, progs, make_task: Callable, claims=None,
+    release_on_settle = False  # a batch's claim goes once the engine has written its result
+
+    def __init__(self, progs, make_task: Callable,
                  written: Callable[[int, int], bool] | None = None,
-                 found: Callable[[int, int], bool] | None = None, poll: float = 0.5):
+                 found: Callable[[int, int], bool] | None = None):
         self.progs = progs
         self.make_task = make_task
-        self.claims = claims
         self.written = written
         self.found = found
-        self.poll = poll
-        self.watched: set[tuple[int, int]] = set()  # (value, batch) held by others
-        self.out: set[tuple[int, int]] = set()  # handed out here, not yet settled
-        self._last_look = 0.0
 
-    def _elsewhere(self, value: int, batch: int) -> bool:
-        """Whether another process wrote the batch (whole, reading back); if so it is counted
-        here."""
-        if self.written is None or not self.written(value, batch):
-            return False
-        return self.found(value, batch)
+    def next(self):
+        best = None
+        for v, prog in enumerate(self.progs):
+            index = prog.peek()
+            if index is not None and (best is None or index < best[1]):
+                best = (v, index)
+        if best is not None:
+            self.progs[best[0]].next_batch()  # handed out, or watched: not peeked again
+        return best
 
-    def _claim(self, value: int, batch: int) -> bool:
-        """True if this process is to compute the batch (claimed, and not written since)."""
-        if self.claims is None:
-            return True
-        if self._elsewhere(value, batch):
-            return False
-        if not self.claims.try_claim((value, batch)):
-            return False
-        if self._elsewhere(value, batch):  # written between our look and our claim
-            self.claims.release((value, batch))
-            return False
-        return True
+    def needed(self, key) -> bool:
+        return not self.progs[key[0]].done
 
-    def _hand_out(self, value: int, batch: int):
-        self.out.add((value, batch))
-        return self.make_task(value, batch)
+    def done_elsewhere(self, key) -> bool:
+        return self.written is not None and self.written(*key) and self.found(*key)
 
-    def take(self):
-        """A batch to compute (a :class:`~coincli.montecarlo.BatchTask`), or None for now."""
-        while True:
-            best = None
-            for v, prog in enumerate(self.progs):
-                index = prog.peek()
-                if index is not None and (best is None or index < best[1]):
-                    best = (v, index)
-            if best is None:
-                break
-            v, index = best
-            self.progs[v].next_batch()  # handed out, or watched: either way not peeked again
-            if self._claim(v, index):
-                return self._hand_out(v, index)
-            if index not in self.progs[v].tallies:
-                self.watched.add((v, index))
-        self.watched = {(v, b) for v, b in self.watched if not self.progs[v].done}
-        if self.watched and time.monotonic() - self._last_look >= self.poll:
-            self._last_look = time.monotonic()
-            for v, index in sorted(self.watched, key=lambda item: item[1]):
-                if self.progs[v].done or self._elsewhere(v, index):
-                    self.watched.discard((v, index))
-                elif self.claims.try_claim((v, index)):
-                    self.watched.discard((v, index))
-                    if self._elsewhere(v, index):  # written and let go between look and claim
-                        self.claims.release((v, index))
-                        continue
-                    return self._hand_out(v, index)
-        return None
+    def held(self, key) -> None:
+        pass
 
-    def settle(self, task) -> None:
-        """A handed-out batch's result is back (its claim is released once it is written)."""
-        self.out.discard((task.value, task.batch))
+    def task(self, key):
+        return self.make_task(*key)
 
-    def drop(self, task) -> None:
-        """A handed-out batch that will not be written by this run (stopping, failed)."""
-        self.out.discard((task.value, task.batch))
-        self.progs[task.value].issued.discard(task.batch)
-        if self.claims is not None:
-            self.claims.release((task.value, task.batch))
+    def key(self, task):
+        return (task.value, task.batch)
 
-    @property
-    def finished(self) -> bool:
-        return not self.out and not self.watched and all(p.peek() is None for p in self.progs)
+    def dropped(self, key) -> None:
+        self.progs[key[0]].issued.discard(key[1])
 
-    def pause(self) -> None:
-        """Sleep until the next look at the batches others hold (Ctrl-C interrupts it)."""
-        time.sleep(max(0.01, self.poll - (time.monotonic() - self._last_look)))
-
+    def exhausted(self) -> bool:
+        return all(p.peek() is None for p in self.progs)
 
 
 def compute_value_batch(specs, task: BatchTask, control=None):
@@ -135,7 +87,8 @@ def compute_value_batch(specs, task: BatchTask, control=None):
     return compute_batch(specs[task.value], task, control)
 
 
-def run_fractions(plan: FractionsPlan, *, target=None, overwrite: bool = False, threads: int | None = None,
+def run_fractions(plan: FractionsPlan, *, target=None, overwrite: bool = False,
+                  threads: int | None = None,
                   workers: int | None = None, scheduler: str | None = None,
                   progress: Callable[[FractionsProgress], None] | None = None, stop=None,
                   worker_timeout: float | None = None):
@@ -216,12 +169,12 @@ class FractionsRun:
         self.from_others += count
         return True
 
-    def queue(self) -> BatchQueue:
+    def queue(self) -> ClaimQueue:
         if self.target is None:
-            return BatchQueue(self.progs, self.make_task)
+            return ClaimQueue(BatchSource(self.progs, self.make_task))
         self.claims = self.target.claims()
-        return BatchQueue(self.progs, self.make_task, self.claims, self.target.batch_written,
-                          self.found)
+        return ClaimQueue(BatchSource(self.progs, self.make_task, self.target.batch_written,
+                                      self.found), self.claims)
 
     def compute(self, progress, stop) -> SchedulerLost | None:
         """Compute the batches the stop rules still need, each written to the store as it
