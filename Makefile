@@ -69,25 +69,16 @@ bench: install
 docs-build: install
 	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
 
-# Regenerate every picture and table under docs/ (about an hour on 2 idle cores; the
-# screenshot needs Debian's xvfb and mesa-vulkan-drivers), and run the pages' commands marked
-# <!-- long --> (tests/test_docs.py).
+# Regenerate every table and picture under docs/, then run the pages' commands marked
+# <!-- long --> (tests/test_docs.py, which also checks that every picture was made by this
+# version): some three hours on 2 idle cores. The pictures and their commands are listed in one
+# place, benchmarks/docs_pictures.py (`--list` shows each with the version that made it); the
+# screenshots of Rerun's viewer need Debian's xvfb and mesa-vulkan-drivers.
 docs: install
 	$(BIN)/python benchmarks/docs_tables.py
 	$(BIN)/python benchmarks/docs_notebook.py
+	$(BIN)/python benchmarks/docs_pictures.py --make --out $(OUT)
 	COIN_DOCS_LONG=1 $(BIN)/python -m pytest -q -n 0 tests/test_docs.py
-	$(COIN) accuracy --res 32 -o docs/accuracy.png --table docs/accuracy.json
-	$(COIN) accuracy --preset thick --res 24 -o docs/accuracy-thick.png \
-		--table docs/accuracy-thick.json
-	$(COIN) basin $(OUT)/docs-basin.zarr --overwrite
-	$(COIN) basin render $(OUT)/docs-basin.zarr -o docs/basin.png
-	$(COIN) basin render $(OUT)/docs-basin.zarr --field settle_time -o docs/basin-settle-time.png
-	$(COIN) basin analyze $(OUT)/docs-basin.zarr -o docs/basin-analysis.png
-	$(COIN) fractions --y0 r:5r --phi0 -pi:pi --vx -0.5:0.5 --over thickness=0.001:0.02:20 \
-		--samples 64k --store $(OUT)/docs-thickness.zarr --overwrite --plot docs/fractions-thickness.png
-	$(COIN) simulate --vy 1.197 --vphi 3.508 --rrd $(OUT)/fig2.rrd
-	xvfb-run -a -s '-screen 0 1600x1000x24' $(BIN)/rerun --window-size 1600x1000 \
-		--screenshot-to docs/simulate-fig2.png $(OUT)/fig2.rrd
 
 lint: install
 	$(BIN)/ruff check coincli tests

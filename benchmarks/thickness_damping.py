@@ -39,6 +39,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import coincli  # noqa: E402
+from coincli.files import save_figure  # noqa: E402
 from coincli.montecarlo import corner_restitution, pender_uhrin, point_scene  # noqa: E402
 
 D = 0.02  # m, the paper coin's diameter
@@ -162,7 +163,7 @@ def draw(result, rows: list[dict], out: Path) -> None:
     right.grid(True, alpha=0.3)
     fig.suptitle(f"P(standing) = 1/3 against the damping: {SAMPLES:,} throws a point, the same "
                  "throws at every point", fontsize=9)
-    fig.savefig(out, dpi=150)
+    save_figure(fig, out, 150)  # with the version that made it in its metadata
 
 
 LANDING = [(t_d, c) for t_d in (0.6, 0.8) for c in (0.5, 8, 32, 128)]  # the landing table's

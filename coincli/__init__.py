@@ -17,18 +17,20 @@ from .version import __version__
 _API = ("BasinStats", "Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
         "FractionsProgress", "Method", "MinimalShock", "Outcome", "ParameterError", "Scene",
         "Status", "StopReason", "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport",
-        "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin", "basin_attrs",
-        "basin_stats", "cell_scene", "classify", "compile_kernels", "estimate_fractions",
-        "estimate_sweep", "export_basin", "fractions", "fractions_over", "load_preset",
-        "minimal_shock", "open_basin", "open_fractions", "plan_fractions", "plan_sweep",
-        "record", "render_analysis", "render_basin", "render_fractions", "run_fractions",
-        "show_basin", "simulate", "stability", "sweep", "verify_basin", "viewer")
+        "SweepStart", "SweepTooLong", "Trajectory", "WorkTooLong", "analyze", "basin",
+        "basin_attrs", "basin_stats", "cell_scene", "classify", "compile_kernels",
+        "estimate_fractions", "estimate_sweep", "export_basin", "fractions", "fractions_over",
+        "inspect_cell", "load_preset", "method_table", "minimal_shock", "open_basin",
+        "open_fractions", "plan_fractions", "plan_sweep", "record", "render_analysis",
+        "render_basin", "render_fractions", "run_fractions", "show_basin", "simulate",
+        "stability", "sweep", "verify_basin", "viewer")
 # = coincli.api.__all__ (tested)
 
 __all__ = ["__version__", *_API]
 
 
-# names that need no more than a light module (coincli.api imports numpy and the kernels' modules)
+# names that need no more than a light module, loaded without even coincli.api (whose other names
+# load numpy and the kernels' modules on first use)
 _LIGHT = {"Scene": "params", "ParameterError": "params", "Certainty": "enums", "Engine": "enums",
           "Method": "enums", "Status": "enums", "StopReason": "enums"}
 

@@ -27,6 +27,16 @@ DEFAULT_CHUNK = 64
 
 DEFAULT_LOG_EVERY = 1e-3  # s of simulated time between frames of a recording
 
+# an animation of a throw (coin simulate --gif): its frame rate, and how long it lasts on screen
+# (a throw lasts a fraction of a second: it is slowed down to last this long; a longer run,
+# sped up)
+DEFAULT_FPS = 25
+DEFAULT_SECONDS = 4.0
+
+# Work (a sweep, a Monte Carlo run) estimated to take longer is refused before it starts, unless
+# the caller goes ahead (max_seconds=None in the API, --yes on the command line).
+MAX_SECONDS = 12 * 3600.0
+
 # coin fractions
 DEFAULT_BATCH = 8192  # 2^13: Sobol points keep their balance in powers of two
 DEFAULT_PRECISION = 0.002  # +- 0.2 percentage points
@@ -35,6 +45,6 @@ DEFAULT_MAX_SAMPLES = 1 << 24
 PARAMETER_UNITS = {"thickness": "m", "diameter": "m", "k": "N/m", "c": "N s/m", "mass": "kg",
                    "inertia": "kg m^2", "g": "m/s^2"}
 
-__all__ = ["AXIS_INFO", "DEFAULT_BATCH", "DEFAULT_CHUNK", "DEFAULT_LOG_EVERY",
+__all__ = ["AXIS_INFO", "DEFAULT_BATCH", "DEFAULT_CHUNK", "DEFAULT_FPS", "DEFAULT_LOG_EVERY",
            "DEFAULT_MAX_SAMPLES", "DEFAULT_PRECISION", "DEFAULT_PRESET", "DEFAULT_RANGES",
-           "DEFAULT_RES", "IC_NAMES", "PARAMETER_UNITS"]
+           "DEFAULT_RES", "DEFAULT_SECONDS", "IC_NAMES", "MAX_SECONDS", "PARAMETER_UNITS"]

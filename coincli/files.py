@@ -159,13 +159,93 @@ def check_figure_path(path: str | os.PathLike, what: str = "figure") -> Path:
     return path
 
 
+def made_by() -> str:
+    """What every picture coin writes says made it, in its metadata: ``coin 0.11.0``."""
+    from .version import __version__
+
+    return f"coin {__version__}"
+
+
+# the metadata key that names what made a picture, by format (matplotlib's keys: a PNG's text
+# chunk "Software", the "Creator" of a PDF's or an SVG's metadata)
+MADE_BY_KEY = {"png": "Software", "pdf": "Creator", "svg": "Creator"}
+
+
 def save_figure(fig, path: str | os.PathLike, dpi: int) -> Path:
     """Save a matplotlib figure in the format its file name ends in (.png, .svg, .pdf), through
-    :func:`atomic_output` (complete or absent)."""
+    :func:`atomic_output` (complete or absent), saying in its metadata the version that made it
+    (:func:`made_by`, read back by :func:`picture_made_by`)."""
     path = Path(path)
+    fmt = path.suffix.lstrip(".").lower() or "png"
+    metadata = {MADE_BY_KEY[fmt]: made_by()} if fmt in MADE_BY_KEY else None
     with atomic_output(path) as tmp:
-        fig.savefig(tmp, dpi=dpi, format=path.suffix.lstrip(".").lower() or "png")
+        fig.savefig(tmp, dpi=dpi, format=fmt, metadata=metadata)
     return path
+
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _png_chunks(data: bytes) -> list[tuple[bytes, bytes]]:
+    """The chunks of a PNG file, (type, data) in order; ValueError unless it is one."""
+    if not data.startswith(PNG_SIGNATURE):
+        raise ValueError("not a PNG file")
+    chunks, at = [], len(PNG_SIGNATURE)
+    while at + 8 <= len(data):
+        length = int.from_bytes(data[at:at + 4], "big")
+        kind = data[at + 4:at + 8]
+        chunks.append((kind, data[at + 8:at + 8 + length]))
+        at += 12 + length
+        if kind == b"IEND":
+            return chunks
+    raise ValueError("a PNG file cut short")
+
+
+def _png_chunk(kind: bytes, body: bytes) -> bytes:
+    import zlib
+
+    return (len(body).to_bytes(4, "big") + kind + body
+            + zlib.crc32(kind + body).to_bytes(4, "big"))
+
+
+def png_text(path: str | os.PathLike) -> dict[str, str]:
+    """The text chunks (tEXt, and iTXt uncompressed) of a PNG file, keyword -> text."""
+    out = {}
+    for kind, body in _png_chunks(Path(path).read_bytes()):
+        if kind == b"tEXt" and b"\0" in body:
+            key, _, text = body.partition(b"\0")
+            out[key.decode("latin-1")] = text.decode("latin-1")
+        elif kind == b"iTXt" and b"\0" in body:
+            key, _, rest = body.partition(b"\0")
+            if rest[:1] == b"\0":  # not compressed: method, language, translated keyword
+                _, _, rest = rest[2:].partition(b"\0")
+                _, _, text = rest.partition(b"\0")
+                out[key.decode("latin-1")] = text.decode("utf-8")
+    return out
+
+
+def stamp_png(path: str | os.PathLike, software: str | None = None) -> Path:
+    """Say in a PNG made by another program (a Rerun viewer's screenshot) what made it: its
+    "Software" text chunk (any other replaced) becomes ``software`` (:func:`made_by` unless
+    given), written through :func:`atomic_output`; the image is untouched."""
+    path = Path(path)
+    chunks = [(kind, body) for kind, body in _png_chunks(path.read_bytes())
+              if not (kind in (b"tEXt", b"iTXt") and body.partition(b"\0")[0] == b"Software")]
+    text = b"Software\0" + (software or made_by()).encode("latin-1")
+    chunks.insert(1, (b"tEXt", text))  # right after IHDR, which comes first
+    with atomic_output(path) as tmp:
+        tmp.write_bytes(PNG_SIGNATURE + b"".join(_png_chunk(k, b) for k, b in chunks))
+    return path
+
+
+def picture_made_by(path: str | os.PathLike) -> str | None:
+    """The version of coin that made a PNG picture (``0.11.0``), from its "Software" text chunk
+    (:func:`save_figure`, :func:`stamp_png`); None if it names none (another program, or a
+    coin before 0.11)."""
+    import re
+
+    found = re.fullmatch(r"coin (\S+)", png_text(path).get("Software", ""))
+    return found.group(1) if found else None
 
 
 def check_connect_url(url: str) -> str:
@@ -192,8 +272,9 @@ def probe_viewer(url: str, timeout: float = 2.0) -> None:
                               "start one with `rerun`") from None
 
 
-__all__ = ["DEFAULT_CONNECT_URL", "DISK_ERRORS", "FIGURE_FORMATS", "NotWritable", "atomic_output",
-           "check_figure_path", "save_figure",
+__all__ = ["DEFAULT_CONNECT_URL", "DISK_ERRORS", "FIGURE_FORMATS", "MADE_BY_KEY", "NotWritable",
+           "atomic_output", "check_figure_path", "save_figure", "made_by", "picture_made_by",
+           "png_text", "stamp_png",
            "check_connect_url", "check_rrd_path", "check_writable", "describe", "explain",
            "probe_name",
            "probe_viewer"]

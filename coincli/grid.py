@@ -46,18 +46,15 @@ import numpy as np
 
 from .defaults import AXIS_INFO, DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES, IC_NAMES
 from .integrators import MethodInfo
-from .integrators.batch import NO_LABEL, verified_labels
-from .integrators.ladder import Ladder, ladder_of
+from .integrators.batch import NO_LABEL
+from .integrators.ladder import ladder_of
 from .jit import python
+from .labeller import Labeller
 from .model import horizon_text, total_energy_at
 from .params import (
-    ModelParams,
     ParameterError,
-    RunSettings,
     Scene,
-    model_params,
     parse_whole,
-    run_settings,
     shown,
     state_array,
     step_budget,
@@ -321,9 +318,7 @@ class SweepSpec:
     """Everything a tile needs, as plain picklable values (shipped to Dask workers)."""
 
     grid: Grid
-    params: ModelParams
-    settings: RunSettings
-    ladder: Ladder
+    labeller: Labeller
 
     array_names = ("quarter_turns", "status", "settle_time", "steps", "certainty", "rung")
 
@@ -345,15 +340,13 @@ class SweepSpec:
             state = list(grid.base_state)
             for axis, along, t in zip(grid.axes, middles, tile, strict=True):
                 state[axis.index] = float(along[t])
-            return energy_at(self.params, *state[1:])
+            return energy_at(self.labeller.params, *state[1:])
 
         return sorted(grid.work_tiles(), key=energy, reverse=True)
 
 
 def make_spec(scene: Scene, grid: Grid) -> SweepSpec:
-    integ = scene.integration
-    return SweepSpec(grid=grid, params=model_params(scene), settings=run_settings(integ),
-                     ladder=ladder_of(integ))
+    return SweepSpec(grid=grid, labeller=Labeller.of(scene))
 
 
 def method_attrs(scene: Scene, method: MethodInfo) -> dict:
@@ -405,7 +398,7 @@ def compute_tile(spec: SweepSpec, tile: tuple[int, int], control=None) -> TileRe
     states = spec.grid.tile_states(tile)
     s0, s1 = spec.grid.tile_slices(tile)
     shape = (s0.stop - s0.start, s1.stop - s1.start)
-    out = verified_labels(spec.params, spec.settings, spec.ladder, states, control)
+    out = spec.labeller.label(states, control)
     arrays = {name: getattr(out, name).reshape(shape) for name in spec.array_names}
     return TileResult(tile=tuple(tile), arrays=arrays, cpu_seconds=time.thread_time() - cpu0,
                       wall_seconds=time.perf_counter() - wall0)

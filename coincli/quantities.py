@@ -8,7 +8,7 @@ and in the API (a scene's overrides, a sweep's axes, a throw's distributions, a 
 
 A multiple of r depends on the coin, so a parsed value is a :class:`Quantity` that
 :meth:`Quantity.resolve` turns into metres for the coin at hand (the scene's, after its own
-overrides). Every other number given as text goes through :func:`coincli.params.parse_number`.
+overrides). Every other number given as text goes through :func:`coincli.values.parse_number`.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import numbers
 import re
 from dataclasses import dataclass
 
-from .params import ParameterError, parse_number, shown
+from .values import ParameterError, parse_number, shown
 
 ANGLES = frozenset({"phi0", "vphi"})  # pi and its multiples mean radians (per second)
 HEIGHTS = frozenset({"y0"})  # r and its multiples mean the coin's half diagonal

@@ -19,10 +19,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .enums import Certainty, Engine, Status
-from .integrators import check_step, final_state, integrate, new_control, warm_up
+from .integrators import check_step, new_control
 from .integrators.batch import (
     NO_LABEL,
-    interruptible,
     outcome_label,
     rungs_agree,
     stops_ladder,
@@ -36,17 +35,15 @@ from .integrators.common import (
     SAMPLE_COLUMNS,
     is_finite_state,
 )
-from .integrators.ladder import ladder_of
-from .jit import compiled, is_active, python
+from .jit import is_active
+from .labeller import Labeller
 from .model import energies, horizon_text, rounded_quarter_turns, scene_horizon
 from .params import (
     OVERRIDE_KEYS,
     STATE_NAMES,
     ParameterError,
     Scene,
-    model_params,
     require_scene,
-    run_settings,
     state_array,
     validate,
 )
@@ -248,9 +245,8 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     except ValueError:
         raise ParameterError(f"engine must be one of {', '.join(e.label for e in Engine)}, "
                              f"got {engine!r}") from None
-    p = model_params(scene)
-    base = run_settings(integ, float(sample_dt or 0.0))
-    ladder = ladder_of(integ)
+    labeller = Labeller.of(scene, sample_dt=float(sample_dt or 0.0))
+    p, ladder = labeller.params, labeller.ladder
     state0 = state_array(scene)
     if sample_dt:
         samples = np.empty((_sample_rows(horizon, sample_dt), SAMPLE_COLUMNS))
@@ -268,10 +264,9 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     previous = None  # the last rung's RunResult and label
     decided = True  # both runs of the last comparison settled (else: undecided, not chaotic)
     for k in range(len(ladder)):
-        settings = base._replace(method=int(ladder.methods[k]), rtol=ladder.rtols[k],
-                                 dt=ladder.dts[k], max_steps=ladder.budget(k, base.max_steps))
-        result, seconds, engine = _run(p, settings, state0, samples, events, final, control,
-                                       engine)
+        settings = labeller.rung_settings(k)
+        result, seconds, engine = _run(labeller, settings, state0, samples, events, final,
+                                       control, engine)
         wall += seconds
         label = outcome_label(result.status, result.n_well, final[2])
         rungs.append(Rung(ladder.rung_text(k), None if label == NO_LABEL else int(label),
@@ -317,20 +312,19 @@ def _check_sample_dt(sample_dt, horizon: float) -> None:
                              f"sample_dt >= {horizon / MAX_SAMPLES:.2g} s")
 
 
-def _run(p, settings, state0, samples, events, final, control, engine: Engine):
+def _run(labeller: Labeller, settings, state0, samples, events, final, control,
+         engine: Engine):
     """One kernel run: (result, wall seconds, the engine for the next rung). A Python run that
     outgrows PYTHON_STEPS is run again compiled, from the start, and so is every rung after."""
     if engine == Engine.PYTHON:
         start = time.perf_counter()
         capped = settings._replace(max_steps=min(settings.max_steps, PYTHON_STEPS))
-        result = python(integrate)(p, capped, state0, samples, events, final, control)
+        result = labeller.run(capped, state0, samples, events, final, control, compiled=False)
         if not (result.status == Status.BUDGET and capped.max_steps < settings.max_steps):
             return result, time.perf_counter() - start, engine
-    warm_up(p, settings._replace(sample_dt=0.0), state0, (final_state,))  # before the clock
+    labeller.load(state0, trajectory=True)  # before the clock
     start = time.perf_counter()
-    kernel = compiled(integrate)
-    result = interruptible(lambda: kernel(p, settings, state0, samples, events, final, control),
-                           control)
+    result = labeller.run(settings, state0, samples, events, final, control)
     return result, time.perf_counter() - start, Engine.NUMBA
 
 

@@ -99,10 +99,27 @@ def run_kernel(scene, state, *, method: Method | str, t_end: float, dt: float = 
     return KernelRun(result, final, samples[:result.n_samples], events[:result.n_events])
 
 
-def reset_sigint():
-    """Popen's preexec_fn for a child that must take Ctrl-C: children of a non-interactive
-    shell's background job (or of a test runner started as one) inherit SIGINT as ignored."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
+def default_signals():
+    """Popen's preexec_fn for a child that must take Ctrl-C and a hang-up as a `coin` started at
+    a terminal does: a signal ignored by the test runner is ignored by every child it starts,
+    and the runner may be started so (a non-interactive shell's background job ignores SIGINT,
+    ``nohup make test`` SIGHUP; CI runs the suite so, .ci/run). The runner itself keeps them
+    as it was given them."""
+    for signum in (signal.SIGINT, signal.SIGHUP):
+        signal.signal(signum, signal.SIG_DFL)
+
+
+def store_files(path) -> dict[str, bytes]:
+    """Every file of a store by its path inside it, but those of its records folder
+    (NAME.zarr/.coin/: its runs, its tiles' costs, its claims), which differ from run to run:
+    what is byte-identical however the store was computed (its arrays and metadata)."""
+    from pathlib import Path
+
+    from coincli.stores.basin_layout import RECORDS
+
+    path = Path(path)
+    return {f.relative_to(path).as_posix(): f.read_bytes() for f in sorted(path.rglob("*"))
+            if f.is_file() and f.relative_to(path).parts[0] != RECORDS}
 
 
 @contextlib.contextmanager

@@ -169,7 +169,8 @@ def test_the_command_line_declares_its_options_without_numpy():
     code = ("import sys, coincli.cli\n"
             "heavy = sorted(m for m in sys.modules if m.split('.')[0] in ('numpy', 'numba', "
             "'zarr', 'xarray', 'scipy', 'matplotlib', 'rerun', 'dask') "
-            "or m.startswith(('coincli.integrators', 'coincli.montecarlo', 'coincli.stores', 'coincli.recordings', 'coincli.charts', 'coincli.engines')))\n"
+            "or m.startswith(('coincli.integrators', 'coincli.montecarlo', 'coincli.stores', "
+            "'coincli.recordings', 'coincli.charts', 'coincli.engines')))\n"
             "assert not heavy, heavy")
     subprocess.run([sys.executable, "-c", code], check=True)
 
@@ -273,3 +274,26 @@ def test_simulate_keeps_no_states_for_sample_dt_zero_and_takes_an_engine_by_name
     run = coincli.simulate(scene, sample_dt=0, engine="python")
     assert run.samples is None or len(run.samples) == 0
     assert run.quarter_turns == 6
+
+
+def test_the_api_for_front_ends_is_light_and_every_name_in_it_resolves():
+    """coincli.api and its modules for a front end (options, words, errors, recording) load no
+    numpy when imported; each name they offer resolves (the heavier ones on first use)."""
+    code = ("import sys, coincli.api, coincli.api.options, coincli.api.words, "
+            "coincli.api.errors, coincli.api.recording\n"
+            "print('numpy' in sys.modules, any(m.startswith('coincli.engines') "
+            "for m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["False", "False"]
+    import coincli.api as api
+    from coincli.api import errors, options, recording, words
+
+    for module in (api, options, words, errors, recording):
+        for name in module.__all__:
+            assert getattr(module, name) is not None, f"{module.__name__}.{name}"
+    assert errors.SweepTooLong is coincli.SweepTooLong and errors.ParameterError is ParameterError
+    assert issubclass(errors.StoreDamaged, ParameterError)
+    assert words.format_duration(5000) == "83 min" and options.MAX_SECONDS == 12 * 3600
+    with pytest.raises(AttributeError, match="has no attribute 'nothing'"):
+        options.nothing  # noqa: B018

@@ -17,17 +17,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import reset_sigint
+from conftest import default_signals, store_files
 from typer.testing import CliRunner
 
 import coincli
 from coincli.cli import app
 from coincli.engines.basin import run_tile_task
+from coincli.engines.basin_plan import sweep_attrs
 from coincli.grid import compute_tile, make_grid, make_spec, parse_pair, parse_range
 from coincli.integrators import NO_LABEL, info
 from coincli.params import ParameterError, Scene
 from coincli.stats import basin_stats, wilson
-from coincli.engines.basin_plan import sweep_attrs
 from coincli.stores.basin_store import BasinStore
 
 runner = CliRunner()
@@ -46,14 +46,9 @@ def coin_ok(*args: str):
 
 # -- comparing stores ----------------------------------------------------------------------------
 def _chunk_files(path: Path) -> dict[str, bytes]:
-    """Every file of the store, metadata included (measured costs live beside the store, in
-    out.zarr.cost/, so the store itself must be bit-identical)."""
-    out = {}
-    for root, _, files in os.walk(path):
-        for name in files:
-            full = Path(root) / name
-            out[full.relative_to(path).as_posix()] = full.read_bytes()
-    return out
+    """Every file of the store, metadata included, but its records (measured costs and runs,
+    in out.zarr/.coin/): the rest must be bit-identical however the store was computed."""
+    return store_files(path)
 
 
 def assert_same_store(a: Path, b: Path) -> None:
@@ -81,7 +76,7 @@ def done_tiles(path: Path) -> int:
 def start_sweep(*args: str) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "coincli", "basin", *args],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            preexec_fn=reset_sigint, cwd=Path(__file__).parent.parent)
+                            preexec_fn=default_signals, cwd=Path(__file__).parent.parent)
 
 
 def wait_for_tiles(proc: subprocess.Popen, path: Path, n: int, timeout: float = 60) -> None:
@@ -447,7 +442,8 @@ def test_tiles_are_computed_most_energetic_first():
     assert sorted(order) == sorted(grid.work_tiles()) and len(order) == 8  # mirrored: half
     assert order[0] == (3, 0) and order[-1] == (0, 1)  # fastest throw first, slowest last
     middle = [grid.tile_states(t)[len(grid.tile_states(t)) // 2] for t in order]
-    kinetic = [s[4] ** 2 + spec.params.inertia / spec.params.mass * s[5] ** 2 for s in middle]
+    p = spec.labeller.params
+    kinetic = [s[4] ** 2 + p.inertia / p.mass * s[5] ** 2 for s in middle]
     assert kinetic == sorted(kinetic, reverse=True)
 
 

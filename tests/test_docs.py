@@ -186,6 +186,143 @@ def test_the_site_links_every_page():
         assert re.search(rf":\s*{re.escape(page.name)}\s*$", nav, re.M), f"{page.name} not in nav"
 
 
+MINUTES = {1: "a minute", 2: "two minutes", 3: "three minutes", 4: "four minutes"}
+DURATION = re.compile(r"about (?:a|an|one|two|three|four|five|\d+(?:\.\d+)?) ?"
+                      r"(?:minutes?|min|s|seconds?)\b")
+
+
+def test_one_figure_for_the_first_compile_everywhere():
+    """How long the first compile takes is said one way wherever it is said (the README, the
+    pages, the notebook, the Makefile): the generated table's figure (docs/performance.md, from
+    benchmarks/first-compile.json) rounded up to whole minutes, which is FIRST_COMPILE_SECONDS,
+    the figure of the command's notices and of its live clock."""
+    import json
+    import math
+
+    from coincli.jit import FIRST_COMPILE_SECONDS
+
+    record = json.loads((ROOT / "benchmarks" / "first-compile.json").read_text())
+    wall = record["compile"]["wall_s"]
+    assert f"({wall:.1f} s wall)" in (ROOT / "docs" / "performance.md").read_text()
+    minutes = max(1, math.ceil(wall / 60))
+    assert FIRST_COMPILE_SECONDS == 60 * minutes, (
+        f"the table says {wall:.0f} s: coincli.jit.FIRST_COMPILE_SECONDS = {60 * minutes}")
+    said = f"about {MINUTES.get(minutes, f'{minutes} minutes')}"
+    notebook = json.loads((ROOT / "docs" / "notebook.ipynb").read_text())
+    texts = {page_id(p): p.read_text() for p in PAGES}
+    texts["Makefile"] = (ROOT / "Makefile").read_text()
+    texts["docs/notebook.ipynb"] = "\n\n".join("".join(c["source"]) for c in notebook["cells"]
+                                               if c["cell_type"] == "markdown")
+    found = []
+    for name, text in texts.items():
+        text = re.sub(r"<!-- first-compile:start -->.*?<!-- first-compile:end -->", "", text,
+                      flags=re.S)
+        for sentence in re.split(r"(?<=[.;!?])\s+|\n\s*\n", text):
+            if re.search(r"compil", sentence, re.I):
+                found += [(name, d) for d in DURATION.findall(" ".join(sentence.split()))]
+    assert found and all(d == said for _, d in found), [f for f in found if f[1] != said]
+
+
+def _docs_pictures():
+    """benchmarks/docs_pictures.py: every picture of the documentation and its command."""
+    import importlib.util
+
+    if "docs_pictures" not in sys.modules:
+        spec = importlib.util.spec_from_file_location("docs_pictures",
+                                                      ROOT / "benchmarks" / "docs_pictures.py")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["docs_pictures"] = module  # its dataclass looks its module up there
+        spec.loader.exec_module(module)
+    return sys.modules["docs_pictures"]
+
+
+def test_every_picture_shown_is_listed_with_the_command_that_makes_it():
+    """benchmarks/docs_pictures.py lists every picture under docs/, and every picture a page
+    shows, each with its command; `make docs` makes them through it (one list, not two)."""
+    pictures = _docs_pictures()
+    listed = set(pictures.BY_NAME)
+    assert {p.name for p in (ROOT / "docs").glob("*.png")} == listed
+    shown = set()
+    for page in PAGES:
+        for target in re.findall(r"!\[[^\]]*\]\(([^)\s]+)\)", page.read_text()):
+            path = (page.parent / target).resolve()
+            if path.parent == ROOT / "docs":
+                shown.add(path.name)
+    assert shown == listed, f"shown but not listed: {shown - listed}; listed, not shown: " \
+                            f"{listed - shown}"
+    makefile = (ROOT / "Makefile").read_text()
+    docs = makefile.split("\ndocs: ")[1].split("\n\n")[0]
+    assert "benchmarks/docs_pictures.py --make" in docs
+    assert not re.search(r"(-o|--plot|--screenshot-to) docs/", makefile), \
+        "a picture made by the Makefile itself, not through benchmarks/docs_pictures.py"
+
+
+def test_a_chart_and_a_stamped_screenshot_name_the_version_that_made_them(tmp_path):
+    """save_figure writes the version into a chart's metadata (a PNG's "Software" text chunk,
+    an SVG's or a PDF's Creator); stamp_png into a PNG another program made, its image
+    untouched."""
+    import zlib
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from coincli.files import picture_made_by, png_text, save_figure, stamp_png
+
+    fig, ax = plt.subplots(figsize=(2, 2))
+    ax.plot([0, 1], [1, 0])
+    for suffix in ("png", "svg", "pdf"):
+        save_figure(fig, tmp_path / f"chart.{suffix}", 50)
+        assert f"coin {coincli.__version__}".encode() in (tmp_path / f"chart.{suffix}").read_bytes()
+    plt.close(fig)
+    assert picture_made_by(tmp_path / "chart.png") == coincli.__version__
+    other = tmp_path / "other.png"  # as a viewer writes one: no text chunk
+    other.write_bytes(_png(np.arange(12, dtype=np.uint8).reshape(2, 2, 3), zlib))
+    assert picture_made_by(other) is None and png_text(other) == {}
+    pixels = plt.imread(other)
+    stamp_png(other)
+    stamp_png(other)  # once more: still one Software chunk
+    assert png_text(other) == {"Software": f"coin {coincli.__version__}"}
+    assert picture_made_by(other) == coincli.__version__
+    assert (plt.imread(other) == pixels).all()
+
+
+def _png(rgb, zlib) -> bytes:
+    """A plain RGB PNG file, without any text chunk."""
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return (len(body).to_bytes(4, "big") + kind + body
+                + zlib.crc32(kind + body).to_bytes(4, "big"))
+
+    height, width, _ = rgb.shape
+    rows = b"".join(b"\0" + rgb[i].tobytes() for i in range(height))
+    header = width.to_bytes(4, "big") + height.to_bytes(4, "big") + bytes([8, 2, 0, 0, 0])
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(rows))
+            + chunk(b"IEND", b""))
+
+
+def _minor(version: str) -> tuple[int, int]:
+    major, minor = re.match(r"(\d+)\.(\d+)", version).groups()
+    return int(major), int(minor)
+
+
+def test_every_picture_was_made_by_this_minor_version():
+    """Each picture says in its metadata which version made it (coincli.files.save_figure,
+    stamp_png): one made by an older minor version than the package's, or naming none, is
+    stale; the failure names it and the command that remakes it."""
+    pictures = _docs_pictures()
+    stale = []
+    for picture in pictures.PICTURES:
+        version = pictures.made_by(picture)
+        if version is None or _minor(version) < _minor(coincli.__version__):
+            made = f"made by coin {version}" if version else "no version in its metadata"
+            stale.append(f"docs/{picture.name} ({made}): {picture.command()}")
+    assert not stale, (f"pictures older than coin {coincli.__version__} (all of them: "
+                       ".venv/bin/python benchmarks/docs_pictures.py --make):\n"
+                       + "\n".join(stale))
+
+
 def test_the_figures_shown_are_those_of_the_stored_benchmark():
     """The tables of current figures are generated (benchmarks/docs_tables.py) from
     benchmarks/bench.json and peers.json, never edited by hand: rendering them again changes

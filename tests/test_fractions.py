@@ -72,6 +72,27 @@ def test_normal_draws_have_their_moments_and_truncation():
     assert t.mean() == pytest.approx(truncnorm(0.5, 2).mean(), abs=1e-4)
 
 
+def test_a_normal_whose_draws_overflow_is_refused_in_one_line():
+    """`--vphi "normal(0,1e308)"` drew infinities, and numpy's "overflow encountered in
+    multiply" leaked out of the command: refused before any draw, in our words, by the API
+    (ParameterError naming vphi) and the command line (one line, exit 2, no warning)."""
+    import subprocess
+
+    with pytest.raises(ParameterError, match="past the largest float") as caught:
+        coincli.fractions(PAPER, vphi="normal(0,1e308)", samples=256)
+    assert caught.value.parameters == ("vphi",)
+    widest = parse_dist("vphi", f"normal(-1e300, {sys.float_info.max / 8.4!r})")
+    with np.errstate(all="raise"):  # the widest normal allowed draws finite numbers
+        assert np.isfinite(widest.ppf(np.array([0.0, 0.5, 1.0]))).all()
+    result = subprocess.run([sys.executable, "-m", "coincli", "fractions", "--vphi",
+                             "normal(0,1e308)", "--samples", "256"], capture_output=True,
+                            text=True, timeout=120)
+    assert result.returncode == 2 and result.stdout == "", result.stdout
+    assert result.stderr.startswith("error: --vphi normal(0,1e308): draws of this normal reach "
+                                     "past the largest float"), result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and "Warning" not in result.stderr
+
+
 def test_vectorised_wilson_is_the_stats_module_interval():
     ks = [0, 1, 7, 500, 999, 1000, 13_000]
     ns = [1000, 1000, 1000, 1000, 1000, 1000, 4_600_000]
@@ -189,8 +210,10 @@ def test_the_same_command_gives_the_same_samples_and_results_on_any_thread_count
 
 
 def _files(path: Path) -> dict[str, bytes]:
-    return {str(f.relative_to(path)): f.read_bytes() for f in sorted(path.rglob("*"))
-            if f.is_file()}
+    """The store's files but its records (runs.jsonl differs from run to run)."""
+    from conftest import store_files
+
+    return store_files(path)
 
 
 def test_an_interrupted_store_resumes_to_the_same_store_and_results(tmp_path):
@@ -349,3 +372,61 @@ def test_a_resumed_run_says_what_the_store_held(tmp_path):
     more = CliRunner().invoke(app, [*args, "--samples", "4096"])
     assert more.exit_code == 0, more.output
     assert "2,048 samples were in the store already" in " ".join(more.output.split())
+
+
+# -- work refused for its cost before it starts, as a sweep is (issues 46, 48) ------------------
+def test_a_continuation_of_weeks_is_refused_in_seconds_before_any_work(tmp_path):
+    """coincli.fractions_over with 20,000 values: its pilot (a few hundred samples at three
+    of them) estimates weeks, and the run is refused with WorkTooLong, the sweep's kind of
+    refusal, before anything is created: in seconds, where it used to run for minutes."""
+    import time
+
+    values = np.linspace(0.0015, 0.0025, 20_000)
+    start = time.perf_counter()
+    with pytest.raises(coincli.WorkTooLong) as refused:  # months, on any machine
+        coincli.fractions_over(PAPER, "thickness", values, precision=0.0005,
+                               store=tmp_path / "f.zarr", threads=2)
+    assert time.perf_counter() - start < 60
+    est = refused.value.estimate
+    assert est.seconds > 12 * 3600 and 0 < est.pilot_samples <= 3 * 512
+    assert isinstance(refused.value, ParameterError)  # one line on the command line
+    assert refused.value.parameters == ("max_seconds",)
+    assert "would take about" in str(refused.value) and "max_seconds=None" in str(refused.value)
+    assert not (tmp_path / "f.zarr").exists()
+    assert issubclass(coincli.SweepTooLong, coincli.WorkTooLong)
+
+
+def test_max_seconds_refuses_a_run_and_none_goes_ahead():
+    """The keyword of coincli.sweep and coincli.basin: a run estimated over max_seconds is
+    refused; max_seconds=None starts it without a pilot; a run no larger than its pilot is
+    not piloted (the pilot would cost the run)."""
+    with pytest.raises(coincli.WorkTooLong):
+        coincli.fractions(PAPER, samples=2048, batch=512, threads=1, max_seconds=1e-6)
+    seen = []
+    plan = coincli.plan_fractions(PAPER, samples=2048, batch=512)
+    r = coincli.run_fractions(plan, threads=1, max_seconds=None, on_start=seen.append)
+    assert r.samples == 2048 and seen == [None]
+    small = coincli.plan_fractions(PAPER, samples=512, batch=512)
+    r = coincli.run_fractions(small, threads=1, max_seconds=1e-6, on_start=seen.append)
+    assert r.samples == 512 and seen == [None, None]
+    asked = coincli.run_fractions(small, threads=1, max_seconds=None, estimate=True,
+                                  on_start=seen.append)
+    assert asked.samples == 512 and seen[-1].pilot_samples == 512
+    with pytest.raises(ParameterError, match="max_seconds must be a positive number"):
+        coincli.fractions(PAPER, samples=512, batch=512, max_seconds=0)
+    with pytest.raises(coincli.SweepTooLong):
+        coincli.basin(PAPER, res=16, chunk=16, max_seconds=1e-9)
+
+
+def test_the_command_line_refuses_a_long_run_in_one_line_unless_yes(monkeypatch):
+    """--yes is the API's max_seconds=None: without it a run over the limit (lowered here from
+    12 hours) is refused in one line, naming the way out."""
+    from coincli.cli import fractions_cmd
+
+    monkeypatch.setattr(fractions_cmd, "MAX_SECONDS", 1e-6)
+    args = ["fractions", "--samples", "2048", "--batch", "512", "--threads", "1", "-q"]
+    refused = CliRunner().invoke(app, args)
+    err = refused.stderr.strip()
+    assert refused.exit_code == 2 and len(err.splitlines()) == 1, refused.output
+    assert err.startswith("error: this run would take about") and "--yes" in err, err
+    assert CliRunner().invoke(app, [*args, "--yes"]).exit_code == 0

@@ -30,8 +30,10 @@ RUN = dict(phi0="-pi:pi", samples=1024, batch=512, threads=1)
 
 
 def _files(path: Path) -> dict[str, bytes]:
-    return {str(f.relative_to(path)): f.read_bytes() for f in sorted(path.rglob("*"))
-            if f.is_file()}
+    """The store's files but its records (runs.jsonl differs from run to run)."""
+    from conftest import store_files
+
+    return store_files(path)
 
 
 def _counts(r) -> tuple:
@@ -280,3 +282,26 @@ def test_a_corners_restitution_is_the_models_impact():
             assert kinds == ["onset"] and throw.final.vy < 1e-3 * 0.2
     flat = PAPER.coin
     assert corner_restitution(PAPER, lever=flat.r_d) < corner_restitution(PAPER)
+
+
+def test_a_grid_too_large_for_memory_is_refused_in_one_line_before_any_work(monkeypatch):
+    """Thousands of values a side: refused naming the grid's size before a point's scene is
+    built (it used to end in a MemoryError's traceback), as a tile too large is refused."""
+    result = CliRunner().invoke(app, ["fractions", "--over", "thickness=0.0015:0.0025:10000",
+                                      "--over", "c=0.1:1:10000"])
+    err = result.stderr.strip()
+    assert result.exit_code == 2 and len(err.splitlines()) == 1, result.output
+    assert err.startswith("error: --over: a grid of 10,000 x 10,000 = 100,000,000 points "
+                          "need about"), err
+    assert "give fewer values" in err and "Traceback" not in result.output
+    from coincli.montecarlo import plan as plan_module
+
+    monkeypatch.setattr(plan_module, "available_memory", lambda: 50 * plan_module.POINT_BYTES)
+    with pytest.raises(ParameterError, match="a grid of 10 x 10 = 100 points") as refused:
+        coincli.plan_fractions(PAPER, samples=512, over={"thickness": np.linspace(
+            0.0015, 0.0025, 10), "c": np.linspace(0.1, 1, 10)})
+    assert refused.value.parameters == ("over",) and "at most about 50 points" in str(
+        refused.value)
+    with pytest.raises(ParameterError, match="over: 60 values need"):
+        coincli.plan_fractions(PAPER, samples=512, over=("c", np.linspace(0.1, 1, 60)))
+    coincli.plan_fractions(PAPER, samples=512, over=("c", np.linspace(0.1, 1, 40)))  # fits

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import store_files
 from typer.testing import CliRunner
 
 import coincli
@@ -25,8 +26,8 @@ RUN = dict(phi0="-pi:pi", batch=256)
 
 
 def _files(path: Path) -> dict[str, bytes]:
-    return {str(f.relative_to(path)): f.read_bytes() for f in sorted(path.rglob("*"))
-            if f.is_file()}
+    """The store's files but its records (runs.jsonl differs from run to run)."""
+    return store_files(path)
 
 
 def _remove_batch(store: Path, batch: int) -> None:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pyarrow as pa
 import pytest
-from conftest import outputs_in_a_kernel, reset_sigint, shows_a_widget
+from conftest import default_signals, outputs_in_a_kernel, shows_a_widget
 from typer.testing import CliRunner
 
 from coincli.charts.basin_render import n_range, ramp_colours
@@ -266,7 +266,7 @@ def test_a_sweep_ended_by_a_signal_leaves_the_recording_of_its_store(tmp_path, h
     sweep = subprocess.Popen([sys.executable, "-m", "coincli", "basin", str(store), "--res",
                               "512", "--chunk", "16", "--threads", "1", "-q", "--rrd", str(rrd)],
                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                             start_new_session=True, preexec_fn=reset_sigint,
+                             start_new_session=True, preexec_fn=default_signals,
                              cwd=Path(__file__).parent.parent)
     try:
         deadline = time.monotonic() + 60

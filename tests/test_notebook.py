@@ -32,6 +32,24 @@ def cell_with(nb, text: str):
     return matches[0]
 
 
+def test_every_picture_of_the_notebook_has_its_alternative_text_on_the_site():
+    """Each cell that draws a picture says what it shows (its metadata "alt"), and the site's
+    page gives every picture that text: nbconvert's lab template, which mkdocs-jupyter renders
+    with, writes a placeholder, which the build's hook (benchmarks/docs_notebook.py, named in
+    mkdocs.yml) replaces."""
+    import json
+
+    nb2html = pytest.importorskip("mkdocs_jupyter.nbconvert2").nb2html
+    texts = docs_notebook.alt_texts(json.loads(NOTEBOOK.read_text()))
+    assert len(texts) == 3 and all(len(text) > 40 for text in texts.values())
+    page = docs_notebook.add_alt_attributes(nb2html(str(NOTEBOOK)), texts)
+    alts = re.findall(r'<img\b[^>]*\salt="([^"]*)"', page)
+    assert len(alts) == len(re.findall(r"<img\b", page)) == len(texts)
+    assert "No description has been provided" not in page
+    hooks = (ROOT / "mkdocs.yml").read_text().split("\nhooks:\n")[1].split("\n\n")[0]
+    assert "benchmarks/docs_notebook.py" in hooks
+
+
 @pytest.mark.slow
 def test_the_notebook_runs_and_shows_what_it_says(tmp_path):
     nbformat = pytest.importorskip("nbformat")

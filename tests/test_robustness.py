@@ -10,7 +10,7 @@ import sys
 import time
 
 import pytest
-from conftest import reset_sigint
+from conftest import default_signals
 from typer.testing import CliRunner
 
 import coincli
@@ -88,7 +88,7 @@ def test_ctrl_c_stops_a_long_simulation_within_two_seconds(tmp_path):
     proc = subprocess.Popen([*COIN, "simulate", "--method", "symplectic_euler", "--dt", "1e-9",
                              "--t-end", "100", "--full", "--single-pass", "--no-rrd"],
                             cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, preexec_fn=reset_sigint)
+                            text=True, preexec_fn=default_signals)
     time.sleep(3.0)
     assert proc.poll() is None, proc.communicate()
     sent = time.monotonic()
@@ -108,7 +108,7 @@ def test_ctrl_c_stops_a_long_simulation_within_two_seconds(tmp_path):
 def test_ctrl_c_stops_accuracy_and_bench_within_two_seconds(tmp_path, args):
     """The kernels of the long measurements poll a control flag that Ctrl-C sets."""
     proc = subprocess.Popen([*COIN, *args], cwd=tmp_path, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, preexec_fn=reset_sigint)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
     time.sleep(8.0)
     assert proc.poll() is None, proc.communicate()
     sent = time.monotonic()

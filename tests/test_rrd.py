@@ -1,5 +1,5 @@
-"""Rerun recordings of one throw (coincli.recordings.rrd and `coin simulate --rrd/--no-rrd`): the .rrd is
-read back with rerun.chunk.RrdReader and pyarrow and checked against the simulation."""
+"""Rerun recordings of one throw (coincli.recordings.rrd and `coin simulate --rrd/--no-rrd`): the
+.rrd is read back with rerun.chunk.RrdReader and pyarrow and checked against the simulation."""
 
 from __future__ import annotations
 

@@ -5,7 +5,6 @@ released, run recorded, exit 143 and 129), and a Dask scheduler killed mid-run (
 from __future__ import annotations
 
 import contextlib
-import json
 import os
 import signal
 import socket
@@ -15,6 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
+from conftest import default_signals
 from test_basin import KILL_ARGS, assert_same_store, coin_ok, start_sweep, wait_for_tiles
 
 from coincli.cli import interruptions
@@ -31,8 +31,8 @@ def clean(tmp_path_factory) -> Path:
 
 
 def runs(path: Path) -> list[dict]:
-    return [json.loads(line) for line in (Path(f"{path}.cost") / "runs.jsonl").read_text()
-            .splitlines()]
+    """The run records of a store (basin or fractions: the same records folder)."""
+    return BasinStore(path).runs()
 
 
 def claims_left(path: Path) -> list[str]:
@@ -131,7 +131,8 @@ def test_a_second_signal_during_the_first_ones_clean_up_still_ends_it():
 
 def test_handlers_are_the_commands_only_and_nohup_is_kept():
     """Importing coincli (a notebook, a program) leaves Python's handlers; the command keeps
-    an ignored SIGHUP ignored."""
+    an ignored SIGHUP ignored. The child starts with the dispositions of a terminal's process,
+    whatever this runner inherited (``nohup make test`` ignores SIGHUP)."""
     code = ("import signal, coincli.api, coincli.cli\n"
             "assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL\n"
             "assert signal.getsignal(signal.SIGHUP) is signal.SIG_DFL\n"
@@ -140,7 +141,28 @@ def test_handlers_are_the_commands_only_and_nohup_is_kept():
             "stop_on_termination()\n"
             "assert signal.getsignal(signal.SIGHUP) is signal.SIG_IGN\n"
             "assert signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL\n")
-    subprocess.run([sys.executable, "-c", code], check=True, timeout=60)
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=60,
+                   preexec_fn=default_signals)
+
+
+def test_a_sweep_started_under_nohup_goes_on_after_a_hang_up(tmp_path, clean):
+    """`nohup coin basin ...` (SIGHUP ignored when the command starts): a hang-up neither stops
+    the sweep nor is recorded; it ends as an uninterrupted one, exit 0."""
+    def as_nohup_leaves_it():
+        default_signals()
+        signal.signal(signal.SIGHUP, signal.SIG_IGN)
+
+    path = tmp_path / "s.zarr"
+    proc = subprocess.Popen([sys.executable, "-m", "coincli", "basin", str(path), *KILL_ARGS],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            preexec_fn=as_nohup_leaves_it, cwd=Path(__file__).parent.parent)
+    wait_for_tiles(proc, path, 3)
+    proc.send_signal(signal.SIGHUP)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err.decode()
+    assert "stopped" not in err.decode()
+    assert [run["interrupted"] for run in runs(path)] == [False]
+    assert_same_store(path, clean)
 
 
 # -- a Dask scheduler lost -----------------------------------------------------------------------

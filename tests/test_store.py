@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import reset_sigint, sigint_raises
+from conftest import default_signals, sigint_raises, store_files
 from typer.testing import CliRunner
 
 import coincli
@@ -40,7 +40,7 @@ from coincli.engines.basin_plan import pilot_cells
 from coincli.integrators import NO_LABEL
 from coincli.stores import basin_layout, zarr_v3
 from coincli.stores import basin_schema as schema
-from coincli.stores.basin_layout import cost_dir
+from coincli.stores.basin_layout import RECORDS, records_dir
 from coincli.stores.basin_store import BasinStore
 
 runner = CliRunner()
@@ -73,12 +73,13 @@ def read_basin(path: Path):
 
 
 def files_of(path: Path) -> dict[str, bytes]:
-    return {p.relative_to(path).as_posix(): p.read_bytes()
-            for p in sorted(path.rglob("*")) if p.is_file()}
+    """The files of a store but its records (conftest.store_files), or of a folder of stores
+    (their records included)."""
+    return store_files(path)
 
 
 def assert_identical(a: Path, b: Path) -> None:
-    """Every file of the two stores, byte for byte (metadata included)."""
+    """Every file of the two stores, byte for byte (metadata included), but their records."""
     fa, fb = files_of(a), files_of(b)
     assert sorted(fa) == sorted(fb)
     assert [k for k in fa if fa[k] != fb[k]] == []
@@ -100,8 +101,7 @@ def clean(tmp_path_factory) -> Path:
 
 
 def copy_store(src: Path, dst: Path) -> Path:
-    shutil.copytree(src, dst)
-    shutil.copytree(cost_dir(src), cost_dir(dst))
+    shutil.copytree(src, dst)  # its records with it: they are in its folder
     return dst
 
 
@@ -327,6 +327,57 @@ def test_reads_are_what_zarr_reads(clean):
     assert dict(group.attrs) == view.attrs
 
 
+def test_a_store_is_one_folder_that_zarr_and_xarray_open_as_before(tmp_path, clean):
+    """Everything a store owns is in its folder: its records (each tile's cost, the runs) in
+    out.zarr/.coin/, nothing beside it once made; moved, it keeps them. Zarr and xarray open
+    it through its consolidated metadata, which list its arrays only; verify is silent on
+    them."""
+    import warnings
+
+    import xarray as xr
+    import zarr
+
+    assert sorted(p.name for p in clean.parent.iterdir()) == [clean.name]
+    assert sorted(p.name for p in (clean / RECORDS).iterdir()) == [
+        "runs.jsonl", "tile_0_0.json", "tile_0_1.json", "tile_1_0.json", "tile_1_1.json"]
+    moved = tmp_path / "elsewhere" / "moved.zarr"
+    moved.parent.mkdir()
+    shutil.copytree(clean, tmp_path / "copy.zarr")
+    (tmp_path / "copy.zarr").rename(moved)
+    assert BasinStore(moved).runs() == BasinStore(clean).runs() != []
+    assert np.isfinite(BasinStore.open(moved).costs()[0]).all()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        group = zarr.open_group(str(moved), mode="r")
+        assert RECORDS not in group and sorted(group.array_keys()) == sorted(
+            [*basin_layout.ARRAY_NAMES, "done", "vy", "vphi"])
+        assert xr.open_zarr(moved)["quarter_turns"].shape == (8, 8)
+    assert f"{moved}: intact: 4 of 4 tiles done" in coin_ok("verify", moved).output
+
+
+def test_a_store_of_0_10_keeps_its_records_beside_it_and_resumes_to_the_same_store(tmp_path,
+                                                                                  clean):
+    """coincli 0.10.0 kept a store's records beside it (out.zarr.cost/): they are read and
+    written there while they are (so processes of both versions claim in one place), the store
+    resumes to the uninterrupted one; replaced (--overwrite), its new records are in it and the
+    old ones gone."""
+    path = copy_store(clean, tmp_path / "s.zarr")
+    legacy = tmp_path / "s.zarr.cost"
+    (path / RECORDS).rename(legacy)  # as 0.10.0 left it
+    (path / "done" / "c" / "1" / "1").unlink()
+    assert records_dir(path) == legacy and len(BasinStore(path).runs()) == 1
+    coin_ok(path, *ARGS)
+    assert not (path / RECORDS).exists()
+    assert len(BasinStore(path).runs()) == 2 and len((legacy / "runs.jsonl").read_text()
+                                                      .splitlines()) == 2
+    assert np.isfinite(BasinStore.open(path).costs()[0]).all()
+    assert_identical(path, clean)
+    coin_ok(path, *ARGS, "--overwrite")
+    assert not legacy.exists() and records_dir(path) == path / RECORDS
+    assert len(BasinStore(path).runs()) == 1
+    assert_identical(path, clean)
+
+
 def test_a_sweep_does_not_import_zarr(tmp_path):
     """`coin basin` writes and checks its store without Zarr (a quarter of a second to import),
     with numcodecs' own Zstd codec; Zarr reads the store."""
@@ -345,7 +396,7 @@ def test_a_sweep_does_not_import_zarr(tmp_path):
 def start(*args) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "coincli", "basin", *map(str, args)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=reset_sigint, cwd=ROOT)
+                            preexec_fn=default_signals, cwd=ROOT)
 
 
 def computed(output: str) -> int:
@@ -394,7 +445,8 @@ def test_racing_creations_end_in_one_store(tmp_path):
         t.join()
     assert errors == []
     assert BasinStore.open(path).check().intact and leftovers(tmp_path) == []
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr", "s.zarr.cost"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.zarr"]  # its records in it
+    assert (path / RECORDS).is_dir()
 
 
 def _claim(path: Path, tile, pid: int, age: float = 0.0) -> Path:
@@ -641,7 +693,7 @@ def test_outputs_that_cannot_be_written_fail_in_one_line_before_work(tmp_path, c
                         lambda *a, **k: pytest.fail("computed before checking its outputs"))
     result = runner.invoke(app, ["accuracy", "--quick", "--res", "2", "-o", str(ro / "a.png")])
     assert "cannot write" in one_line_error(result)
-    assert sorted(p.name for p in ro.iterdir()) == ["partial.zarr", "partial.zarr.cost"]
+    assert sorted(p.name for p in ro.iterdir()) == ["partial.zarr"]
     assert leftovers(tmp_path) == []
 
 
@@ -683,7 +735,7 @@ def test_a_mirrored_store_has_the_labels_of_the_full_one(mirrored, clean):
         np.testing.assert_array_equal(half.arrays[name], full.arrays[name], err_msg=name)
     np.testing.assert_allclose(half.arrays["settle_time"], full.arrays["settle_time"], rtol=1e-5)
     assert half.attrs["sweep"]["mirror"] == ["vphi"] and full.attrs["sweep"]["mirror"] is None
-    costs = {t: json.loads((cost_dir(mirrored) / f"tile_{t}.json").read_text())
+    costs = {t: json.loads((records_dir(mirrored) / f"tile_{t}.json").read_text())
              for t in ("0_0", "0_1", "1_0", "1_1")}
     assert costs["0_1"]["mirror_of"] == [0, 0] and costs["1_1"]["mirror_of"] == [1, 0]
     assert costs["0_1"]["cpu_seconds"] == 0.0 < costs["0_0"]["cpu_seconds"]

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import reset_sigint
+from conftest import default_signals
 from test_live import check_map, rows
 from test_signals import free_port
 from test_store import (
@@ -224,7 +224,7 @@ def test_kill_9_of_a_recorded_sweep_leaves_no_traceback_and_a_whole_recording(tm
         sweep = subprocess.Popen([sys.executable, "-m", "coincli", "basin", str(store), "--res",
                                   "512", "--chunk", "64", "--threads", "1", "-q", "--rrd",
                                   str(rrd)], stdout=subprocess.DEVNULL, stderr=err,
-                                 start_new_session=True, preexec_fn=reset_sigint, cwd=ROOT)
+                                 start_new_session=True, preexec_fn=default_signals, cwd=ROOT)
     try:
         deadline = time.monotonic() + 60
         while not any(f.is_file() and f.suffix != ".partial"

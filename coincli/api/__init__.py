@@ -12,118 +12,127 @@ A facade: each function checks its options, builds a plan and calls the one engi
 sweep's :func:`coincli.engines.basin.run_sweep`, a Monte Carlo run's
 :func:`coincli.engines.fractions.run_fractions`, the analysis's
 :func:`coincli.analysis.analyze_basin`). Options are keywords; results are named (objects with
-``to_dict()``, Datasets). One throw, the statics and the compilation are here; basin maps in
-:mod:`.basins`, their boundaries in :mod:`.boundaries`, outcome probabilities in
-:mod:`.probabilities`.
+``to_dict()``, Datasets). One throw, the statics, the methods and the compilation are in
+:mod:`.throws`; basin maps in :mod:`.basins`, their boundaries in :mod:`.boundaries`, outcome
+probabilities in :mod:`.probabilities`, the studies of the methods in :mod:`.studies`.
+
+The command line (:mod:`coincli.cli`) imports nothing of the package but this API. What a front
+end needs beyond the public names is in submodules: :mod:`.options` (parsers, checks of paths
+and options, defaults, units: how to read user input), :mod:`.words` (how settings and results
+are said: method ladders, horizons, durations, disk errors), :mod:`.recording` (live recordings
+to Rerun) and :mod:`.errors` (every exception the API raises on purpose).
+
+Names load on first use (the module's ``__getattr__``): importing this package, or its light
+submodules :mod:`.options` and :mod:`.words`, loads no numpy, numba or kernels, so that the
+command line declares its options (``coin --help``) without them.
 """
 
 from __future__ import annotations
 
-import numpy as np
+import importlib
+from typing import TYPE_CHECKING
 
-from ..charts.fractions_over import FractionsOver
-from ..engines.basin import SweepProgress, SweepReport, SweepStart
-from ..engines.basin_plan import SweepEstimate, SweepPlan, SweepTooLong, estimate_sweep, plan_sweep
-from ..enums import Certainty, Engine, Method, Status, StopReason
-from ..integrators import warm_up
-from ..montecarlo import Fractions
-from ..montecarlo.plan import FractionsPlan, FractionsProgress, plan_fractions
-from ..params import ParameterError, Scene, validate
-from ..presets import load
-from ..recordings.rrd import record
-from ..recordings.trajectory import Trajectory
-from ..shock import MinimalShock, minimal_shock
-from ..statics import StabilityReport, analyse
-from ..stats import BasinStats
-from ..throw import Outcome, classify
-from ..throw import simulate as simulate_throw
-from .basins import (
-    basin,
-    basin_attrs,
-    basin_stats,
-    cell_scene,
-    export_basin,
-    open_basin,
-    render_basin,
-    show_basin,
-    sweep,
-    verify_basin,
-)
-from .boundaries import analyze, render_analysis
-from .probabilities import (
-    estimate_fractions,
-    fractions,
-    fractions_over,
-    open_fractions,
-    render_fractions,
-    run_fractions,
-)
+from ..version import __version__  # noqa: F401 - for a front end (coincli.__version__ too)
 
+# where each public name is defined (a module of the package, relative to coincli)
+_WHERE = {
+    "enums": ("Certainty", "Engine", "Method", "Status", "StopReason"),
+    "params": ("ParameterError", "Scene"),
+    "stats": ("BasinStats",),
+    "throw": ("Outcome", "classify"),
+    "shock": ("MinimalShock", "minimal_shock"),
+    "montecarlo": ("Fractions",),
+    "montecarlo.plan": ("FractionsPlan", "FractionsProgress", "plan_fractions"),
+    "engines.work": ("WorkTooLong",),
+    "engines.basin": ("SweepProgress", "SweepReport", "SweepStart"),
+    "engines.basin_plan": ("SweepEstimate", "SweepPlan", "SweepTooLong", "estimate_sweep",
+                           "plan_sweep"),
+    "charts.fractions_over": ("FractionsOver",),
+    "recordings.rrd": ("record",),
+    "recordings.trajectory": ("Trajectory",),
+    "api.throws": ("compile_kernels", "load_preset", "method_table", "simulate", "stability",
+                   "viewer"),
+    "api.basins": ("basin", "basin_attrs", "basin_stats", "cell_scene", "export_basin",
+                   "inspect_cell", "open_basin", "render_basin", "show_basin", "sweep",
+                   "verify_basin"),
+    "api.boundaries": ("analyze", "render_analysis"),
+    "api.probabilities": ("estimate_fractions", "fractions", "fractions_over", "open_fractions",
+                          "render_fractions", "run_fractions"),
+}
+_MODULE = {name: module for module, names in _WHERE.items() for name in names}
 
-def load_preset(name_or_path: str = "paper") -> Scene:
-    """The scene of a shipped preset (``coin presets`` lists them) or of a TOML file."""
-    return load(name_or_path).scene
-
-
-def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: bool = False,
-             force: bool = False, engine: Engine = Engine.AUTO, control=None,
-             **overrides) -> Trajectory:
-    """Integrate one throw (a :class:`Trajectory`), verified on the ladder of settings unless
-    ``verify=False``.
-
-    ``overrides`` change the scene for this throw, by the flat names of
-    :meth:`Scene.with_overrides`: initial conditions (``vy=1.197, vphi=3.508``, ``phi0="pi/2"``,
-    ``y0="2r"``), physical parameters (``k=5000``) and integration settings (``rtol=1e-8``).
-    With ``sample_dt`` the state is kept every ``sample_dt`` seconds of simulated time (exact
-    times for the adaptive methods); with ``record_events`` every contact onset and lift-off is
-    kept with its state. ``force`` allows a fixed step beyond the method's stable step.
-    ``engine`` chooses what runs the kernel (the same result to rounding: compiled code fuses
-    multiplies and adds, :mod:`coincli.jit`); ``control`` (from
-    :func:`coincli.integrators.new_control`) lets another thread stop it."""
-    return Trajectory.of(simulate_throw(scene, sample_dt=sample_dt, record_events=record_events,
-                                        force=force, engine=engine, control=control,
-                                        **overrides))
-
-
-def stability(scene: Scene) -> StabilityReport:
-    """The static energy table and critical stiffnesses of the paper's section 3, and E_crit."""
-    return analyse(validate(scene))
-
-
-def compile_kernels() -> bool:
-    """Compile every kernel for this machine now, unless this version is compiled here already
-    (:func:`coincli.jit.kernels_cached`): what the first run of any of them would do, in about
-    ``coincli.jit.FIRST_COMPILE_SECONDS``. Whatever the scene, the kernels take the same
-    argument types, so the default scene's compile serves every later one. True if it
-    compiled. Silent: a caller that wants to show the wait does (``coin compile``)."""
-    from .. import jit
-    from ..params import model_params, run_settings
-
-    if jit.kernels_cached():
-        return False
-    scene = Scene()
-    warm_up(model_params(scene), run_settings(scene.integration),
-            np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
-    return True
+if TYPE_CHECKING:  # the same names, for the reference's generator and for type checkers
+    from ..charts.fractions_over import FractionsOver
+    from ..engines.basin import SweepProgress, SweepReport, SweepStart
+    from ..engines.basin_plan import (
+        SweepEstimate,
+        SweepPlan,
+        SweepTooLong,
+        estimate_sweep,
+        plan_sweep,
+    )
+    from ..engines.work import WorkTooLong
+    from ..enums import Certainty, Engine, Method, Status, StopReason
+    from ..montecarlo import Fractions
+    from ..montecarlo.plan import FractionsPlan, FractionsProgress, plan_fractions
+    from ..params import ParameterError, Scene
+    from ..recordings.rrd import record
+    from ..recordings.trajectory import Trajectory
+    from ..shock import MinimalShock, minimal_shock
+    from ..stats import BasinStats
+    from ..throw import Outcome, classify
+    from .basins import (
+        basin,
+        basin_attrs,
+        basin_stats,
+        cell_scene,
+        export_basin,
+        inspect_cell,
+        open_basin,
+        render_basin,
+        show_basin,
+        sweep,
+        verify_basin,
+    )
+    from .boundaries import analyze, render_analysis
+    from .probabilities import (
+        estimate_fractions,
+        fractions,
+        fractions_over,
+        open_fractions,
+        render_fractions,
+        run_fractions,
+    )
+    from .throws import (
+        compile_kernels,
+        load_preset,
+        method_table,
+        simulate,
+        stability,
+        viewer,
+    )
 
 
-def viewer(*, width: int | None = None, height: int | None = None):
-    """A Rerun viewer shown in the notebook's cell now (``width`` and ``height`` in pixels),
-    for the work of later cells: ``coincli.basin(..., store=..., notebook=v)``,
-    ``fractions(..., notebook=v)``, ``analyze(..., notebook=v)``, ``show_basin(ds,
-    notebook=v)`` show in it as they run (a viewer made in the cell that runs the work is
-    ready only once the cell has run: Jupyter hands the kernel its "ready" between cells)."""
-    from ..recordings.stream import notebook_viewer
+def __getattr__(name: str):
+    module = _MODULE.get(name)
+    if module is None:
+        raise AttributeError(f"module 'coincli.api' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"coincli.{module}"), name)
+    globals()[name] = value  # loaded once
+    return value
 
-    return notebook_viewer(width=width, height=height)
+
+def __dir__():
+    return sorted({*globals(), *__all__})
 
 
 __all__ = ["BasinStats", "Certainty", "Engine", "Fractions", "FractionsOver", "FractionsPlan",
            "FractionsProgress", "Method", "MinimalShock", "Outcome", "ParameterError", "Scene",
            "Status", "StopReason", "SweepEstimate", "SweepPlan", "SweepProgress", "SweepReport",
-           "SweepStart", "SweepTooLong", "Trajectory", "analyze", "basin", "basin_attrs",
-           "basin_stats", "cell_scene", "classify", "compile_kernels", "estimate_fractions",
-           "estimate_sweep", "export_basin", "fractions", "fractions_over", "load_preset",
-           "minimal_shock", "open_basin", "open_fractions", "plan_fractions", "plan_sweep",
-           "record", "render_analysis", "render_basin", "render_fractions", "run_fractions",
+           "SweepStart", "SweepTooLong", "Trajectory", "WorkTooLong", "analyze", "basin",
+           "basin_attrs", "basin_stats", "cell_scene", "classify", "compile_kernels",
+           "estimate_fractions", "estimate_sweep", "export_basin", "fractions",
+           "fractions_over", "inspect_cell", "load_preset", "method_table", "minimal_shock",
+           "open_basin", "open_fractions", "plan_fractions", "plan_sweep", "record",
+           "render_analysis", "render_basin", "render_fractions", "run_fractions",
            "show_basin", "simulate", "stability", "sweep", "verify_basin", "viewer"]

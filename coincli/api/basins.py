@@ -1,18 +1,23 @@
 """The public functions of basin maps: sweeping one (into a store or in memory), reading,
-exporting, checking, counting, drawing and showing it.
+exporting, checking, counting, drawing and showing it, and going from one of its cells back
+to its throw.
 
 Everything that takes a basin takes a Dataset from :func:`basin` or :func:`open_basin`, or the
 path of a store (or of a NetCDF export)."""
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
+from ..defaults import IC_NAMES, MAX_SECONDS
 from ..engines.basin import SweepProgress, SweepReport, SweepStart, check_progress, run_sweep
 from ..engines.basin_plan import SweepPlan, plan_sweep
 from ..engines.executors import executor_for
+from ..engines.work import check_max_seconds
 from ..grid import DEFAULT_CHUNK, DEFAULT_RES
 from ..params import ParameterError, Scene
 from ..stats import BasinStats
@@ -22,7 +27,7 @@ from .recording import both, live_destination, warn_if_failed
 def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
           threads: int | None = None, workers: int | None = None, scheduler: str | None = None,
           progress: Callable[[SweepProgress], None] | None = None, stop=None,
-          max_seconds: float | None = None,
+          max_seconds: float | None = MAX_SECONDS,
           on_start: Callable[[SweepStart], None] | None = None,
           worker_timeout: float | None = None) -> SweepReport:
     """Compute the tiles of ``plan`` that ``store`` does not hold yet (creating it if needed),
@@ -40,14 +45,17 @@ def sweep(plan: SweepPlan, store: str | os.PathLike, *, overwrite: bool = False,
     interrupt) stops the tiles in flight at once, unwritten, and returns too (``interrupted``).
 
     ``on_start`` receives a :class:`SweepStart` (damaged tiles, the estimate) before any work;
-    with ``max_seconds`` or ``on_start`` the sweep is first estimated (:func:`estimate_sweep`)
-    and, over ``max_seconds``, refused with :class:`SweepTooLong` before anything is created.
+    the sweep is first estimated (:func:`estimate_sweep`, a pilot of at most a second) and,
+    over ``max_seconds`` (12 hours unless given; None: no limit, and no estimate unless
+    ``on_start`` asks for it), refused with :class:`SweepTooLong` (a
+    :class:`coincli.WorkTooLong`, as a Monte Carlo run is refused) before anything is created.
     A store with other parameters is refused (ParameterError naming them) unless
     ``overwrite``. OSErrors (a read-only or full disk) are raised as they come; a store or
     output that cannot be written is found before any work."""
     from ..stores.basin_store import BasinStore
 
     check_progress(progress)
+    check_max_seconds(max_seconds)
     executor = executor_for(threads, workers, scheduler, worker_timeout)
     target = BasinStore(store)
     target.check_writable(overwrite)  # a complete store needs no write: read-only is enough
@@ -61,7 +69,7 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
           progress: Callable[[SweepProgress], None] | None = None, stop=None,
           mirror: bool = True, x0=None, y0=None, phi0=None, vx=None, vy=None, vphi=None,
           rrd: str | os.PathLike | None = None, spawn: bool = False, connect: str | None = None,
-          notebook=False):
+          notebook=False, max_seconds: float | None = MAX_SECONDS):
     """The basin map of two initial conditions as an xarray Dataset.
 
     Swept axes are given as ``name=(lo, hi)`` or ``'LO:HI'`` (``phi0='-pi:pi'``,
@@ -75,7 +83,8 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
     coincli.integrators.ladder) unless the scene's integration says ``verify=False``
     (``scene.with_overrides(verify=False)``). Interrupted (``stop`` set, or Ctrl-C, which stops
     the tiles in flight at once), it raises KeyboardInterrupt; a store keeps every finished
-    tile for a resume.
+    tile for a resume. A sweep estimated at over ``max_seconds`` (12 hours unless given) is
+    refused with :class:`SweepTooLong` before any work; ``max_seconds=None`` starts it anyway.
 
     ``rrd`` (an .rrd file), ``spawn`` (a new viewer) and ``connect`` (a running viewer's URL,
     ``rerun+http://host:port/proxy``) stream the map to Rerun as it fills in, as
@@ -85,6 +94,7 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
     store, so it needs ``store``. A recording that fails (a full disk, a viewer gone) does not
     fail the sweep: it is said in a RuntimeWarning."""
     check_progress(progress)
+    check_max_seconds(max_seconds)
     plan = plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=mirror, x0=x0, y0=y0,
                       phi0=phi0, vx=vx, vy=vy, vphi=vphi)
     where = live_destination(rrd, spawn, connect, notebook)
@@ -93,18 +103,19 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
             raise ParameterError("a live recording of a sweep reads its tiles from the store: "
                                  "give store=PATH")
         return _basin_in_memory(plan, executor_for(threads, workers, scheduler), progress,
-                                stop)
-    from ..recordings.sweep_recording import sweep_recorder
+                                stop, max_seconds)
+    from .recording import sweep_recorder
 
     recorder = sweep_recorder(plan, store, where)
     if recorder is None:
         report = sweep(plan, store, overwrite=overwrite, threads=threads, workers=workers,
-                       scheduler=scheduler, progress=progress, stop=stop)
+                       scheduler=scheduler, progress=progress, stop=stop,
+                       max_seconds=max_seconds)
     else:
         with recorder:
             report = sweep(plan, store, overwrite=overwrite, threads=threads, workers=workers,
                            scheduler=scheduler, progress=both(progress, recorder.progress),
-                           stop=stop)
+                           stop=stop, max_seconds=max_seconds)
         warn_if_failed(recorder)
     if report.interrupted:
         raise KeyboardInterrupt(f"sweep interrupted: {report.tiles_done} of "
@@ -112,7 +123,7 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
     return open_basin(store)
 
 
-def _basin_in_memory(plan: SweepPlan, executor, progress, stop):
+def _basin_in_memory(plan: SweepPlan, executor, progress, stop, max_seconds):
     from ..stores.dataset import to_dataset
     from ..stores.memory import MemoryMap
 
@@ -120,7 +131,8 @@ def _basin_in_memory(plan: SweepPlan, executor, progress, stop):
         raise ParameterError("a sweep on Dask writes its tiles to a store: give store=PATH",
                              parameters=("store",))
     target = MemoryMap()
-    report = run_sweep(plan, target, executor, progress=progress, stop=stop)
+    report = run_sweep(plan, target, executor, progress=progress, stop=stop,
+                       max_seconds=max_seconds)
     if report.interrupted:
         raise KeyboardInterrupt("sweep interrupted")
     return to_dataset(target.basin())
@@ -206,6 +218,126 @@ def cell_scene(basin, *, cell=None, **values) -> Scene:
     else:
         attrs = as_basin(basin).attrs
     return scene_of(attrs, locate(attrs, cell=cell, **values))
+
+
+@dataclass(frozen=True)
+class CellRecord:
+    """One cell of a basin (:func:`inspect_cell`): where it is, the throw behind it and what
+    the basin holds for it (``stored``: ``computed``, ``quarter_turns``, ``status``,
+    ``certainty``, ``rung``, ``settle_time``, ``steps``)."""
+
+    cell: tuple[int, int]  # index along the first and the second swept axis
+    dims: tuple[str, str]  # the swept axes
+    scene: Scene  # the basin's parameters with the cell's initial state, as the sweep gave it
+    stored: object  # a coincli.stores.cells.StoredCell
+    rung_setting: str | None  # the setting of the rung the stored label was decided at
+    ladder_matches: bool  # this version climbs the ladder the basin records (else a replay
+    # may differ: a basin of another version)
+
+    def __repr__(self) -> str:  # one line in a notebook; everything: to_dict()
+        s, at = self.stored, ", ".join(f"{d} = {self.initial[d]:.6g}" for d in self.dims)
+        held = (f"n = {s.quarter_turns} ({s.certainty.label}, {s.status.label})" if s.computed
+                else "not computed")
+        return f"CellRecord({self.cell[0]}, {self.cell[1]}: {at}; stored {held})"
+
+    @property
+    def initial(self) -> dict[str, float]:
+        """The cell's six initial values by name."""
+        s = self.scene
+        i = s.initial
+        return dict(zip(IC_NAMES, map(float, (i.x0, s.y0, i.phi0, i.vx, i.vy, i.vphi)),
+                        strict=True))
+
+    def to_dict(self) -> dict:
+        """Plain values (what `coin basin inspect --json` prints under cell, values, stored)."""
+        s, initial = self.stored, self.initial
+        return {"cell": list(self.cell), "dims": list(self.dims),
+                "values": {d: initial[d] for d in self.dims}, "initial": initial,
+                "stored": {"computed": s.computed, "quarter_turns": s.quarter_turns,
+                           "status": s.status.label, "certainty": s.certainty.label,
+                           "rung": s.rung, "rung_setting": self.rung_setting,
+                           "settle_time": None if math.isnan(s.settle_time)
+                           else s.settle_time, "steps": s.steps},
+                "ladder_matches": self.ladder_matches, "parameters": self.scene.to_dict()}
+
+
+def inspect_cell(basin, *, cell=None, **values) -> CellRecord:
+    """One cell of a basin (a store path, or a Dataset): the cell nearest to ``values`` of both
+    swept axes (``vy=1.2, vphi=3.5``; ``phi0="pi/2"``) or ``cell=(i, j)`` (or ``"I,J"``), its
+    scene (as :func:`cell_scene`) and what the basin holds for it: a :class:`CellRecord`. Of
+    a store only the cell's tile is read, checked against its digest (a damaged tile's cells
+    read as not computed). :func:`replay_cell` runs its throw again."""
+    from ..integrators.ladder import ladder_of
+    from ..stores.basin_store import BasinStore
+    from ..stores.cells import cell_scene as scene_of
+    from ..stores.cells import ladder_matches, locate, read_stored_cell, stored_cell
+
+    on_disk = isinstance(basin, str | os.PathLike) and not Path(basin).is_file()
+    attrs = BasinStore.open(basin).attrs if on_disk else as_basin(basin).attrs
+    index = locate(attrs, cell=cell, **{k: v for k, v in values.items() if v is not None})
+    if on_disk:
+        attrs, stored = read_stored_cell(basin, index)
+    else:
+        stored = stored_cell(as_basin(basin).arrays, index)
+    scene = scene_of(attrs, index)
+    ladder = ladder_of(scene.integration)
+    return CellRecord(index, tuple(attrs["sweep"]["dims"]), scene, stored,
+                      None if stored.rung is None else ladder.rung_text(stored.rung),
+                      ladder_matches(attrs, scene))
+
+
+def replay_cell(cell: CellRecord | Scene, *, sample_dt: float | None = None,
+                record_events: bool = False):
+    """The throw of a cell (a :class:`CellRecord` of :func:`inspect_cell`, or its scene) run
+    again as the sweep ran it: the compiled kernels up the same ladder, its step accepted (a
+    :class:`coincli.Trajectory`; ``sample_dt`` and ``record_events`` as for
+    :func:`coincli.simulate`). Its label is the stored one unless the basin is damaged or of
+    another version."""
+    from ..recordings.trajectory import Trajectory
+    from ..stores import cells
+
+    scene = cell.scene if isinstance(cell, CellRecord) else cell
+    return Trajectory.of(cells.replay(scene, sample_dt=sample_dt, record_events=record_events))
+
+
+def open_store(store: str | os.PathLike):
+    """A basin store opened for reading, for a front end that reports on it
+    (:class:`coincli.stores.basin_store.BasinStore`): ``attrs``, ``read()`` (its map, every
+    tile checked: a Basin), ``stats()``, and the damage of its metadata (``problems``: copies
+    of its parameters changed or lost; ``damaged_metadata()``: files that differ from its
+    parameters; ``view.proof``: how the parameters it is read with are known). ParameterError
+    if ``store`` is no basin store."""
+    from ..stores.basin_store import BasinStore
+
+    return BasinStore.open(store)
+
+
+def export_stats(stats: BasinStats, path: str | os.PathLike) -> Path:
+    """Write the outcome table of :func:`basin_stats` to the CSV file ``path`` (what `coin
+    basin stats --csv` writes): a row per n with its pose, direction, cells, fraction and 95 %
+    interval, and over the certain cells too for a verified sweep. The file is complete or
+    absent; returns its path."""
+    import csv
+
+    from ..files import atomic_output
+
+    stats = dict(stats)  # a BasinStats, or its to_dict()
+    certain = {r["n"]: r for r in stats.get("outcomes_certain", [])}
+    with atomic_output(path) as tmp, open(tmp, "w", newline="") as fh:
+        writer = csv.writer(fh)
+        header = ["n", "pose", "direction", "cells", "fraction", "low", "high"]
+        if stats["verified"]:
+            header += ["certain_cells", "fraction_of_certain", "certain_low", "certain_high"]
+        writer.writerow(header)
+        for row in stats["outcomes"]:
+            line = [row["n"], row["pose"], row["direction"], row["count"], row["fraction"],
+                    row["low"], row["high"]]
+            if stats["verified"]:
+                r = certain.get(row["n"])
+                line += ([r["count"], r["fraction"], r["low"], r["high"]] if r
+                         else [0, 0.0, "", ""])
+            writer.writerow(line)
+    return Path(path)
 
 
 def verify_basin(store: str | os.PathLike):

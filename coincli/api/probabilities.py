@@ -4,18 +4,21 @@ engine, :func:`coincli.engines.fractions.run_fractions`), its estimate, its stor
 
 from __future__ import annotations
 
+import contextlib
 import os
 from collections.abc import Callable
 from pathlib import Path
 
 from ..charts.fractions_over import FractionsOver
+from ..defaults import MAX_SECONDS
 from ..engines.basin import check_progress
-from ..engines.executors import check_where
+from ..engines.executors import executor_for
 from ..montecarlo import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, Fractions
+from ..montecarlo.estimate import FractionsEstimate
 from ..montecarlo.over import Continuation
 from ..montecarlo.plan import FractionsPlan, FractionsProgress, plan_fractions
 from ..params import ParameterError, Scene
-from .recording import both, live_destination, warn_if_failed
+from .recording import live_destination, warn_if_failed
 
 
 def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
@@ -26,7 +29,8 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
               scheduler: str | None = None, force: bool = False,
               progress: Callable[[FractionsProgress], None] | None = None,
               stop=None, rrd: str | os.PathLike | None = None, spawn: bool = False,
-              connect: str | None = None, notebook=False) -> Fractions:
+              connect: str | None = None, notebook=False,
+              max_seconds: float | None = MAX_SECONDS) -> Fractions:
     """The outcome probabilities of throws whose initial conditions are drawn at random.
 
     Each of ``y0, phi0, vx, vy, vphi`` is a fixed value, a uniform range ``(lo, hi)`` or
@@ -45,7 +49,9 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
     ``stopped=StopReason.INTERRUPTED``. Ctrl-C (a notebook's interrupt) raises
     KeyboardInterrupt, as it does in :func:`basin`; a store keeps every batch counted so far
     for a resume. ``rrd``, ``spawn`` and ``connect`` stream the running estimates to Rerun
-    (as `coin fractions --rrd FILE`; see :func:`run_fractions`). Returns a
+    (as `coin fractions --rrd FILE`; see :func:`run_fractions`). A run estimated at over
+    ``max_seconds`` (12 hours unless given) is refused before any work, as `coin fractions`
+    refuses it without --yes (see :func:`run_fractions`). Returns a
     :class:`coincli.montecarlo.Fractions`."""
     plan = plan_fractions(scene, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi, samples=samples,
                           precision=precision, of=of, max_samples=max_samples, seed=seed,
@@ -53,7 +59,8 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
     return _raise_if_interrupted(
         run_fractions(plan, store=store, overwrite=overwrite, threads=threads,
                       workers=workers, scheduler=scheduler, progress=progress, stop=stop,
-                      rrd=rrd, spawn=spawn, connect=connect, notebook=notebook), stop)
+                      rrd=rrd, spawn=spawn, connect=connect, notebook=notebook,
+                      max_seconds=max_seconds), stop)
 
 
 def _raise_if_interrupted(result, stop):
@@ -84,7 +91,7 @@ def fractions_over(scene: Scene, parameter: str | None = None, values=None, *, o
         over = parameter if values is None else (parameter, values)
     run_options = {k: options.pop(k) for k in ("store", "overwrite", "threads", "workers",
                                                "scheduler", "progress", "stop", "rrd",
-                                               "spawn", "connect", "notebook")
+                                               "spawn", "connect", "notebook", "max_seconds")
                    if k in options}
     plan = plan_fractions(scene, over=over, keep=keep, **options)
     return _raise_if_interrupted(run_fractions(plan, **run_options), run_options.get("stop"))
@@ -96,11 +103,22 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
                   progress: Callable[[FractionsProgress], None] | None = None,
                   stop=None, rrd: str | os.PathLike | None = None, spawn: bool = False,
                   connect: str | None = None, notebook=False,
-                  worker_timeout: float | None = None) -> Fractions | FractionsOver:
+                  worker_timeout: float | None = None,
+                  max_seconds: float | None = MAX_SECONDS,
+                  on_start: Callable[[FractionsEstimate | None], None] | None = None,
+                  estimate: bool = False) -> Fractions | FractionsOver:
     """Run a Monte Carlo run planned by :func:`plan_fractions` (see :func:`fractions` for the
     options): a Fractions for a plain run, a FractionsOver for a continuation. Unlike
     :func:`fractions`, it does not raise on Ctrl-C: it returns what it has, with
     ``stopped=StopReason.INTERRUPTED`` (as :func:`sweep` returns a report).
+
+    Before any work the run is estimated (the pilot of :func:`estimate_fractions`, a few
+    hundred samples) and, over ``max_seconds`` (12 hours unless given; None: no limit),
+    refused with :class:`coincli.WorkTooLong` (``estimate``: the FractionsEstimate), nothing
+    created or recorded, as `coin fractions` refuses it without --yes and a sweep is refused
+    (:func:`sweep`). A run no larger than its pilot is not estimated (the pilot would cost as
+    much as the run) unless ``estimate`` asks. ``on_start`` receives the estimate (None if
+    there was none) before any work.
 
     ``rrd`` (an .rrd file), ``spawn`` (a new viewer) and ``connect`` (a running viewer's URL)
     stream the estimates to Rerun as the run goes, as `coin fractions --rrd FILE` does
@@ -109,6 +127,7 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
     parameter as each value finishes. A recording that fails does not fail the run: it is
     said in a RuntimeWarning. ``worker_timeout``: as for :func:`sweep`."""
     from ..engines.fractions import run_fractions as run
+    from .recording import fractions_recorder
 
     check_progress(progress)
     target = None
@@ -117,18 +136,28 @@ def run_fractions(plan: FractionsPlan, *, store: str | os.PathLike | None = None
 
         target = FractionsStore.for_run(store)
     where = live_destination(rrd, spawn, connect, notebook)
-    if where is None:
-        return _with_views(run(plan, target=target, overwrite=overwrite, threads=threads,
-                               workers=workers, scheduler=scheduler, progress=progress,
-                               stop=stop, worker_timeout=worker_timeout))
-    from ..recordings.fractions_view import FractionsRecorder
+    recorder = None
+    with contextlib.ExitStack() as recording:
+        def started(found) -> None:  # the run passed its checks: the recording begins
+            nonlocal recorder
+            if where is not None:
+                recorder = recording.enter_context(fractions_recorder(plan, where))
+            if on_start is not None:
+                on_start(found)
 
-    with FractionsRecorder(plan, where) as recorder:
+        def show(update) -> None:
+            if progress is not None:
+                progress(update)
+            if recorder is not None:
+                recorder.progress(update)
+
         result = _with_views(run(plan, target=target, overwrite=overwrite, threads=threads,
                                  workers=workers, scheduler=scheduler,
-                                 progress=both(progress, recorder.progress), stop=stop,
-                                 worker_timeout=worker_timeout))
-        recorder.result(result)
+                                 progress=show if progress or where else None, stop=stop,
+                                 worker_timeout=worker_timeout, max_seconds=max_seconds,
+                                 on_start=started, estimate=estimate))
+        if recorder is not None:
+            recorder.result(result)
     warn_if_failed(recorder)
     return result
 
@@ -146,19 +175,16 @@ def estimate_fractions(plan: FractionsPlan, *, threads: int | None = None,
     :class:`coincli.montecarlo.estimate.FractionsEstimate` (``budget_suffices`` says whether
     the sample budget covers a precision goal). On ``threads`` threads (default one per core),
     ``workers`` Dask workers, or a cluster (``scheduler``: the estimate is then CPU time);
-    samples that ``store`` holds already are not counted."""
-    from ..engines.executors import usable_cores
-    from ..montecarlo.estimate import estimate_fractions as estimate
+    samples that ``store`` holds already are not counted. (:func:`run_fractions` makes the
+    same estimate before it starts, to refuse a run over its ``max_seconds``.)"""
+    from ..engines.fractions import estimate_run
 
-    check_where(threads, workers, scheduler)
-    n = None if scheduler is not None else workers or min(threads or usable_cores(),
-                                                          usable_cores())
-    held = None
+    target = None
     if store is not None and Path(store).is_dir():
         from ..stores.fractions_store import FractionsStore
 
-        held = FractionsStore(store).held_samples(plan)
-    return estimate(plan, n, held)
+        target = FractionsStore(store)
+    return estimate_run(plan, executor_for(threads, workers, scheduler), target)
 
 
 def open_fractions(store: str | os.PathLike):

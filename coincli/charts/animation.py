@@ -19,16 +19,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..defaults import DEFAULT_FPS, DEFAULT_SECONDS
 from ..files import atomic_output, check_writable
 from ..params import ParameterError
 from ..recordings.frames import Frames, build_frames
 from .timeseries import with_samples
 
 FORMATS = (".gif", ".mp4")
-DEFAULT_FPS = 25
-# A throw lasts a fraction of a second: by default it is slowed down to last this long on screen
-# (a longer run, sped up).
-DEFAULT_SECONDS = 4.0
 MAX_FRAMES = 1000  # 40 s at 25 fps (a GIF's frames are held in memory: 0.2-0.5 MB each)
 NO_FFMPEG = "writing an .mp4 needs ffmpeg on PATH (install it, e.g. apt install ffmpeg), or " \
     "write a .gif"

@@ -7,8 +7,7 @@ import typer
 from rich import box
 from rich.table import Table
 
-from ..enums import Method
-from ..params import ParameterError
+from ..api import Method, ParameterError
 from .app import app
 from .common import (
     COpt,
@@ -30,29 +29,6 @@ from .common import (
     whole_option,
 )
 from .text import percent, say
-
-
-def parse_range(text: str, option: str) -> tuple[float, float]:
-    """A required LO:HI range (the sweep's parser, which also accepts a single value)."""
-    from ..grid import parse_range as parse
-
-    value = parse(option.lstrip("-"), text)
-    if not isinstance(value, tuple):
-        raise ParameterError(f"{option} must be a range LO:HI, got '{text}'")
-    return value
-
-
-def parse_res(text: str) -> tuple[int, int]:
-    from ..grid import parse_pair
-
-    return parse_pair("res", text, minimum=2)
-
-
-def parse_methods(text: str) -> list[Method]:
-    try:
-        return [Method.parse(name) for name in text.split(",") if name.strip()]
-    except ValueError as exc:
-        raise ParameterError(str(exc)) from None
 
 
 @app.command("accuracy")
@@ -86,8 +62,9 @@ def accuracy_command(
 
     Trajectory error: the state of five throws ~0.06 s after their first impact against the event method at rtol 1e-12. Label error: the fraction of robust cells of a basin grid whose n differs from that reference; robust cells are those where it agrees with RK4 at h = 2.5e-7.
     """  # noqa: E501
-    from .. import accuracy as acc
-    from ..files import check_writable, describe
+    from ..api import studies
+    from ..api.options import check_figure_path, check_writable
+    from ..api.words import describe_error
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
@@ -95,16 +72,8 @@ def accuracy_command(
         if stability:
             run_stability(scene, json_out)
             return
-        names = parse_methods(methods)
-        from ..engines.executors import usable_cores
-
-        threads = usable_cores() if threads is None else threads
-        if threads < 1:
-            raise ParameterError("--threads must be at least 1")
-        grid = acc.vy_vphi_grid(scene, parse_range(vy_range, "--vy"),
-                                parse_range(vphi_range, "--vphi"), parse_res(res))
-        from ..files import check_figure_path
-
+        plan = studies.plan_accuracy(scene, vy=vy_range, vphi=vphi_range, res=res,
+                                     methods=methods, quick=quick, threads=threads)
         check_figure_path(out, "chart")
         table = table or out.with_suffix(".json")
         if table.suffix not in (".json", ".csv"):
@@ -112,28 +81,24 @@ def accuracy_command(
         # both outputs writable before minutes of computing
         check_writable(out, what="chart", create_parents=True)
         check_writable(table, what="table", create_parents=True)
-    settings = acc.ladder_settings(names)
-    if quick:
-        settings = [s for s in settings
-                    if s.knob in (acc.LADDERS[s.method][1], acc.LADDERS[s.method][-2])]
     compile_first()
     with console.status("") as status:
-        study = acc.run_study(scene, grid, settings, threads,
-                              progress=lambda text: status.update(f"accuracy: {text}"))
-    from ..charts.accuracy import plot_study, write_table
-
+        study = studies.accuracy_study(
+            plan, progress=lambda text: status.update(f"accuracy: {text}"))
+    grid = plan.grid
     try:
-        plot_study(study, out, title=f"coin {scene.coin.diameter * 1e3:g} x "
-                                     f"{scene.coin.thickness * 1e3:g} mm, k = "
-                                     f"{scene.foundation.k:g} N/m, c = {scene.foundation.c:g} "
-                                     f"N s/m; grid {grid.shape[0]} x {grid.shape[1]} over vy0 "
-                                     f"{vy_range}, vphi0 {vphi_range}")
+        studies.plot_accuracy(study, out, title=f"coin {scene.coin.diameter * 1e3:g} x "
+                                                f"{scene.coin.thickness * 1e3:g} mm, k = "
+                                                f"{scene.foundation.k:g} N/m, c = "
+                                                f"{scene.foundation.c:g} N s/m; grid "
+                                                f"{grid.shape[0]} x {grid.shape[1]} over vy0 "
+                                                f"{vy_range}, vphi0 {vphi_range}")
     except OSError as exc:
-        raise fail(describe(exc, f"cannot write {out}")) from None
+        raise fail(describe_error(exc, f"cannot write {out}")) from None
     try:
-        write_table(study, table, scene)
+        studies.write_accuracy_table(study, table, scene)
     except OSError as exc:
-        raise fail(describe(exc, f"cannot write {table}")) from None
+        raise fail(describe_error(exc, f"cannot write {table}")) from None
     if json_out:
         print_json(__import__("json").loads(table.read_text()) if table.suffix == ".json"
                    else {"table": str(table)})
@@ -180,30 +145,21 @@ def print_study(study) -> None:
 
 
 def run_stability(scene, json_out: bool) -> None:
-    from .. import accuracy as acc
-    from ..integrators import METHODS
+    from ..api.studies import step_limits
 
-    rows = []
     compile_first()  # the bisection runs the compiled kernels
     with console.status("bisecting the failing step of each fixed-step method"):
-        for method in METHODS.values():
-            if method.adaptive:
-                continue
-            limit = acc.measured_limit(scene, method.method)
-            rows.append({"method": method.name, "predicted_stable_step": limit.predicted,
-                         "measured_failure_step": limit.measured,
-                         "ratio": limit.measured / limit.predicted})
+        limits = step_limits(scene)
     if json_out:
-        print_json({"test": {"kick_vphi": acc.STABILITY_KICK, "t_end": acc.STABILITY_TIME},
-                    "methods": rows})
+        print_json(limits.to_dict())
         return
     table = Table(title="Where the fixed-step methods fail: a coin resting on two corners, "
-                        f"kicked by {acc.STABILITY_KICK} rad/s, run {acc.STABILITY_TIME} s; a "
+                        f"kicked by {limits.kick} rad/s, run {limits.seconds} s; a "
                         "step fails if it goes non-finite or gains energy", title_justify="left")
     for col in ("method", "predicted stable step", "measured failure step", "measured / "
                 "predicted"):
         table.add_column(col, justify="right" if col != "method" else "left")
-    for r in rows:
+    for r in limits.methods:
         table.add_row(r["method"], f"{r['predicted_stable_step']:.3g} s",
                       f"{r['measured_failure_step']:.3g} s", f"{r['ratio']:.2f}")
     console.print(table)

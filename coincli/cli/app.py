@@ -72,7 +72,7 @@ app = typer.Typer(
 
 def _version(value: bool) -> None:
     if value:
-        from ..version import __version__
+        from ..api import __version__
 
         typer.echo(f"coin (coincli) {__version__}")
         raise typer.Exit()

@@ -1,6 +1,5 @@
 """`coin bench`: per-trajectory cost side by side, label agreement, and the full default basin."""
 
-import json
 import os
 import shutil
 import statistics
@@ -8,14 +7,12 @@ import subprocess
 import sys
 import tempfile
 import time
-from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.table import Table
 
-from ..params import ParameterError
-from .accuracy_cmd import parse_range, parse_res
+from ..api import ParameterError
 from .app import app
 from .common import (
     JsonOpt,
@@ -53,48 +50,22 @@ def bench_command(
     preset: PresetOpt = "paper", json_out: JsonOpt = False,
 ) -> None:
     """Benchmark: cost per trajectory of each method and of the paper's setting side by side, their label accuracy, and the full default basin on all cores."""  # noqa: E501
-    from .. import bench
-    from ..accuracy import vy_vphi_grid
+    from ..api.studies import bench_methods
 
     with user_errors():
-        from ..engines.executors import usable_cores
-
-        threads = usable_cores() if threads is None else threads
-        if threads < 1 or repeats < 1:
-            raise ParameterError("--threads and --repeats must be at least 1")
         if basin_res != 0 and basin_res < 2:
             raise ParameterError(f"--basin-res must be 0 (skip) or at least 2, got {basin_res}")
         scene = build_scene(preset)
-        vy, vphi = parse_range(vy_range, "--vy"), parse_range(vphi_range, "--vphi")
-        cost_grid = vy_vphi_grid(scene, vy, vphi, parse_res(cost_res))
-        label_grid = vy_vphi_grid(scene, vy, vphi, parse_res(label_res))
-    compile_first()
-    with console.status("") as status:
-        def report(text):
-            status.update(f"bench: {text}")
-        rows = bench.side_by_side(scene, cost_grid, repeats, report)
-        check = bench.label_check(scene, label_grid, rows, threads, report)
-        startup = time_startup(report)
-        basin = time_basin_command(basin_res, report) if basin_res else None
-    from ..integrators.registry import setting_text
-
-    paper = next(r for r in rows if r.full_run)
-    result = {
-        "cost_cells": cost_grid.shape[0] * cost_grid.shape[1],
-        "label_cells": int(check.robust.size), "robust_cells": int(check.robust.sum()),
-        "reference_agreement": check.agreement_ab,
-        "rows": [{"name": r.name, "method": r.setting.method.label,
-                  "setting": setting_text(r.setting.method, r.setting.dt, r.setting.rtol),
-                  "verified": r.setting.verify, "dt": r.setting.dt,
-                  "rtol": r.setting.rtol, "full_run": r.full_run,
-                  "ms_per_trajectory": r.seconds_per_trajectory * 1e3,
-                  "rounds_ms": [t * 1e3 for t in r.repeats],
-                  "speedup_vs_paper": paper.seconds_per_trajectory / r.seconds_per_trajectory,
-                  "label_agreement_robust": r.label_agreement,
-                  "uncertain_robust": r.uncertain} for r in rows],
-        "startup": startup,
-        "basin": basin,
-    }
+        compile_first()
+        with console.status("") as status:
+            def report(text):
+                status.update(f"bench: {text}")
+            found = bench_methods(scene, vy=vy_range, vphi=vphi_range, cost_res=cost_res,
+                                  label_res=label_res, repeats=repeats, threads=threads,
+                                  progress=report)
+            startup = time_startup(report)
+            basin = time_basin_command(basin_res, report) if basin_res else None
+    result = {**found.to_dict(), "startup": startup, "basin": basin}
     if json_out:
         print_json(result)
         return
@@ -108,8 +79,9 @@ def bench_command(
         table.add_row(r["name"], f"{r['ms_per_trajectory']:.3g}",
                       f"{r['speedup_vs_paper']:,.0f}", right, uncertain)
     console.print(table)
-    say(console, f"Label grid {label_grid.shape[0]} x {label_grid.shape[1]}: references (event "
-                 f"rtol=1e-12, rk4 h=2.5e-7) agree on {check.agreement_ab:.1%} of cells; "
+    n0, n1 = found.label_shape
+    say(console, f"Label grid {n0} x {n1}: references (event "
+                 f"rtol=1e-12, rk4 h=2.5e-7) agree on {found.reference_agreement:.1%} of cells; "
                  f"{result['robust_cells']} robust cells: right and uncertain are fractions of "
                  "those (a verified setting's right cells are the certain ones with the "
                  "reference's label).")
@@ -188,12 +160,14 @@ def time_startup(report) -> dict:
 def time_basin_command(res: int, report) -> dict:
     """Run the real `coin basin STORE --res RES` into a scratch store and time it: the whole
     command, and from its run record the tiles' time in the kernels and in the store."""
+    from ..api.basins import open_store
+
     report(f"default basin {res} x {res}, the whole command")
     scratch = tempfile.mkdtemp(prefix="coin-bench-")
     store = os.path.join(scratch, "basin.zarr")
     try:
         wall, peak = _run(["basin", store, "--res", str(res), "--quiet"], scratch)
-        record = json.loads((Path(f"{store}.cost") / "runs.jsonl").read_text().splitlines()[-1])
+        record = open_store(store).runs()[-1]  # the command's run, as its store recorded it
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     threads = max(1, record["workers"])

@@ -10,15 +10,21 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 
-from ..defaults import IC_NAMES
-from ..params import ParameterError, Scene, parse_number, parse_whole, shown, validate
-from ..presets import load
-from ..quantities import parse_quantity
+from ..api import ParameterError, Scene
+from ..api.options import (
+    IC_NAMES,
+    parse_number,
+    parse_quantity,
+    parse_whole,
+    read_preset,
+    shown,
+    validate,
+)
 from .text import say
 
 
 def number_option(value) -> float:
-    """Read a float option with :func:`coincli.params.parse_number` (typer's ``parser=``): ASCII
+    """Read a float option with :func:`coincli.values.parse_number` (typer's ``parser=``): ASCII
     digits only, and a bad value quoted short, where click's float type takes any script's digits
     and quotes a bad value whole. Infinities pass, for the command to refuse naming the
     parameter."""
@@ -46,7 +52,7 @@ def quantity_option(name: str):
 
 
 def whole_option(value) -> int:
-    """Read an int option with :func:`coincli.params.parse_whole` (ASCII digits, quoted short)."""
+    """Read an int option with :func:`coincli.values.parse_whole` (ASCII digits, quoted short)."""
     if not isinstance(value, str):  # a default
         return value
     try:
@@ -66,7 +72,7 @@ INTEG = "Integration"
 def _paper_defaults() -> dict:
     """The default preset's values, for the help texts (read once: a small TOML file)."""
     try:
-        scene = load(None).scene
+        scene = read_preset(None).scene
     except ParameterError:
         return {}
     integ = scene.integration
@@ -173,7 +179,7 @@ LONG_TOKEN = 200  # characters without a space: no word or path, a value pasted 
 
 def clip_values(message: str) -> str:
     """``message`` with every run of LONG_TOKEN or more characters without a space cut short
-    (:func:`coincli.params.shown`): whatever quoted a bad value whole (click's own messages
+    (:func:`coincli.values.shown`): whatever quoted a bad value whole (click's own messages
     do), the error stays one readable line."""
     return re.sub(rf"\S{{{LONG_TOKEN},}}", lambda m: shown(m.group()), message)
 
@@ -218,14 +224,14 @@ def user_errors():
     except ParameterError as exc:
         raise fail(in_cli_words(exc)) from None
     except OSError as exc:  # a read-only or full disk, a missing folder, no permission
-        from ..files import describe
+        from ..api.words import describe_error
 
-        raise fail(describe(exc)) from None
+        raise fail(describe_error(exc)) from None
 
 
 def build_scene(preset: str, **overrides) -> Scene:
     """The preset, overridden by every option the user gave, validated."""
-    scene = load(preset).scene.with_overrides(**overrides)
+    scene = read_preset(preset).scene.with_overrides(**overrides)
     return validate(scene)
 
 
@@ -242,7 +248,7 @@ def compile_first(quiet: bool = False) -> None:
     import threading
     import time
 
-    from ..jit import FIRST_COMPILE_SECONDS, kernels_cached
+    from ..api.throws import FIRST_COMPILE_SECONDS, kernels_cached
 
     if kernels_cached():
         return
@@ -286,6 +292,6 @@ def compile_first(quiet: bool = False) -> None:
 
 def print_json(data) -> None:
     """One JSON object on stdout; NaN and infinities (no such JSON values) become null."""
-    from ..jsonable import jsonable
+    from ..api.words import jsonable
 
     sys.stdout.write(json.dumps(jsonable(data), indent=2, allow_nan=False) + "\n")

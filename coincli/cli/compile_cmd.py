@@ -17,7 +17,7 @@ def compile_command(
                                         "no live line.")] = False,
 ) -> None:
     """Compile the numerical kernels for this machine now (once after installing or updating; otherwise the first command that needs them does)."""  # noqa: E501
-    from ..jit import cache_dir, kernels_cached
+    from ..api.throws import cache_dir, kernels_cached
 
     if kernels_cached():
         say(console, f"the numerical kernels are compiled already (cached in {cache_dir()})")

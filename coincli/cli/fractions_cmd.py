@@ -11,10 +11,14 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from ..defaults import DEFAULT_BATCH, DEFAULT_MAX_SAMPLES, DEFAULT_PRECISION, PARAMETER_UNITS
-from ..enums import StopReason
-from ..params import ParameterError
-from ..version import __version__
+from ..api import ParameterError, StopReason, __version__
+from ..api.options import (
+    DEFAULT_BATCH,
+    DEFAULT_MAX_SAMPLES,
+    DEFAULT_PRECISION,
+    MAX_SECONDS,
+    PARAMETER_UNITS,
+)
 from . import interruptions, recording
 from .app import app
 from .common import (
@@ -166,8 +170,7 @@ def fractions_command(
     coin fractions --y0 r:5r --phi0 -pi:pi --vx -0.5:0.5 --precision 0.05%
     """  # noqa: E501
     from .. import api
-    from ..engines.executors import check_where
-    from ..montecarlo import parse_count, parse_precision
+    from ..api.options import check_figure_path, check_where, parse_count, parse_precision
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
@@ -177,8 +180,6 @@ def fractions_command(
         if plot is not None and not over:
             raise ParameterError("--plot draws a continuation: give --over NAME=LO:HI:STEPS")
         if plot is not None:
-            from ..files import check_figure_path
-
             check_figure_path(plot, "--plot")
         keep = tuple(name for name, given in (("mass", mass), ("inertia", inertia))
                      if given is not None)
@@ -192,65 +193,64 @@ def fractions_command(
     if plan.note and not json_out and not console.is_terminal:  # else the result shows it
         say(err_console, f"[cyan]note:[/] {plan.note}")
     compile_first(quiet)
-    with user_errors():
-        if store is not None:
-            from ..stores.basin_layout import check_store_writable
-
-            check_store_writable(store)
-        est = api.estimate_fractions(plan, threads=threads, workers=workers,
-                                     scheduler=scheduler, store=store)
-    _check_estimate(est, plan, scheduler, yes, quiet)
-    result, recorder = _run(plan, where_to, quiet, store=store, overwrite=overwrite,
+    result, recorder = _run(plan, where_to, quiet, yes, store=store, overwrite=overwrite,
                             threads=threads, workers=workers, scheduler=scheduler,
                             worker_timeout=worker_timeout)
     _report(plan, result, store=store, plot=plot, json_out=json_out, every_n=every_n,
             recorder=recorder, where_to=where_to, no_viewer=no_viewer)
 
 
-MAX_SECONDS = 12 * 3600.0  # a run estimated longer is refused without --yes
-
-
 @contextlib.contextmanager
 def _naming(store: Path | None):
     """A disk's error while the run writes ``store`` (a full disk) said naming the store, and
     that the batches it holds are kept."""
-    from ..files import DISK_ERRORS, NotWritable, describe
+    from ..api.words import DISK_ERRORS, NotWritable, describe_error
 
     try:
         yield
     except OSError as exc:
         if store is None or isinstance(exc, NotWritable) or exc.errno not in DISK_ERRORS:
             raise
-        raise NotWritable(exc.errno, describe(exc, f"cannot write {store}") + "; the batches "
-                          "written so far are kept: rerun the command to resume") from None
+        raise NotWritable(exc.errno, describe_error(exc, f"cannot write {store}") + "; the "
+                          "batches written so far are kept: rerun the command to "
+                          "resume") from None
 
 
-def _check_estimate(est, plan, scheduler, yes: bool, quiet: bool) -> None:
-    """Refuse (unless --yes) a run estimated at over 12 hours, or whose stop rule likely needs
-    more samples than its budget; otherwise say what a long run will cost."""
-    from ..engines.basin_plan import format_duration
+def _cost(est, scheduler) -> str:
+    """What a run will cost, from its estimate (a FractionsEstimate)."""
+    from ..api.words import format_duration
 
     on = (f"on {counted(est.workers, 'core')}" if est.workers
           else f"of CPU time over the cluster at {scheduler}")
-    cost = (f"about {format_duration(est.seconds)} {on} for {est.samples:,} samples "
+    return (f"about {format_duration(est.seconds)} {on} for {est.samples:,} samples "
             f"({est.cpu_per_sample * 1e3:.3g} ms a sample, from a pilot of "
             f"{est.pilot_samples:,})")
+
+
+def _too_long(est, scheduler) -> str:
+    """One line: how long a run refused for its time would take (over MAX_SECONDS, the limit
+    lifted by --yes, the API's default), and what to do."""
+    return (f"this run would take {_cost(est, scheduler)}. Give --yes to start it anyway, ask "
+            "for less precision or fewer samples, or run it on more machines sharing a "
+            "--store (each claims its own batches)")
+
+
+def _check_estimate(est, plan, scheduler, yes: bool, quiet: bool) -> None:
+    """Before the run (the API refuses one estimated at over MAX_SECONDS unless --yes):
+    refuse, unless --yes, a run whose stop rule likely needs more samples than its budget;
+    say what a long run will cost."""
     over = f" over {len(plan.scenes)} values" if plan.parameters else ""
     if not est.budget_suffices and not yes and not est.held:  # a resume goes on
         raise fail(f"--precision needs about {est.needed:,} samples{over} (from a pilot of "
                    f"{est.pilot_samples:,}), more than the budget of {est.budget:,}: raise "
                    "--max-samples, ask for less precision, or give --yes to run to the "
                    "budget")
-    if est.seconds > MAX_SECONDS and not yes:
-        raise fail(f"this run would take {cost}. Give --yes to start it anyway, ask for less "
-                   "precision or fewer samples, or run it on more machines sharing a --store "
-                   "(each claims its own batches)")
     if not est.budget_suffices:
         say(err_console, f"[yellow]note:[/] --precision needs about {est.needed:,} samples, "
                          f"more than the budget of {est.budget:,}: the run stops at the "
                          "budget (exit 1)")
     if est.seconds > 60 and not quiet:
-        say(err_console, f"estimate: {cost}")
+        say(err_console, f"estimate: {_cost(est, scheduler)}")
 
 
 def _header(plan, samples: int) -> str:
@@ -329,8 +329,8 @@ def _print_result(plan, r, every_n: bool = False) -> None:
     summary.append(("all labelled", f"standing {percent(a['standing']['probability'])} (95 % CI "
                                      f"{interval(a['standing'])}) of {a['labelled']:,} "
                                      "labelled samples, uncertain ones included"))
-    from ..integrators.ladder import describe
-    from ..model import horizon_text
+    from ..api.words import describe_method as describe
+    from ..api.words import horizon_text
 
     summary.append(("method", describe(scene.integration)))
     summary.append(("horizon", horizon_text(scene)))
@@ -371,7 +371,7 @@ def _print_over(plan, res) -> None:
                  f"the same samples at every value ({plan.sampling.sampler}, seed "
                  f"{plan.sampling.seed})")
     say(console, f"drawn: {plan.sampling.describe()}")
-    from ..integrators.ladder import describe
+    from ..api.words import describe_method as describe
 
     say(console, f"method: {describe(plan.scene.integration)}")
     if res.note:
@@ -412,12 +412,11 @@ def _print_over(plan, res) -> None:
 __all__ = ["fractions_command"]
 
 
-def _run(plan, where_to, quiet: bool, *, store, **options):
-    """The run with its progress bars, its live recording and two-step Ctrl-C: (its result,
-    the recorder or None). A store that cannot be written, a lost scheduler: one line."""
+def _bars(plan, quiet: bool):
+    """The progress bars of a run (not started) and the function that draws a
+    FractionsProgress on them: a bar a value, or one for a whole grid."""
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn
 
-    from .. import api
     from .progress import Bars, RateColumn
 
     wide = err_console.width >= 100  # at 80 columns the rate goes: the estimate matters more
@@ -459,26 +458,50 @@ def _run(plan, where_to, quiet: bool, *, store, **options):
         if v not in tasks:
             tasks[v] = progress.add_task("fractions", total=total, value=label, detail=detail)
         progress.update(tasks[v], completed=samples, total=total, detail=detail, value=label)
+
+    return progress, show
+
+
+def _run(plan, where_to, quiet: bool, yes: bool, *, store, scheduler, **options):
+    """The run with its progress bars, its live recording and two-step Ctrl-C: (its result,
+    the recorder or None). Refused in one line before any work, unless --yes, if its pilot
+    estimates it at over MAX_SECONDS (the API refuses it) or to spend its budget before
+    --precision; a store that cannot be written, a lost scheduler: one line."""
+    from .. import api
+    from ..api.errors import SchedulerLost, StoreIncomplete, WorkTooLong
+    from ..api.recording import fractions_recorder
+
+    progress, draw = _bars(plan, quiet)
+
+    def show(update) -> None:
+        draw(update)
         if recorder is not None:
             recorder.progress(update)
 
-    from ..engines.executors import SchedulerLost
-    from ..engines.fractions import StoreIncomplete
-
     recorder = None
-    if where_to is not None:
-        from ..recordings.fractions_view import (
-            FractionsRecorder,  # Rerun's code only when asked for
-        )
+    recording_stack = contextlib.ExitStack()
 
-        recorder = FractionsRecorder(plan, where_to)
+    def started(est) -> None:  # the run passed its checks and its estimate: the work begins
+        nonlocal recorder
+        _check_estimate(est, plan, scheduler, yes, quiet)
+        recorder = fractions_recorder(plan, where_to)  # Rerun's code only when asked for
+        if recorder is not None:
+            recording_stack.enter_context(recorder)
+        progress.start()
+
     try:
         stop = interruptions.GracefulStop("finishing the batches in flight, then stopping "
                                           "(rerun the same command with --store to resume)")
-        with user_errors(), _naming(store), stop, recorder or contextlib.nullcontext(), \
-                progress:
-            result = api.run_fractions(plan, store=store, progress=show, stop=stop.event,
-                                       **options)
+        with user_errors(), _naming(store), stop, recording_stack:
+            try:
+                result = api.run_fractions(plan, store=store, scheduler=scheduler,
+                                           progress=show, stop=stop.event,
+                                           max_seconds=None if yes else MAX_SECONDS,
+                                           on_start=started, estimate=True, **options)
+            except WorkTooLong as exc:
+                raise fail(_too_long(exc.estimate, scheduler)) from None
+            finally:
+                progress.stop()
             if recorder is not None:
                 recorder.result(result)
     except StoreIncomplete as exc:

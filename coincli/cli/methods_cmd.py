@@ -32,19 +32,12 @@ def methods_command(
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
                             inertia=inertia, k=k, c=c, g=g)
-    from ..integrators import METHODS
-    from ..model import stiffest_frequency
-    from ..params import model_params
+    from ..api.throws import method_table
 
-    omega, zeta = stiffest_frequency(model_params(scene))
-    rows = []
-    for m in METHODS.values():
-        limit = m.stable_step(scene)
-        rows.append({"name": m.name, "order": m.order, "adaptive": m.adaptive,
-                     "symplectic": m.symplectic, "stable_step": limit, "summary": m.summary,
-                     "default": m.method == scene.integration.method})
+    found = method_table(scene)
+    omega, zeta, rows = found.omega, found.zeta, found.methods
     if json_out:
-        print_json({"omega_max": omega, "zeta": zeta, "methods": rows})
+        print_json(found.to_dict())
         return
     say(console, f"[bold]Integration methods[/] (stiffest mode: rocking on two corners, "
                  f"omega = {omega:.4g} rad/s, damping ratio {zeta:.3f})")

@@ -3,8 +3,7 @@
 from rich import box
 from rich.table import Table
 
-from .. import presets as presets_mod
-from ..defaults import DEFAULT_PRESET
+from ..api.options import DEFAULT_PRESET, available_presets, presets_dir
 from .app import app
 from .common import JsonOpt, console, print_json, user_errors
 from .text import say
@@ -13,15 +12,15 @@ from .text import say
 @app.command("presets")
 def presets_command(json_out: JsonOpt = False) -> None:
     """List the presets in presets/ with their parameter values."""
-    from ..integrators.ladder import describe
+    from ..api.words import describe_method as describe
 
     with user_errors():
-        found = presets_mod.available()
+        found = available_presets()
     if json_out:
         print_json({p.name: {"path": str(p.path), "description": p.description,
                              **p.scene.to_dict()} for p in found})
         return
-    say(console, f"[bold]Presets[/] in {presets_mod.presets_dir()} (--preset NAME, or "
+    say(console, f"[bold]Presets[/] in {presets_dir()} (--preset NAME, or "
                  "--preset PATH.toml for your own)")
     table = Table(box=box.SIMPLE_HEAD, pad_edge=False)
     for col in ("name", "d (mm)", "t (mm)", "m (g)", "I (kg m^2)", "k (N/m)", "c (N s/m)"):

@@ -54,7 +54,7 @@ def check_log_every(scene, log_every, no_rrd_helps: bool = False) -> None:
     smallest --log-every that fits, and --no-rrd where that alone makes the run need none."""
     if isinstance(log_every, bool) or not math.isfinite(log_every) or log_every <= 0:
         raise fail(f"--log-every must be a positive number of seconds, got {log_every}")
-    from ..model import horizon_text, scene_horizon
+    from ..api.words import horizon_text, scene_horizon
 
     horizon = scene_horizon(scene)  # t_end, or the throw's cap (infinite: from a non-finite start)
     frames = horizon / log_every if math.isfinite(horizon) else 0.0
@@ -86,12 +86,12 @@ def destination(rrd: Path | None, spawn: bool, connect: str | None):
     its work is done). Fails in one line, before any work, on an unusable path or URL."""
     if rrd is None and not spawn and connect is None:
         return None, False  # nothing asked: Rerun's code is not even imported
-    from ..params import ParameterError
-    from ..recordings.stream import NO_DISPLAY, check_destination, display_available
+    from ..api import ParameterError
+    from ..api.recording import NO_DISPLAY, display_available, live_destination
 
     no_viewer = spawn and not display_available()
     try:
-        where = check_destination(rrd, spawn and not no_viewer, connect)
+        where = live_destination(rrd, spawn and not no_viewer, connect)
     except ParameterError as exc:
         raise fail(in_cli_words(exc)) from None
     except OSError as exc:  # ConnectionError: no viewer at --connect
@@ -128,16 +128,17 @@ def recorded(where) -> str:
 
 
 def record_throw(run, *, rrd, spawn: bool, connect, log_every: float):
-    """Record one throw (:func:`coincli.recordings.rrd.write_recording`): (its RecordingInfo, None), or
-    (None, why it was not written, in one line) for the command to say after its outcome."""
-    from ..files import describe
-    from ..recordings.rrd import write_recording
+    """Record one throw (:func:`coincli.record`, the throw run keeping its samples every
+    ``log_every`` s and its events): (its RecordingInfo, None), or (None, why it was not
+    written, in one line) for the command to say after its outcome."""
+    from .. import api
+    from ..api.words import describe_error
 
     try:
-        return write_recording(run, rrd=rrd, spawn=spawn, connect=connect,
-                               log_every=log_every), None
+        return api.record(run, rrd=rrd, spawn=spawn, connect=connect,
+                          log_every=log_every), None
     except OSError as exc:
-        return None, describe(exc)
+        return None, describe_error(exc)
     except (RuntimeError, ValueError) as exc:
         return None, str(exc)
 
@@ -147,7 +148,7 @@ def finish(recorder, no_viewer: bool, exit_code: int | None = 1) -> None:
     ``exit_code`` (None: leave the exit to the caller) if it did, or if --spawn found no
     display."""
     if recorder is not None and recorder.error is not None:
-        from ..files import explain
+        from ..api.words import explain
 
         why = explain(recorder.error)
         if exit_code is None:

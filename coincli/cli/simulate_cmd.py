@@ -7,9 +7,8 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from ..defaults import DEFAULT_LOG_EVERY
-from ..enums import Certainty, Status
-from ..version import __version__
+from ..api import Certainty, Status, __version__
+from ..api.options import DEFAULT_LOG_EVERY
 from .app import app
 from .common import (
     COpt,
@@ -95,7 +94,7 @@ def simulate_command(
 
     coin simulate --vy 1.197 --vphi 3.508
     """  # noqa: E501
-    from ..throw import simulate  # coincli.simulate, without the rest of the API's imports
+    from ..api.throws import simulate  # coincli.simulate, without the rest of the API
 
     # checked before the run; --spawn without a display is said now, the outcome still follows
     where_to, no_viewer = destination(None if no_rrd else rrd, spawn, connect)
@@ -159,26 +158,19 @@ SLOW_STEPS = 1e8  # fixed steps above which a run is announced (about 2 s of com
 
 def _announce(scene) -> None:
     """Say before it starts how long a long fixed-step run will take at most."""
-    from ..integrators import info
-    from ..integrators.ladder import ladder_of
-    from ..model import scene_horizon
+    from ..api.throws import step_bound
+    from ..api.words import format_duration
 
-    integ = scene.integration
-    if not (info(integ.method).adaptive and integ.stop_on_settle):
+    bound = step_bound(scene)  # every rung's budget, or the steps to the throw's cap
+    if not (bound.adaptive and scene.integration.stop_on_settle):
         compile_first()  # not a short run: the compiled kernels do it
-    if info(integ.method).adaptive:
+    if bound.adaptive:
         return
-    ladder = ladder_of(integ)
-    # every rung's own budget (t_end / dt of its step), or the steps to the throw's cap
-    horizon = scene_horizon(scene)
-    steps = sum(min(budget, math.ceil(horizon / dt)) if math.isfinite(horizon) else budget
-                for budget, dt in zip(ladder.budgets, ladder.dts, strict=True))
+    steps, dts = bound.steps, bound.dts
     if steps > SLOW_STEPS:
-        from ..engines.basin_plan import format_duration
-
         seconds = steps * 2e-8  # ~20 ns a step compiled, the paper's method
-        rungs = (f"{ladder.dts[0]:g} s" if len(ladder) == 1 else
-                 f"{ladder.dts[0]:g} s down to {ladder.dts[-1]:g} s over {len(ladder)} rungs")
+        rungs = (f"{dts[0]:g} s" if len(dts) == 1 else
+                 f"{dts[0]:g} s down to {dts[-1]:g} s over {len(dts)} rungs")
         err_console.print(f"[yellow]note[/]: up to {steps:,} steps of {rungs} "
                           f"(about {format_duration(seconds)}); Ctrl-C stops it",
                           highlight=False)
@@ -186,9 +178,8 @@ def _announce(scene) -> None:
 
 def _check_exports(csv, gif) -> None:
     """Fail in one line, before the run, on a path --csv or --gif cannot write."""
-    from ..charts.animation import check_animation_path
-    from ..files import check_writable
-    from ..params import ParameterError
+    from ..api import ParameterError
+    from ..api.options import check_animation_path, check_writable
 
     if csv is not None:
         check_writable(csv, what="--csv file")
@@ -202,29 +193,28 @@ def _check_exports(csv, gif) -> None:
 def _write_exports(trajectory, csv, gif, not_written: list) -> dict:
     """Write the CSV and the animation asked for: {"csv": path, "animation": path} of those
     written; (what, why) of the others appended to ``not_written``."""
-    from ..charts.animation import animate
-    from ..charts.timeseries import write_csv
-    from ..files import describe
-    from ..params import ParameterError
+    from ..api import ParameterError
+    from ..api.words import describe_error
 
     written = {}
-    for name, path, write in (("csv", csv, write_csv), ("animation", gif, animate)):
+    for name, path, write in (("csv", csv, trajectory.to_csv),
+                              ("animation", gif, trajectory.animate)):
         if path is None:
             continue
         if trajectory.samples is None or not len(trajectory.samples):
             not_written.append((str(path), "the run kept no samples"))
             continue
         try:
-            written[name] = write(trajectory, path)
+            written[name] = write(path)
         except OSError as exc:
-            not_written.append((str(path), describe(exc)))
+            not_written.append((str(path), describe_error(exc)))
         except (ParameterError, RuntimeError, ValueError) as exc:
             not_written.append((str(path), str(exc)))
     return written
 
 
 def print_exports(trajectory, written: dict) -> None:
-    from ..charts.animation import DEFAULT_FPS, DEFAULT_SECONDS
+    from ..api.options import DEFAULT_FPS, DEFAULT_SECONDS
 
     rows = []
     if "csv" in written:
@@ -259,8 +249,8 @@ def outcome_text(tr) -> str:
 
 
 def print_summary(tr) -> None:
-    from ..integrators.ladder import describe
-    from ..model import horizon_text, scene_horizon
+    from ..api.words import describe_method as describe
+    from ..api.words import horizon_text, scene_horizon
 
     s = tr.summary()
     integ = tr.scene.integration

@@ -6,7 +6,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from ..version import __version__
+from ..api import __version__
 from .app import app
 from .common import (
     COpt,
@@ -64,8 +64,8 @@ def stability_command(
         print_json({"version": __version__, "parameters": scene.to_dict(), **report.to_dict(),
                     **extra})
         return
-    from ..statics import MJ as mj
-    from ..statics import critical_rows, energy_rows
+    from ..api.words import MJ as mj
+    from ..api.words import critical_rows, energy_rows
 
     table = Table(title="Static states (energies in mJ)", title_justify="left")
     table.add_column("")
@@ -124,7 +124,7 @@ KICKS = ("vphi", "vx", "vy")  # coincli.shock.Kick, named here without loading t
 
 def print_shocks(shocks: dict) -> None:
     """The minimal shocks as a table, with what each value means below it."""
-    from ..statics import MJ as mj
+    from ..api.words import MJ as mj
 
     table = Table(title="Minimal shocks: the smallest kick to another well",
                   title_justify="left")

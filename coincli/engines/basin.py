@@ -43,6 +43,7 @@ from .basin_plan import (
 )
 from .claims import tile_queue
 from .executors import Dask, SchedulerLost, Threads, hard_stop
+from .work import checked_estimate
 
 
 @dataclass(frozen=True)
@@ -175,10 +176,8 @@ def _estimate(plan: SweepPlan, executor: Threads | Dask, cells: int | None,
         where = {"workers": executor.local_workers, "scheduler": executor.scheduler}
     else:
         where = {"threads": executor.threads}
-    estimate = estimate_sweep(plan, **where, cells=cells)
-    if max_seconds is not None and estimate.seconds > max_seconds:
-        raise SweepTooLong(estimate, max_seconds)
-    return estimate
+    return checked_estimate(lambda: estimate_sweep(plan, **where, cells=cells), max_seconds,
+                            SweepTooLong)
 
 
 def run_sweep(plan: SweepPlan, target, executor: Threads | Dask, *, overwrite: bool = False,

@@ -5,7 +5,6 @@ should take (:func:`estimate_sweep`, from a pilot of a few dozen cells timed on 
 from __future__ import annotations
 
 import math
-import os
 import threading
 import time
 from dataclasses import dataclass
@@ -24,12 +23,14 @@ from ..grid import (
     parse_pair,
     split_options,
 )
-from ..integrators import check_step, warm_up
-from ..integrators.batch import new_control, verified_labels
+from ..integrators import check_step
+from ..integrators.batch import new_control
 from ..integrators.ladder import describe
 from ..params import ParameterError, Scene, check_start, require_scene, validate
+from ..values import format_duration
 from ..version import __version__
 from .executors import usable_cores
+from .work import WorkTooLong, available_memory, memory_text
 
 
 @dataclass(frozen=True)
@@ -97,26 +98,6 @@ def sweep_attrs(scene: Scene, method, spec: SweepSpec) -> dict:
 TILE_BYTES_PER_CELL = 48 + 17 + 17 + 16
 
 
-def available_memory() -> int | None:
-    """Bytes of memory a new allocation can take here without swapping: Linux's MemAvailable
-    (/proc/meminfo), elsewhere the free pages; None where neither is known."""
-    try:
-        with open("/proc/meminfo") as meminfo:
-            for line in meminfo:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):
-        return None
-
-
-def _size(n_bytes: float) -> str:
-    return f"{n_bytes / 2**30:.1f} GiB" if n_bytes >= 2**30 else f"{n_bytes / 2**20:.0f} MiB"
-
-
 def check_tile_memory(grid: Grid, at_once: int = 1) -> None:
     """ParameterError naming ``chunk`` unless ``at_once`` tiles of ``grid`` (one a thread or a
     worker of this machine) fit in the memory available now: checked before anything is
@@ -130,10 +111,9 @@ def check_tile_memory(grid: Grid, at_once: int = 1) -> None:
     side = side // 64 * 64 or side
     tiles = (f"{at_once} tiles at once (one a thread or worker) of {cells:,} cells each need"
              if at_once > 1 else f"a tile of {cells:,} cells needs")
-    raise ParameterError(f"chunk {'x'.join(map(str, grid.chunk))}: {tiles} about "
-                         f"{_size(need)} of memory, and this machine has {_size(available)} "
-                         f"available; give a smaller chunk (at most {side})",
-                         parameters=("chunk",))
+    raise ParameterError(f"chunk {'x'.join(map(str, grid.chunk))}: {tiles} "
+                         f"{memory_text(need, available)}; give a smaller chunk (at most "
+                         f"{side})", parameters=("chunk",))
 
 
 def _check_starts(scene: Scene, grid: Grid) -> None:
@@ -148,8 +128,7 @@ def _check_starts(scene: Scene, grid: Grid) -> None:
 
 def load_kernels(spec: SweepSpec) -> None:
     """Load the compiled kernels before a clock starts (and before the threads race to)."""
-    warm_up(spec.params, spec.settings, np.asarray(spec.grid.base_state, dtype=np.float64),
-            (verified_labels,))
+    spec.labeller.load(np.asarray(spec.grid.base_state, dtype=np.float64))
 
 
 # -- how long it should take ----------------------------------------------------------------------
@@ -171,28 +150,11 @@ class SweepEstimate:
                 "pilot_cells": self.pilot_cells, "at_least": self.at_least}
 
 
-def format_duration(seconds: float) -> str:
-    """'40 s', '12 min', '3.5 h', '9.3 days', '2.1 years'."""
-    if seconds < 90:
-        return f"{seconds:.0f} s"
-    if seconds < 90 * 60:
-        return f"{seconds / 60:.0f} min"
-    if seconds < 48 * 3600:
-        return f"{seconds / 3600:.1f} h"
-    if seconds < 730 * 86400:
-        return f"{seconds / 86400:.1f} days"
-    return f"{seconds / (365.25 * 86400):.1f} years"
+class SweepTooLong(WorkTooLong):
+    """A sweep whose estimate (a :class:`SweepEstimate`) is over the limit it was given
+    (``max_seconds``): the sweep's kind of :class:`coincli.engines.work.WorkTooLong`."""
 
-
-class SweepTooLong(ParameterError):
-    """A sweep whose estimate is over the limit it was given (``max_seconds``)."""
-
-    def __init__(self, estimate: SweepEstimate, limit: float):
-        self.estimate = estimate
-        self.limit = limit
-        super().__init__(f"this sweep would take {'at least' if estimate.at_least else 'about'} "
-                         f"{format_duration(estimate.seconds)}, over the limit of "
-                         f"{format_duration(limit)}")
+    what = "this sweep"
 
 
 PILOT_CELLS = 24  # cells a pilot times
@@ -243,7 +205,7 @@ def estimate_sweep(plan: SweepPlan, threads: int | None = None, *, workers: int 
             state[grid.axes[0].index] = c0[i]
             state[grid.axes[1].index] = c1[j]
             before = time.thread_time()
-            out = verified_labels(spec.params, spec.settings, spec.ladder, state[None, :],
+            out = spec.labeller.label(state[None, :],
                                   control)
             cpu += time.thread_time() - before
             timed += 1

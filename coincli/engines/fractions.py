@@ -11,7 +11,6 @@ from functools import partial
 import numpy as np
 
 from ..enums import StopReason
-from ..integrators.batch import verified_labels, warm_up
 from ..montecarlo import (
     BatchTask,
     Draws,
@@ -25,11 +24,18 @@ from ..montecarlo import (
     widest,
     wilson_arrays,
 )
+from ..montecarlo.estimate import (
+    PILOT_SAMPLES,
+    FractionsEstimate,
+    estimate_fractions,
+    pilot_values,
+)
 from ..montecarlo.over import Continuation
 from ..montecarlo.plan import FractionsPlan, FractionsProgress
 from ..params import ParameterError, state_array
 from .claims import ClaimQueue
-from .executors import SchedulerLost, executor_for, hard_stop
+from .executors import SchedulerLost, executor_for, hard_stop, usable_cores
+from .work import check_max_seconds, checked_estimate
 
 
 class BatchSource:
@@ -91,14 +97,31 @@ def run_fractions(plan: FractionsPlan, *, target=None, overwrite: bool = False,
                   threads: int | None = None,
                   workers: int | None = None, scheduler: str | None = None,
                   progress: Callable[[FractionsProgress], None] | None = None, stop=None,
-                  worker_timeout: float | None = None):
+                  worker_timeout: float | None = None, max_seconds: float | None = None,
+                  on_start: Callable[[FractionsEstimate | None], None] | None = None,
+                  estimate: bool = False):
     """Run a planned Monte Carlo run (see :func:`coincli.fractions`) into ``target`` (a
     :class:`coincli.stores.fractions_store.FractionsStore`, or None: in memory); a Fractions for
     a plain run, a Continuation for a continuation (along one parameter, or over a grid of two:
     every point is a value, counted flat, the first parameter outermost). Several processes may
     run the same plan on one store at once: they share the batches by claims, and each ends
-    with the same results and store."""
-    run = FractionsRun(plan, executor_for(threads, workers, scheduler, worker_timeout))
+    with the same results and store.
+
+    With ``max_seconds`` (or ``estimate``) the run is first estimated (:func:`estimate_run`)
+    and, over ``max_seconds``, refused with :class:`coincli.engines.work.WorkTooLong` before
+    anything is created, as a sweep is (:func:`coincli.engines.work.checked_estimate`); a run
+    no larger than its pilot is estimated only if ``estimate`` asks (the pilot would cost as
+    much as the run). ``on_start`` receives the estimate (a FractionsEstimate, None if there
+    was none) before any work."""
+    check_max_seconds(max_seconds)
+    executor = executor_for(threads, workers, scheduler, worker_timeout)
+    found = None
+    if estimate or (max_seconds is not None and not _smaller_than_pilot(plan)):
+        found = checked_estimate(
+            lambda: estimate_run(plan, executor, None if overwrite else target), max_seconds)
+    if on_start is not None:
+        on_start(found)
+    run = FractionsRun(plan, executor)
     try:
         if target is not None:
             run.open_store(target, overwrite)
@@ -109,6 +132,30 @@ def run_fractions(plan: FractionsPlan, *, target=None, overwrite: bool = False,
     if lost is not None:
         raise lost  # after recording the run: the batches received are written already
     return run.results()
+
+
+def estimate_run(plan: FractionsPlan, executor, target=None) -> FractionsEstimate:
+    """How long ``plan`` should take on ``executor`` (its threads, or its Dask workers; on a
+    cluster of unknown size, CPU time) and how many samples its stop rule likely needs, from
+    the pilot of :func:`coincli.montecarlo.estimate.estimate_fractions`; the samples that
+    ``target`` (a FractionsStore, or None) holds already for this run are not counted."""
+    if executor.dask:
+        workers = None if executor.scheduler is not None else executor.local_workers
+    else:
+        workers = min(executor.threads, usable_cores())
+    held = None
+    if target is not None and target.exists():
+        held = target.held_samples(plan)
+    return estimate_fractions(plan, workers, held)
+
+
+def _smaller_than_pilot(plan: FractionsPlan) -> bool:
+    """Whether the whole run computes no more samples than its pilot would (then the pilot,
+    which computes the run's first samples, would cost as much as the run)."""
+    goal, size = plan.goal, plan.sampling.batch
+    budget = goal.samples or goal.batches(size) * size
+    pilot = min(PILOT_SAMPLES, size, budget) * len(pilot_values(plan.shape))
+    return budget * len(plan.scenes) <= pilot
 
 
 class FractionsRun:
@@ -183,8 +230,7 @@ class FractionsRun:
         queue = self.queue()
         if not self.executor.dask and any(p.peek() is not None for p in self.progs):
             for spec, scene in zip(self.specs, self.plan.scenes, strict=True):
-                warm_up(spec.params, spec.settings, np.asarray(state_array(scene)),
-                        (verified_labels,))
+                spec.load(np.asarray(state_array(scene)))
         runner = self.executor.run(partial(compute_value_batch, self.specs), queue, stop,
                                    name=lambda t: f"fractions-{t.value}-{t.batch}")
         wall0 = time.perf_counter()

@@ -12,7 +12,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..enums import Certainty, Method, Status
-from ..jit import compiled, kernel, kernels_cached, mark_cached
+from ..jit import compiled, kernel, kernels_cached, mark_cached, python
 from ..model import rounded_quarter_turns
 from ..params import RunSettings
 from .adaptive import integrate_adaptive
@@ -246,6 +246,12 @@ def _run_once(kernel_fn, p, settings, state):
     result = compiled(kernel_fn)(p, settings, np.ascontiguousarray(state, dtype=np.float64),
                                  no_samples, no_events, final, new_control())
     return final, result
+
+
+def integrate_once(p, settings, state, samples, events, final, control, interpreted=False):
+    """:func:`integrate` once, compiled (or, ``interpreted``, as plain Python)."""
+    kernel = python(integrate) if interpreted else compiled(integrate)
+    return kernel(p, settings, state, samples, events, final, control)
 
 
 def final_state(p, settings, state) -> tuple[np.ndarray, Status]:

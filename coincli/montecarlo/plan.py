@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..engines.work import available_memory, memory_text
 from ..grid import method_attrs
 from ..integrators import check_step
 from ..params import ParameterError, Scene, validate
@@ -22,6 +23,11 @@ STORE_FORMAT = 3  # of a fractions store (coincli.stores.fractions_store): 2, a 
 
 
 MAX_PARAMETERS = 2  # a continuation varies one parameter, or a grid of two
+
+# What a value (a point of a grid) takes from its plan to its result: its scene, the engine's
+# spec and progression (about 3 kB), its result and its row of the Dataset (20 to 30 kB,
+# measured). A grid of a million points takes about 31 GiB.
+POINT_BYTES = 32 * 1024
 
 
 @dataclass(frozen=True)
@@ -121,6 +127,24 @@ def parse_grid(over) -> list[tuple[str, tuple[float, ...]]]:
     return grid
 
 
+def check_grid_memory(axes) -> None:
+    """ParameterError naming ``over`` unless every value of a continuation (every point of a
+    grid of two: ``axes``, the values of each parameter) fits in the memory available now,
+    POINT_BYTES each: checked before any value's scene is built, where a grid of thousands of
+    values a side would end in a MemoryError (as a tile too large for memory is refused,
+    :func:`coincli.engines.basin_plan.check_tile_memory`)."""
+    points = math.prod(len(values) for values in axes)
+    need = points * POINT_BYTES
+    available = available_memory()
+    if available is None or need <= available:
+        return
+    what, unit = ((f"a grid of {' x '.join(f'{len(v):,}' for v in axes)} = {points:,} points",
+                   "points") if len(axes) > 1 else (f"{points:,} values", "values"))
+    most = max(available // POINT_BYTES, 1)
+    raise ParameterError(f"over: {what} need {memory_text(need, available)}; give fewer "
+                         f"values (at most about {most:,} {unit})", parameters=("over",))
+
+
 def plan_fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
                    samples=None, precision=None, of: str = "all",
                    max_samples=DEFAULT_MAX_SAMPLES, seed: int = 0, sampler: str = "sobol",
@@ -144,6 +168,7 @@ def plan_fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=N
     grid = [] if over is None else parse_grid(over)
     names = tuple(name for name, _ in grid)
     axes = tuple(values for _, values in grid)
+    check_grid_memory(axes)
     note = continuation_note(scene, names, keep) if grid else None
     scenes = tuple(point_scene(scene, dict(zip(names, point, strict=True)), keep)
                    for point in itertools.product(*axes)) if grid else (scene,)

@@ -20,6 +20,10 @@ UNITS = {"y0": "m", "phi0": "rad", "vx": "m/s", "vy": "m/s", "vphi": "rad/s"}
 DEFAULT_DISTRIBUTIONS = {"vy": "0.05:2", "vphi": "-20:20"}  # as coin basin's default axes
 SAMPLERS = ("sobol", "random")
 SOBOL_MAX = 1 << 30  # scipy's Sobol engine has 30 bits
+QUANTILE_CLIP = 2.0 ** -53  # the quantiles a normal is drawn at: [2^-53, 1 - 2^-53]
+# how many standard deviations from its mean an untruncated normal's draw may be (|ndtri| at
+# QUANTILE_CLIP is 8.21): a normal whose draws would overflow a float is refused (_checked)
+NORMAL_REACH = 8.3
 # -- distributions ------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Dist:
@@ -64,7 +68,7 @@ class Dist:
             return self.a + u * (self.b - self.a)
         from scipy.special import ndtr, ndtri
 
-        u = np.clip(u, 2.0 ** -53, 1.0 - 2.0 ** -53)  # ndtri(0) is -inf
+        u = np.clip(u, QUANTILE_CLIP, 1.0 - QUANTILE_CLIP)  # ndtri(0) is -inf
         mean, sd = self.a, self.b
         if math.isinf(self.lo) and math.isinf(self.hi):
             return mean + sd * ndtri(u)
@@ -190,6 +194,10 @@ def _checked(name: str, d: Dist, text: str) -> Dist:
         if not d.lo < d.hi:
             raise ParameterError(f"{name} {text}: empty truncation (LO must be below HI)",
                                  parameters=(name,))
+        if not math.isfinite(abs(d.a) + NORMAL_REACH * d.b):
+            raise ParameterError(f"{name} {text}: draws of this normal reach past the largest "
+                                 f"float, 1.8e308 (|MEAN| + {NORMAL_REACH:g} SD must stay "
+                                 "below it); narrow it", parameters=(name,))
     return d
 
 

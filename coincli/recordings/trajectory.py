@@ -1,6 +1,6 @@
 """The throw as the public API gives it (:class:`Trajectory`): a :class:`coincli.throw.Throw` with
-its views in the io layer, a Dataset of its samples, a table of its contact events, an
-animation and a viewer in a notebook's cell. The views import their libraries (xarray, pandas,
+its views in the io layer, a Dataset of its samples, a table of its contact events, a CSV file,
+an animation and a viewer in a notebook's cell. The views import their libraries (xarray, pandas,
 matplotlib, Rerun) when called, so that a throw computed without them costs none of them."""
 
 from __future__ import annotations
@@ -34,6 +34,14 @@ class Trajectory(Throw):
         from ..charts.timeseries import events_table
 
         return events_table(self)
+
+    def to_csv(self, path):
+        """Write the samples to the CSV file ``path`` (what `coin simulate --csv` writes): a
+        header of names with units, then a row a sample, every number to full precision;
+        complete or absent. Needs ``sample_dt``; returns the path."""
+        from ..charts.timeseries import write_csv
+
+        return write_csv(self, path)
 
     def show(self, *, width: int | None = None, height: int | None = None):
         """Show the throw in the notebook's cell now, in Rerun's viewer (``width`` and

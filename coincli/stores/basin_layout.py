@@ -1,7 +1,8 @@
 """What a basin store is made of, and what opening one proves: its arrays and the files of an
-empty one (:func:`template`), a tile's digest (:func:`tile_digest`), the side folder of its costs
-and claims; and the parameters its tiles were computed with, proven from the three copies of the
-sweep's attributes (:mod:`coincli.stores.basin_metadata`) and from the tiles themselves
+empty one (:func:`template`), a tile's digest (:func:`tile_digest`), the records folder of its
+costs, runs and claims (:func:`records_dir`); and the parameters its tiles were computed with,
+proven from the three copies of the sweep's attributes (:mod:`coincli.stores.basin_metadata`)
+and from the tiles themselves
 (:func:`read_view`). :class:`coincli.stores.basin_store.BasinStore` owns a store through these."""
 
 from __future__ import annotations
@@ -66,8 +67,8 @@ def grid_of(attrs: dict) -> Grid:
 
 def tile_digest(tile: tuple[int, int], arrays: dict[str, np.ndarray], parameters: bytes) -> int:
     """32-bit BLAKE2b of the parameters the tile was computed with (their digest,
-    :func:`coincli.stores.basin_schema.parameters_digest`), its index and its data (every array of the
-    schema, in a fixed order, as little-endian bytes of its stored dtype): never 0, which means
+    :func:`coincli.stores.basin_schema.parameters_digest`), its index and its data (every array of
+    the schema, in a fixed order, as little-endian bytes of its stored dtype): never 0, which means
     "not done"."""
     h = hashlib.blake2b(digest_size=4, person=b"coin-tile")
     h.update(parameters)
@@ -118,9 +119,25 @@ def encode(spec: ArraySpec, block: np.ndarray) -> bytes:
     return encode_chunk(block, spec.dtype, spec.fill, spec.chunks)
 
 
-def cost_dir(path: str | os.PathLike) -> Path:
-    """Where a store's cost records and claims live: beside it, ``out.zarr.cost/``."""
+RECORDS = ".coin"  # a store's records folder, inside it: NAME.zarr/.coin/
+
+
+def legacy_records_dir(path: str | os.PathLike) -> Path:
+    """Where coincli 0.10.0 and earlier kept a store's records: beside it, ``NAME.zarr.cost/``."""
     return Path(f"{os.fspath(path).rstrip(os.sep)}.cost")
+
+
+def records_dir(path: str | os.PathLike) -> Path:
+    """Where a store keeps what it owns besides its arrays and metadata (each tile's cost, the
+    record of each run, the claims of the processes sharing it): inside it, ``NAME.zarr/.coin/``
+    (a folder no array or group is named after, and which Zarr and xarray do not read: the
+    store's consolidated metadata list its arrays), so that a store is one folder to copy, move
+    or delete; its files differ from run to run, the arrays and metadata never do. A store of
+    0.10.0 or earlier keeps them beside it, in ``NAME.zarr.cost/``: that folder is read and
+    written for as long as it is there and the store has no records folder of its own (so
+    processes of both versions sharing it claim in one place)."""
+    legacy, inside = legacy_records_dir(path), Path(path) / RECORDS
+    return legacy if legacy.is_dir() and not inside.is_dir() else inside
 
 
 def root_lost(path: str | os.PathLike) -> bool:
@@ -149,9 +166,10 @@ def short_error(exc: BaseException) -> str:
 
 
 def read_runs(path: str | os.PathLike) -> list[dict]:
-    """The run records of ``STORE.cost/runs.jsonl`` (a damaged line is skipped)."""
+    """The run records of ``runs.jsonl`` in the store's :func:`records_dir` (a damaged line is
+    skipped)."""
     runs = []
-    log = cost_dir(path) / "runs.jsonl"
+    log = records_dir(path) / "runs.jsonl"
     if log.is_file():
         for line in log.read_text().splitlines():
             try:
@@ -162,28 +180,33 @@ def read_runs(path: str | os.PathLike) -> list[dict]:
 
 
 def record_run(path: str | os.PathLike, run: dict) -> None:
-    """Append one invocation's record to ``STORE.cost/runs.jsonl`` (only the coordinating
-    process writes it; one write of one line, so that the records of processes sharing a store
-    do not interleave)."""
-    target = cost_dir(path) / "runs.jsonl"
-    target.parent.mkdir(parents=True, exist_ok=True)
+    """Append one invocation's record to ``runs.jsonl`` in the store's :func:`records_dir`
+    (only the coordinating process writes it; one write of one line, so that the records of
+    processes sharing a store do not interleave). A store removed meanwhile gets no record (its
+    folder is not made again for it)."""
+    target = records_dir(path) / "runs.jsonl"
+    try:
+        target.parent.mkdir(exist_ok=True)
+    except FileNotFoundError:
+        return
     with open(target, "a") as fh:
         fh.write(json.dumps(run) + "\n")
 
 
-class SideRecords:
-    """What a store (basin or fractions) keeps beside it, in ``STORE.cost/``: the records of
-    its runs and the claims of the processes that share it. Its owner sets ``path``."""
+class StoreRecords:
+    """What a store (basin or fractions) keeps in its records folder (:func:`records_dir`):
+    the records of its runs and the claims of the processes that share it. Its owner sets
+    ``path``."""
 
     path: Path
 
     @property
-    def cost_dir(self) -> Path:
-        return cost_dir(self.path)
+    def records_dir(self) -> Path:
+        return records_dir(self.path)
 
     @property
     def claims_dir(self) -> Path:
-        return self.cost_dir / "claims"
+        return self.records_dir / "claims"
 
     def claims(self) -> Claims:
         """This process's claims on the store's pieces of work (close them when done)."""
@@ -198,7 +221,7 @@ class SideRecords:
 
 def check_store_writable(path: str | os.PathLike) -> None:
     """Raise NotWritable (one line) unless the store (or the folder it will be created in) and
-    its side folder accept new files: a read-only mount or a full disk is found before any
+    its records folder accept new files: a read-only mount or a full disk is found before any
     work."""
     import errno
 
@@ -208,9 +231,9 @@ def check_store_writable(path: str | os.PathLike) -> None:
     existed = is_store(path)
     try:
         check_writable(path, what="store", directory=True, create_parents=True)
-        side = cost_dir(path)
-        if side.is_dir():
-            check_writable(side, what="store", directory=True)
+        records = records_dir(path)
+        if records.is_dir():
+            check_writable(records, what="store", directory=True)
     except OSError as exc:
         read_only = (errno.EROFS, errno.EACCES, errno.EPERM)
         if not (isinstance(exc, PermissionError) or exc.errno in read_only):
@@ -253,8 +276,9 @@ class StoreView:
 
 # -- which parameters the tiles were computed with ----------------------------------------------
 def read_view(path: Path, grid: Grid | None = None, wanted: dict | None = None) -> StoreView:
-    """What opening the store at ``path`` reads once (:meth:`coincli.stores.basin_store.BasinStore.open`
-    says what): ParameterError if it is none or of another format, StoreDamaged if the
+    """What opening the store at ``path`` reads once
+    (:meth:`coincli.stores.basin_store.BasinStore.open` says what): ParameterError if it is none or
+    of another format, StoreDamaged if the
     parameters its tiles were computed with cannot be recovered."""
     check_is_store(path)
     attrs, copies = meta.read_copies(path)
@@ -376,7 +400,8 @@ def _prove(path: Path, copies: list[meta.Copy],
                   "computed tile proves either; overwrite starts the sweep again")
 
 
-__all__ = ["ARRAY_NAMES", "DONE_DTYPE", "StoreDamaged", "StoreView", "array_specs",
-           "check_is_store", "check_store_writable", "cost_dir", "grid_of", "read_runs",
-           "read_tile", "read_view", "record_run", "remove_dead_probes", "root_lost",
-           "short_error", "template", "tile_digest"]
+__all__ = ["ARRAY_NAMES", "DONE_DTYPE", "RECORDS", "StoreDamaged", "StoreRecords", "StoreView",
+           "array_specs", "check_is_store", "check_store_writable", "grid_of",
+           "legacy_records_dir", "read_runs", "read_tile", "read_view", "record_run",
+           "records_dir", "remove_dead_probes", "root_lost", "short_error", "template",
+           "tile_digest"]

@@ -19,11 +19,18 @@ Layout (dims named after the two swept initial conditions, e.g. ``vy`` and ``vph
       rung           (vy, vphi)     int8, last rung of the ladder run, fill -1
       done           (tile_vy, tile_vphi)  uint32 digest of the tile, 0 = not done; chunks (1, 1);
                                     attributes: a copy of the sweep's, with their digest
-    out.zarr.cost/                  beside the store, so that the store itself is bit-identical
-      tile_I_J.json                 however it was computed: each tile's CPU seconds and who
-      runs.jsonl                    computed it, one line per invocation (wall time, tiles,
-      claims/tile_I_J               mode), and the claims of the tiles being computed
-                                    (:mod:`coincli.engines.claims`)
+      .coin/                        the store's records (:func:`~coincli.stores.basin_layout.
+        tile_I_J.json               records_dir`), which no array is named after and which
+        runs.jsonl                  Zarr does not read: each tile's CPU seconds and who
+        claims/tile_I_J             computed it, one line per invocation (wall time, tiles,
+                                    mode), and the claims of the tiles being computed
+                                    (:mod:`coincli.engines.claims`). They differ from run to
+                                    run; everything else is bit-identical however the store
+                                    was computed. A store of 0.10.0 keeps them beside it, in
+                                    out.zarr.cost/, read and written while it is there
+    .out.zarr.lock, .out.zarr.creating-HOST-PID  beside the store while it is created (the
+                                    creation lock and the store being built, renamed into
+                                    place): they exist before the store's folder does
 
 Every data array is chunked exactly like the tiles, so one tile is one chunk in every array and
 concurrent writers (threads, Dask workers, other processes) never touch the same file. Every
@@ -68,9 +75,11 @@ from ..stats import BasinCounts, BasinStats
 from . import basin_metadata as meta
 from .basin_layout import (
     ARRAY_NAMES,
-    SideRecords,
+    RECORDS,
+    StoreRecords,
     StoreView,
     check_store_writable,
+    legacy_records_dir,
     read_tile,
     read_view,
     remove_dead_probes,
@@ -142,7 +151,7 @@ class StoreCheck:
                 f"{len(self.metadata)} metadata files differing)")
 
 
-class BasinStore(SideRecords):
+class BasinStore(StoreRecords):
     """A basin store at ``path``: opened (its metadata read, once) on first use, by
     :meth:`open`, or by :meth:`create_or_resume` for a sweep about to write to it (which is
     what the sweep engine's :meth:`prepare` does). Picklable: a Dask worker writes its tiles
@@ -224,7 +233,7 @@ class BasinStore(SideRecords):
         if overwrite or not self.exists():
             path.parent.mkdir(parents=True, exist_ok=True)
             create_store(path, lambda: template(attrs, grid), replace=overwrite,
-                         side=self.cost_dir)
+                         folders=(RECORDS,), side=legacy_records_dir(path))
         elif not self.read_only:
             tidy(path)
             remove_dead_probes(path)
@@ -244,7 +253,7 @@ class BasinStore(SideRecords):
                                  "the store's parameters to resume it, or overwrite to "
                                  "replace it", parameters=("overwrite",))
         if not self.read_only:
-            self.cost_dir.mkdir(exist_ok=True)
+            self.records_dir.mkdir(exist_ok=True)
         return self.check(repair_with=attrs)
 
     def check_writable(self, overwrite: bool = False) -> None:
@@ -380,8 +389,9 @@ class BasinStore(SideRecords):
     def costs(self) -> tuple[np.ndarray, list]:
         """Per-tile CPU seconds (NaN where unknown) and the run records."""
         seconds = np.full(self.grid.tile_grid, math.nan)
-        if self.cost_dir.is_dir():
-            for f in self.cost_dir.glob("tile_*.json"):
+        records = self.records_dir
+        if records.is_dir():
+            for f in records.glob("tile_*.json"):
                 try:
                     i, j = (int(x) for x in f.stem.split("_")[1:3])
                     if i < seconds.shape[0] and j < seconds.shape[1]:
@@ -448,7 +458,7 @@ class BasinStore(SideRecords):
                 "pid": os.getpid()}
         if result.mirror_of is not None:
             cost["mirror_of"] = list(result.mirror_of)
-        write_atomically(self.cost_dir / f"tile_{tile[0]}_{tile[1]}.json",
+        write_atomically(self.records_dir / f"tile_{tile[0]}_{tile[1]}.json",
                          json.dumps(cost).encode())
         self.specs["done"].write(self.path, tile,
                                  np.array([[tile_digest(tile, result.arrays, parameters)]]))

@@ -20,9 +20,12 @@ Layout (a plain run; a continuation adds a leading axis per parameter, named aft
       rung        ([value,] sample)  int8, the last rung of the ladder run
       filled      ([value,] batch)   uint32 samples of the batch written; written last
                                   (one chunk a batch, so writers never share a file)
-    out.zarr.cost/runs.jsonl      beside the store: one line per invocation (wall time, CPU
-                                  time, samples computed, threads or Dask)
-    out.zarr.cost/claims/         the batches being computed (:mod:`coincli.engines.claims`)
+      .coin/runs.jsonl            the store's records (as a basin store's: :func:`~coincli.
+                                  stores.basin_layout.records_dir`): one line per invocation
+                                  (wall time, CPU time, samples computed, threads or Dask)
+      .coin/claims/               the batches being computed (:mod:`coincli.engines.claims`)
+    .out.zarr.lock                beside the store: the creation lock (a store of 0.10.0 keeps
+                                  its records beside it too, in out.zarr.cost/)
 
 Every per-sample array is chunked by batch (``sampling.batch`` samples; one value at a time),
 so one batch is one chunk of each array, and ``filled`` has one chunk a batch too: writers of
@@ -52,7 +55,13 @@ import numpy as np
 
 from ..montecarlo.plan import STORE_FORMAT
 from ..params import ParameterError
-from .basin_layout import SideRecords, check_is_store, check_store_writable
+from .basin_layout import (
+    RECORDS,
+    StoreRecords,
+    check_is_store,
+    check_store_writable,
+    legacy_records_dir,
+)
 from .basin_metadata import flatten_attrs, show_value
 from .basin_schema import VARIABLES, resumable_as
 from .zarr_v3 import (
@@ -140,7 +149,7 @@ def differences(stored: dict, wanted: dict) -> list[str]:
     return out
 
 
-class FractionsStore(SideRecords):
+class FractionsStore(StoreRecords):
     """The store of a Monte Carlo run at ``path``; :meth:`prepare` creates or opens it for a
     run of a layout, after which it reads and writes that run's batches."""
 
@@ -156,7 +165,7 @@ class FractionsStore(SideRecords):
     @classmethod
     def for_run(cls, path: str | os.PathLike) -> FractionsStore:
         """The store a run will write at ``path``, checked first: NotWritable (one line) unless
-        it (or the folder it will be created in) and its side folder accept new files."""
+        it (or the folder it will be created in) and its records folder accept new files."""
         check_store_writable(path)
         store = cls(path)
         return store
@@ -230,13 +239,13 @@ class FractionsStore(SideRecords):
         specs = layout.specs()
         if overwrite or not is_store(path):
             create_store(path, lambda: self._template(attrs, layout, values),
-                         replace=overwrite, side=self.cost_dir)
+                         replace=overwrite, folders=(RECORDS,), side=legacy_records_dir(path))
         with creation_lock(path):
             self._check_stored(attrs, layout)
             if layout.batches > self._read_specs()["filled"].shape[-1]:
                 self._grow(layout, specs)
         self.layout, self.specs = layout, specs
-        self.cost_dir.mkdir(exist_ok=True)
+        self.records_dir.mkdir(exist_ok=True)
         return self.read_filled()
 
     @staticmethod

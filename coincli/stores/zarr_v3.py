@@ -305,11 +305,13 @@ def tidy(path: Path) -> None:
 
 
 def create_store(path: Path, files: Callable[[], dict[str, bytes]], *,
-                 replace: bool = False, side: Path | None = None) -> bool:
-    """Create the store at ``path`` from ``files()`` (key -> bytes), under the creation lock,
-    whole or not at all; unless one exists (another process won the race), or ``replace``. The
-    ``side`` folder (cost records, claims) of an older store is removed and made anew. True if
-    this call created it."""
+                 replace: bool = False, folders: tuple[str, ...] = (),
+                 side: Path | None = None) -> bool:
+    """Create the store at ``path`` from ``files()`` (key -> bytes) and the empty ``folders``
+    in it (its records folder), under the creation lock, whole or not at all; unless one exists
+    (another process won the race), or ``replace``. The ``side`` folder beside it (where an
+    older version kept a store's records) is removed: it holds an older store's. True if this
+    call created it."""
     with creation_lock(path):
         if is_store(path) and not replace:
             return False
@@ -321,14 +323,14 @@ def create_store(path: Path, files: Callable[[], dict[str, bytes]], *,
         tmp = path.with_name(creating_name(path))
         try:
             write_files(tmp, files())
+            for folder in folders:
+                (tmp / folder).mkdir(parents=True, exist_ok=True)
             if side is not None:
                 shutil.rmtree(side, ignore_errors=True)  # the records of an older store
             os.rename(tmp, path)
         except BaseException:
             shutil.rmtree(tmp, ignore_errors=True)
             raise
-    if side is not None:
-        side.mkdir(exist_ok=True)
     return True
 
 

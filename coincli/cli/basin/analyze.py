@@ -9,8 +9,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from ...params import ParameterError
-from ...version import __version__
+from ...api import __version__
 from .. import recording
 from ..common import (
     JsonOpt,
@@ -98,30 +97,22 @@ def analyze_command(
     coin basin analyze out.zarr --bands 4 -o analysis.png
     """  # noqa: E501
     from ... import api
-    from ...analysis import DEFAULT_POINTS
-    from ...analysis import eps_values as make_eps
-    from ...engines.executors import check_where
-    from ...files import check_figure_path, check_rrd_path
-    from ...grid import parse_range
-    from ...stores.basin_store import BasinStore
+    from ...api.basins import open_store
+    from ...api.options import check_figure_path, check_rrd_path, check_where, parse_eps
 
     with user_errors():
-        span = parse_range("eps", eps)
-        if not isinstance(span, tuple):
-            raise ParameterError(f"--eps '{eps}' is not a LO:HI range")
-        eps_list = make_eps(span[0], span[1], eps_values)
+        eps_list = parse_eps(eps, eps_values)
         if figure is not None:
             check_figure_path(figure)
             check_rrd_path(figure)  # a writable file path
-        store = BasinStore.open(path)
+        store = open_store(path)
         basin = store.read()
         check_where(threads, None, None)
     metadata_note(store)
     where_to, no_viewer = recording.destination(rrd, spawn, connect)
-    n_points = DEFAULT_POINTS if points is None else points
-    if n_points:
+    if points != 0:  # the perturbation method runs the simulator (by default too)
         compile_first(quiet)
-    result, recorder = _run(basin, where_to, quiet, box=box, bands=bands, points=n_points,
+    result, recorder = _run(basin, where_to, quiet, box=box, bands=bands, points=points,
                             eps=eps_list, seed=seed, threads=threads, radius=radius,
                             balls=balls, max_dilation=max_dilation)
     if figure is not None:
@@ -161,12 +152,9 @@ def _run(basin, where_to, quiet: bool, **options):
             tasks[stage] = progress.add_task(text, total=total)
         progress.update(tasks[stage], completed=done, total=total)
 
-    recorder = None
-    if where_to is not None:
-        from ...recordings.analysis_view import AnalysisRecorder  # Rerun's code only when asked for
+    from ...api.recording import analysis_recorder  # Rerun's code only when asked for
 
-        recorder = AnalysisRecorder(basin, where_to, bands=options["bands"],
-                                    eps=options["eps"])
+    recorder = analysis_recorder(basin, where_to, bands=options["bands"], eps=options["eps"])
     try:
         with user_errors(), progress, recorder or contextlib.nullcontext():
             result = api.analyze(basin, progress=show,
@@ -181,7 +169,7 @@ def _run(basin, where_to, quiet: bool, **options):
 
 
 def _print_analysis(path: Path, result, data: dict) -> None:
-    from ...boundary import LOG2
+    from ...api.words import LOG2
 
     ax0, ax1 = result.axes
     opts = result.options

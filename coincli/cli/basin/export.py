@@ -26,19 +26,19 @@ def export_command(
     NetCDF: the Dataset of coincli.open_basin, which xarray.open_dataset and coincli.open_basin read back (quarter_turns NaN where a cell has no label; nested attributes as JSON text). CSV: one row per cell, the first swept axis outermost: the two swept values, n, pose, status, certainty, settle_time, steps, rung; header names with units; empty fields where a value is missing. Cells of tiles not computed (or damaged) are exported as not computed.
     """  # noqa: E501
     from ... import api
-    from ...charts.export import check_export_path
-    from ...files import check_writable, describe
-    from ...stores.basin_store import BasinStore
+    from ...api.basins import open_store
+    from ...api.options import check_export_path, check_writable
+    from ...api.words import describe_error
 
     with user_errors():
         check_export_path(out)
-        store = BasinStore.open(path)
+        store = open_store(path)
         basin = store.read()
         check_writable(out, what="export")  # before the work
         try:
             api.export_basin(basin, out)
         except OSError as exc:
-            raise fail(describe(exc, f"cannot write {out}")) from None
+            raise fail(describe_error(exc, f"cannot write {out}")) from None
         done, total = int((basin.done != 0).sum()), int(basin.done.size)
         n0, n1 = basin.arrays["status"].shape
         console.print(f"wrote {escape(str(out))} ({n0} x {n1} cells)", soft_wrap=True,

@@ -10,9 +10,8 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from ...defaults import DEFAULT_LOG_EVERY, DEFAULT_PRESET, IC_NAMES
-from ...enums import Certainty
-from ...version import __version__
+from ...api import Certainty, __version__
+from ...api.options import DEFAULT_LOG_EVERY, DEFAULT_PRESET, IC_NAMES
 from ..common import (
     compile_first,
     console,
@@ -62,7 +61,7 @@ def _words(scene, preset, force: bool, always=()) -> list[str] | None:
     """The `coin simulate` words that make ``scene`` from ``preset`` (None if no options can:
     a preset's step budget cannot be unset). Initial values named in ``always`` are given
     even where the preset has them."""
-    from ...params import validate
+    from ...api.options import validate
 
     want, have = _flat(scene), _flat(preset.scene)
     words = ["coin", "simulate"]
@@ -105,16 +104,16 @@ def simulate_words(scene, swept=()) -> list[str]:
     """The shortest `coin simulate` command line (as words) that reproduces ``scene`` exactly:
     the shipped preset that needs the fewest options, the others as options, every number in
     repr() precision (it reads back to the same float), the swept initial values always."""
-    from ...integrators import check_step
-    from ...params import ParameterError
-    from ...presets import available, load
+    from ...api import ParameterError
+    from ...api.options import available_presets, check_step, read_preset
 
     try:
         check_step(scene)
         force = False
     except ParameterError:
         force = True
-    presets = [load(DEFAULT_PRESET)] + [p for p in available() if p.name != DEFAULT_PRESET]
+    presets = [read_preset(DEFAULT_PRESET)] + [p for p in available_presets()
+                                               if p.name != DEFAULT_PRESET]
     found = [w for w in (_words(scene, p, force, swept) for p in presets) if w is not None]
     if not found:  # cannot happen with the paper preset's own defaults; said plainly if it does
         raise ParameterError("no `coin simulate` command reproduces this scene")
@@ -126,15 +125,6 @@ def _label(n, certainty: Certainty, status) -> str:
         return f"no count ({status.label})"
     pose = "standing" if n % 2 else "lying"
     return f"n = {n} ({pose}, {certainty.label})"
-
-
-def _stored_json(stored, ladder) -> dict:
-    return {"computed": stored.computed, "quarter_turns": stored.quarter_turns,
-            "status": stored.status.label, "certainty": stored.certainty.label,
-            "rung": stored.rung,
-            "rung_setting": None if stored.rung is None else ladder.rung_text(stored.rung),
-            "settle_time": None if math.isnan(stored.settle_time) else stored.settle_time,
-            "steps": stored.steps}
 
 
 @basin_app.command("inspect")
@@ -163,9 +153,7 @@ def inspect_command(
 
     coin basin inspect out.zarr --vy 1.2 --vphi 3.5 --rrd throw.rrd
     """  # noqa: E501
-    from ...integrators.ladder import ladder_of
-    from ...stores.basin_store import BasinStore
-    from ...stores.cells import cell_scene, ladder_matches, locate, read_stored_cell, replay
+    from ...api.basins import inspect_cell, open_store, replay_cell
 
     # checked before the replay; --spawn without a display is said now (the outcome and any
     # file still follow, exit 1)
@@ -173,20 +161,18 @@ def inspect_command(
     recording = where_to is not None
     rrd, spawn, connect = ((where_to.rrd, where_to.spawn, where_to.connect) if recording
                            else (None, False, None))
-    values = dict(x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi)
     with user_errors():
-        store = BasinStore.open(path)
-        attrs = store.attrs
-        index = locate(attrs, cell=cell, **{k: v for k, v in values.items() if v is not None})
-        attrs, stored = read_stored_cell(path, index)
-        scene = cell_scene(attrs, index)
+        store = open_store(path)
+        found = inspect_cell(path, cell=cell, x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy,
+                             vphi=vphi)
+        scene, stored = found.scene, found.stored
         if recording:
             check_log_every(scene, log_every)
-        words = simulate_words(scene, swept=tuple(attrs["sweep"]["dims"]))
+        words = simulate_words(scene, swept=found.dims)
         compile_first()
         try:
-            run = replay(scene, sample_dt=log_every if recording else None,
-                         record_events=recording)
+            run = replay_cell(found, sample_dt=log_every if recording else None,
+                              record_events=recording)
         except KeyboardInterrupt:
             err_console.print("[yellow]interrupted[/]: no replay, nothing written")
             raise typer.Exit(code=130) from None
@@ -194,32 +180,26 @@ def inspect_command(
     if recording:
         info, not_written = record_throw(run, rrd=rrd, spawn=spawn, connect=connect,
                                          log_every=log_every)
-    ladder = ladder_of(scene.integration)
-    same_ladder = ladder_matches(attrs, scene)
     replay_rung = len(run.rungs) - 1
     matches = (stored.computed and run.quarter_turns == stored.quarter_turns
                and run.certainty == stored.certainty)
-    dims = attrs["sweep"]["dims"]
-    state = {name: float(v) for name, v in zip(
-        IC_NAMES, (scene.initial.x0, scene.y0, scene.initial.phi0, scene.initial.vx,
-                   scene.initial.vy, scene.initial.vphi), strict=True)}
     if json_out:
+        cell_dict = found.to_dict()
         print_json({
-            "path": str(path), "version": __version__, "cell": list(index), "dims": dims,
-            "values": {d: state[d] for d in dims}, "initial": state,
-            "stored": _stored_json(stored, ladder),
+            "path": str(path), "version": __version__,
+            **{key: cell_dict[key] for key in ("cell", "dims", "values", "initial", "stored")},
             "replayed": {"quarter_turns": run.quarter_turns, "status": run.status.label,
                          "certainty": run.certainty.label, "rung": replay_rung,
                          "rung_setting": run.rungs[-1].setting if run.rungs else None,
                          "settle_time": None if math.isnan(run.settle_time)
                          else run.settle_time, "steps": run.steps},
-            "matches": matches, "ladder_matches": same_ladder,
+            "matches": matches, "ladder_matches": found.ladder_matches,
             "command": " ".join(words), "parameters": scene.to_dict(),
             "rrd": str(info.rrd) if info is not None and info.rrd is not None else None})
     else:
-        _print_cell(path, index, state, dims, stored, run, ladder, matches, words)
+        _print_cell(path, found, run, matches, words)
         metadata_note(store)
-        if not same_ladder:
+        if not found.ladder_matches:
             say(err_console, "[yellow]note:[/] the store records another verification ladder "
                              "than this version climbs (a store of another version)")
         if info is not None:
@@ -237,17 +217,17 @@ def inspect_command(
         raise typer.Exit(code=1)
 
 
-def _print_cell(path, index, state: dict, dims, stored, run, ladder, matches: bool,
-                words) -> None:
-    """What the store holds for the cell, what its replay gives, and the command that
-    reproduces it."""
+def _print_cell(path, found, run, matches: bool, words) -> None:
+    """What the store holds for the cell (``found``, a CellRecord), what its replay gives, and
+    the command that reproduces it."""
     replay_rung = len(run.rungs) - 1
-    where = ", ".join(f"{d} = {state[d]:.6g}" for d in dims)
+    state, stored, index = found.initial, found.stored, found.cell
+    where = ", ".join(f"{d} = {state[d]:.6g}" for d in found.dims)
     say(console, f"[bold]coin basin inspect[/] {escape(str(path))}  "
                  f"cell{NBSP}({index[0]},{NBSP}{index[1]}): "
                  f"{where}")
     if stored.computed:
-        rung = (f" at {ladder.rung_text(stored.rung)} (rung {stored.rung})"
+        rung = (f" at {found.rung_setting} (rung {stored.rung})"
                 if stored.rung is not None else "")
         settle = ("" if math.isnan(stored.settle_time)
                   else f", decided at t = {stored.settle_time:.6g} s")

@@ -6,7 +6,7 @@ from typing import Annotated
 
 import typer
 
-from ...params import ParameterError
+from ...api import ParameterError
 from .. import recording
 from ..common import (
     console,
@@ -26,7 +26,7 @@ from .group import basin_app, damaged_note, metadata_note
 
 def _mark(text: str) -> tuple[str, str]:
     """--mark V,W as its two values (read as the swept axes' quantities by the render)."""
-    from ...params import shown
+    from ...api.options import shown
 
     parts = text.split(",")
     if len(parts) != 2:
@@ -65,8 +65,9 @@ def render_command(
     n < 0 (clockwise) yellow to red, n > 0 (counter-clockwise) green to blue, n = 0 white, standing (odd n) black; uncertain cells grey, no outcome by t_end purple, non-finite magenta, not computed hatched. Works on partial stores.
     """  # noqa: E501
     from ... import api
-    from ...files import check_rrd_path, check_writable, describe
-    from ...stores.basin_store import BasinStore
+    from ...api.basins import open_store
+    from ...api.options import check_rrd_path, check_writable
+    from ...api.words import describe_error
 
     with user_errors():
         if dpi < 10 or dpi > 1200:
@@ -79,7 +80,7 @@ def render_command(
         if n_max is not None and n_max < 1:
             raise ParameterError(f"--n-max must be at least 1, got {n_max}")
         marks = [_mark(text) for text in mark or ()]
-        store = BasinStore.open(path)
+        store = open_store(path)
         basin = store.read()
         check_writable(target, what="picture")  # before drawing
         if rrd is not None:
@@ -88,18 +89,15 @@ def render_command(
             api.render_basin(basin, target, title=title, dpi=dpi, n_max=n_max, field=field,
                              marks=marks)
         except OSError as exc:
-            raise fail(describe(exc, f"cannot write {target}")) from None
+            raise fail(describe_error(exc, f"cannot write {target}")) from None
         console.print(f"wrote {target}")
         metadata_note(store)
         damaged_note(path, basin.damaged, "drawn as not computed")
         if rrd is not None:
-            from ...recordings.basin_view import show_basin
-            from ...recordings.stream import Destination  # as `coin basin show --rrd`
-
             try:
-                show_basin(basin, Destination(rrd=rrd))
+                api.show_basin(basin, rrd=rrd)  # as `coin basin show --rrd`
             except OSError as exc:
-                raise fail(describe(exc, f"cannot write {rrd}")) from None
+                raise fail(describe_error(exc, f"cannot write {rrd}")) from None
             say(console, f"wrote {rrd} (open with: {command('rerun', rrd)})")
 
 
@@ -117,14 +115,14 @@ def show_command(
 
     coin basin show out.zarr --rrd out.rrd
     """  # noqa: E501
-    from ...recordings.basin_view import show_basin
-    from ...stores.basin_store import BasinStore
+    from ... import api
+    from ...api.basins import open_store
 
     with user_errors():
-        store = BasinStore.open(path)
+        store = open_store(path)
         basin = store.read()
     if rrd is None and connect is None:  # a viewer, then, or nothing to do
-        from ...recordings.stream import NO_DISPLAY, display_available
+        from ...api.recording import NO_DISPLAY, display_available
 
         if not display_available():
             say(err_console, f"[bold red]error:[/] {NO_DISPLAY} here: write the recording "
@@ -136,12 +134,12 @@ def show_command(
     metadata_note(store)
     damaged_note(path, basin.damaged, "shown as not computed")
     try:
-        show_basin(basin, where_to)
+        api.show_basin(basin, rrd=where_to.rrd, spawn=where_to.spawn, connect=where_to.connect)
     except (OSError, RuntimeError) as exc:
-        from ...files import describe
+        from ...api.words import describe_error
 
         raise fail("could not write the recording: "
-                   + (describe(exc) if isinstance(exc, OSError) else str(exc))) from None
+                   + (describe_error(exc) if isinstance(exc, OSError) else str(exc))) from None
     done, total = int(basin.done.sum()), int(basin.done.size)
     say(console, f"{path}: {done} of {counted(total, 'tile')} computed; "
                  f"{recording.recorded(where_to)}")

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from ...version import __version__
+from ...api import __version__
 from ..common import (
     JsonOpt,
     console,
@@ -46,19 +46,20 @@ def stats_command(
     Count and fraction of each n over the labelled cells and, for a verified sweep, over the certain cells only; P(standing) with and without the uncertain cells; the cells unsettled, non-finite, over budget or not computed; the CPU and wall time of the sweep.
     """  # noqa: E501 (typer keeps a docstring's line breaks)
     from ... import api
-    from ...files import check_writable, describe
-    from ...stores.basin_store import BasinStore
+    from ...api.basins import export_stats, open_store
+    from ...api.options import check_writable
+    from ...api.words import describe_error
 
     with user_errors():
-        view = BasinStore.open(path)
+        view = open_store(path)
         if csv_out is not None:
             check_writable(csv_out, what="CSV file")  # before reading the whole store
         stats = api.basin_stats(path)
         if csv_out is not None:
             try:
-                _write_csv(stats, csv_out)
+                export_stats(stats, csv_out)
             except OSError as exc:
-                raise fail(describe(exc, f"cannot write {csv_out}")) from None
+                raise fail(describe_error(exc, f"cannot write {csv_out}")) from None
     attrs = view.attrs
     if json_out:
         print_json({"path": str(path), "version": __version__, "store_version": attrs["version"],
@@ -74,29 +75,6 @@ def stats_command(
         console.print(f"horizon: {attrs['method']['horizon']}", highlight=False)
     _print_outcomes(stats, every_n)
     _print_summary(stats)
-
-
-
-def _write_csv(stats: dict, target: Path) -> None:
-    import csv
-
-    from ...files import atomic_output
-
-    certain = {r["n"]: r for r in stats.get("outcomes_certain", [])}
-    with atomic_output(target) as tmp, open(tmp, "w", newline="") as fh:
-        writer = csv.writer(fh)
-        header = ["n", "pose", "direction", "cells", "fraction", "low", "high"]
-        if stats["verified"]:
-            header += ["certain_cells", "fraction_of_certain", "certain_low", "certain_high"]
-        writer.writerow(header)
-        for row in stats["outcomes"]:
-            line = [row["n"], row["pose"], row["direction"], row["count"], row["fraction"],
-                    row["low"], row["high"]]
-            if stats["verified"]:
-                r = certain.get(row["n"])
-                line += ([r["count"], r["fraction"], r["low"], r["high"]] if r
-                         else [0, 0.0, "", ""])
-            writer.writerow(line)
 
 
 def _num(x, fmt: str = ".3f") -> str:

@@ -8,8 +8,8 @@ from typing import Annotated
 
 import typer
 
-from ...defaults import DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES
-from ...params import ParameterError
+from ...api import ParameterError
+from ...api.options import DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES, MAX_SECONDS
 from .. import recording
 from ..common import (
     INIT,
@@ -138,7 +138,7 @@ def sweep_command(
     coin basin out.zarr --vy 0:2 --vphi -20:20 --res 512
     """  # noqa: E501
     from ... import api
-    from ...engines.executors import check_where
+    from ...api.options import check_where
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
@@ -172,10 +172,10 @@ def _run(plan, path: Path, where_to, *, overwrite: bool, threads, workers, sched
     from rich.progress import BarColumn, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     from ... import api
-    from ...engines.executors import SchedulerLost
-    from ...files import DISK_ERRORS, NotWritable, describe
-    from ...recordings.sweep_recording import sweep_recorder
-    from ...stores.zarr_v3 import is_store
+    from ...api.errors import SchedulerLost
+    from ...api.options import is_store
+    from ...api.recording import sweep_recorder
+    from ...api.words import DISK_ERRORS, NotWritable, describe_error
     from .. import interruptions
     from ..progress import Bars, RateColumn
 
@@ -225,7 +225,8 @@ def _run(plan, path: Path, where_to, *, overwrite: bool, threads, workers, sched
         raise typer.Exit(code=interruptions.SCHEDULER_LOST) from None
     except OSError as exc:  # a read-only or full disk; no scheduler at that address
         disk = exc.errno in DISK_ERRORS or isinstance(exc, NotWritable)
-        raise fail(describe(exc, f"cannot write {path}" if disk else "cannot run the sweep")
+        raise fail(describe_error(exc, f"cannot write {path}" if disk
+                                  else "cannot run the sweep")
                    + ("; the tiles written so far are kept: rerun the command to resume"
                       if disk and is_store(path) and not isinstance(exc, NotWritable)
                       else "")) from None
@@ -287,11 +288,8 @@ def _report(path: Path, plan, report, scheduler) -> None:
                  f"{command('coin', 'basin', 'stats', path)}")
 
 
-MAX_SECONDS = 12 * 3600.0  # a sweep estimated longer is refused without --yes
-
-
 def _estimate_text(est, plan, scheduler) -> str:
-    from ...engines.basin_plan import format_duration
+    from ...api.words import format_duration
 
     bound = "at least" if est.at_least else "about"
     on = (f"on {est.workers} {'core' if est.workers == 1 else 'cores'}" if est.workers
@@ -303,8 +301,9 @@ def _estimate_text(est, plan, scheduler) -> str:
 
 
 def _too_long(est, plan, scheduler) -> str:
-    """One line: how long, and how to split the sweep."""
-    from ...engines.basin_plan import format_duration
+    """One line: how long, and how to split the sweep (MAX_SECONDS: the limit lifted by
+    --yes, the API's default)."""
+    from ...api.words import format_duration
 
     n0, n1 = plan.grid.shape
     scale = math.sqrt(MAX_SECONDS / est.seconds) if est.seconds > 0 else 1.0

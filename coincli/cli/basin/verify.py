@@ -35,7 +35,7 @@ def verify_command(
     Exit code 0 if the store is intact (complete or not), 1 if anything is damaged (listed: rerunning the sweep command recomputes those tiles), 2 if it is no basin store.
     """  # noqa: E501 (typer keeps a docstring's line breaks)
     from ... import api
-    from ...stores.basin_layout import StoreDamaged
+    from ...api.errors import StoreDamaged
 
     damage = None
     with user_errors():

@@ -1,0 +1,176 @@
+"""The public functions of one throw and of what every throw shares: the presets, a throw
+(:func:`simulate`), the statics (:func:`stability`), the integration methods
+(:func:`method_table`, :func:`step_bound`) and the compilation of the kernels.
+
+Light to import: the modules that do the work (numpy, the integrators) load inside the
+functions, so that `coin simulate` starts with no more than one throw needs."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from .. import jit
+from ..enums import Engine
+from ..jit import FIRST_COMPILE_SECONDS
+from ..params import Scene, validate
+from ..presets import load
+
+if TYPE_CHECKING:
+    from ..recordings.trajectory import Trajectory
+    from ..statics import StabilityReport
+
+
+def load_preset(name_or_path: str = "paper") -> Scene:
+    """The scene of a shipped preset (``coin presets`` lists them) or of a TOML file."""
+    return load(name_or_path).scene
+
+
+def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: bool = False,
+             force: bool = False, engine: Engine = Engine.AUTO, control=None,
+             **overrides) -> Trajectory:
+    """Integrate one throw (a :class:`Trajectory`), verified on the ladder of settings unless
+    ``verify=False``.
+
+    ``overrides`` change the scene for this throw, by the flat names of
+    :meth:`Scene.with_overrides`: initial conditions (``vy=1.197, vphi=3.508``, ``phi0="pi/2"``,
+    ``y0="2r"``), physical parameters (``k=5000``) and integration settings (``rtol=1e-8``).
+    With ``sample_dt`` the state is kept every ``sample_dt`` seconds of simulated time (exact
+    times for the adaptive methods); with ``record_events`` every contact onset and lift-off is
+    kept with its state. ``force`` allows a fixed step beyond the method's stable step.
+    ``engine`` chooses what runs the kernel (the same result to rounding: compiled code fuses
+    multiplies and adds, :mod:`coincli.jit`); ``control`` (from
+    :func:`coincli.integrators.new_control`) lets another thread stop it."""
+    from ..recordings.trajectory import Trajectory
+    from ..throw import simulate as simulate_throw
+
+    return Trajectory.of(simulate_throw(scene, sample_dt=sample_dt, record_events=record_events,
+                                        force=force, engine=engine, control=control,
+                                        **overrides))
+
+
+def stability(scene: Scene) -> StabilityReport:
+    """The static energy table and critical stiffnesses of the paper's section 3, and E_crit."""
+    from ..statics import analyse
+
+    return analyse(validate(scene))
+
+
+@dataclass(frozen=True)
+class MethodTable:
+    """The integration methods for a scene (:func:`method_table`): its stiffest mode (rocking
+    on the two corners of a lying coin) and each method's order, kind and stable step."""
+
+    omega: float  # rad/s, the stiffest mode's angular frequency
+    zeta: float  # its damping ratio
+    methods: tuple[dict, ...]  # name, order, adaptive, symplectic, stable_step (s; None for
+    # an adaptive method), summary, default (the scene's own method)
+
+    def __repr__(self) -> str:  # one line in a notebook; everything: to_dict()
+        default = next((m["name"] for m in self.methods if m["default"]), None)
+        return (f"MethodTable(stiffest mode {self.omega:.4g} rad/s, damping ratio "
+                f"{self.zeta:.3f}; {len(self.methods)} methods, the scene's: {default})")
+
+    def to_dict(self) -> dict:
+        """What `coin methods --json` prints."""
+        return {"omega_max": self.omega, "zeta": self.zeta,
+                "methods": [dict(m) for m in self.methods]}
+
+
+def method_table(scene: Scene) -> MethodTable:
+    """Every integration method with its properties for ``scene`` (what `coin methods` lists):
+    the stable step of a fixed-step method is the largest whose error on the scene's stiffest
+    mode does not grow (``simulate`` and ``basin`` refuse a larger ``dt`` without
+    ``force``)."""
+    from ..integrators import METHODS
+    from ..model import stiffest_frequency
+    from ..params import model_params
+
+    scene = validate(scene)
+    omega, zeta = stiffest_frequency(model_params(scene))
+    rows = tuple({"name": m.name, "order": m.order, "adaptive": m.adaptive,
+                  "symplectic": m.symplectic, "stable_step": m.stable_step(scene),
+                  "summary": m.summary, "default": m.method == scene.integration.method}
+                 for m in METHODS.values())
+    return MethodTable(omega, zeta, rows)
+
+
+@dataclass(frozen=True)
+class StepBound:
+    """How many steps a throw of a scene may take at most (:func:`step_bound`)."""
+
+    adaptive: bool  # an adaptive method: its steps are not known before the run
+    steps: int | None  # a fixed step: over every rung of its ladder, each rung's budget or
+    # the steps to the throw's horizon, whichever is fewer (None: adaptive)
+    dts: tuple[float, ...]  # each rung's step, s (fixed steps)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def step_bound(scene: Scene) -> StepBound:
+    """The most steps one throw of ``scene`` may take up its verification ladder: what a front
+    end says before a long fixed-step run."""
+    import math
+
+    from ..integrators import info
+    from ..integrators.ladder import ladder_of
+    from ..model import scene_horizon
+
+    integ = scene.integration
+    if info(integ.method).adaptive:
+        return StepBound(True, None, ())
+    ladder = ladder_of(integ)
+    horizon = scene_horizon(scene)  # t_end, or the throw's cap (infinite: a non-finite start)
+    steps = sum(min(budget, math.ceil(horizon / dt)) if math.isfinite(horizon) else budget
+                for budget, dt in zip(ladder.budgets, ladder.dts, strict=True))
+    return StepBound(False, int(steps), tuple(ladder.dts))
+
+
+def compile_kernels() -> bool:
+    """Compile every kernel for this machine now, unless this version is compiled here already
+    (:func:`kernels_cached`): what the first run of any of them would do, in about
+    ``FIRST_COMPILE_SECONDS``. Whatever the scene, the kernels take the same argument types, so
+    the default scene's compile serves every later one. True if it compiled. Silent: a caller
+    that wants to show the wait does (``coin compile``)."""
+    import numpy as np
+
+    from ..integrators import warm_up
+    from ..params import model_params, run_settings
+
+    if jit.kernels_cached():
+        return False
+    scene = Scene()
+    warm_up(model_params(scene), run_settings(scene.integration),
+            np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+    return True
+
+
+def kernels_cached() -> bool:
+    """Whether this version's kernels are compiled on this machine already (then they load in
+    a second; else the first call that integrates compiles them, in about
+    FIRST_COMPILE_SECONDS)."""
+    return jit.kernels_cached()
+
+
+def cache_dir() -> Path:
+    """Where coincli keeps its compiled kernels (``$NUMBA_CACHE_DIR/coincli``, else in the
+    user's cache folder); it may be deleted at any time: the kernels then compile again."""
+    return jit.cache_dir()
+
+
+def viewer(*, width: int | None = None, height: int | None = None):
+    """A Rerun viewer shown in the notebook's cell now (``width`` and ``height`` in pixels),
+    for the work of later cells: ``coincli.basin(..., store=..., notebook=v)``,
+    ``fractions(..., notebook=v)``, ``analyze(..., notebook=v)``, ``show_basin(ds,
+    notebook=v)`` show in it as they run (a viewer made in the cell that runs the work is
+    ready only once the cell has run: Jupyter hands the kernel its "ready" between cells)."""
+    from ..recordings.stream import notebook_viewer
+
+    return notebook_viewer(width=width, height=height)
+
+
+__all__ = ["FIRST_COMPILE_SECONDS", "MethodTable", "StepBound", "cache_dir", "compile_kernels",
+           "kernels_cached", "load_preset", "method_table", "simulate",
+           "stability", "step_bound", "viewer"]
