@@ -1,6 +1,7 @@
 #!/usr/bin/env python
 """What writing a sweep's tiles through zarr-python would cost the default 512 x 512 map, side by
-side with the one Zarr route of the package (coincli.stores.zarr_v3), and why the stores do not use it.
+side with the one Zarr route of the package (coincli.stores.zarr_v3), and why the stores do not
+use it.
 
     python benchmarks/zarr_route.py [--rounds 5] [--json] [--write]
 

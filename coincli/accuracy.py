@@ -22,11 +22,10 @@ import numpy as np
 
 from .enums import Certainty, Method, Status
 from .grid import Grid, make_grid
-from .integrators import METHODS, final_state, label_states, warm_up
-from .integrators.batch import new_control, verified_labels
-from .integrators.ladder import ladder_of
-from .model import total_energy
-from .params import Scene, model_params, run_settings, state_array
+from .integrators import METHODS
+from .integrators.batch import new_control
+from .labeller import Labeller
+from .params import Scene, state_array
 from .stats import wilson
 
 
@@ -120,15 +119,13 @@ def run_grid(scene: Scene, setting: Setting, grid: Grid, threads: int = 2,
     releases the GIL). CPU time is the thread time of the workers, so it does not count the
     other processes of a shared machine."""
     run_scene = setting.apply(scene, stop_on_settle=stop_on_settle, t_end=t_end)
-    p = model_params(run_scene)
-    settings = run_settings(run_scene.integration)
-    ladder = ladder_of(run_scene.integration)
+    labeller = Labeller.of(run_scene)
     states = grid.states()
     n = states.shape[0]
     n_out = np.empty(n, np.int16)
     st_out = np.empty(n, np.uint8)
     certainty = np.empty(n, np.uint8)
-    warm_up(p, settings, states[0])  # before timing
+    labeller.load(states[0])  # before timing
     # interleave cells across threads so each gets a fair share of hard and easy cells
     parts = [np.arange(i, n, threads) for i in range(threads)]
 
@@ -136,11 +133,9 @@ def run_grid(scene: Scene, setting: Setting, grid: Grid, threads: int = 2,
 
     def work(idx):
         start = time.thread_time()
+        labels = labeller.label(states[idx], control)
         if setting.verify:
-            labels = verified_labels(p, settings, ladder, states[idx], control)
             certainty[idx] = labels.certainty
-        else:
-            labels = label_states(p, settings, states[idx], control)
         n_out[idx], st_out[idx] = labels.quarter_turns, labels.status
         return time.thread_time() - start
 
@@ -183,8 +178,7 @@ TRAJECTORY_THROWS = [(0.4, 6.0, 0.15), (0.6, -9.0, 0.18), (0.75, 3.0, 0.21), (0.
 def state_at(scene: Scene, setting: Setting, t: float) -> np.ndarray:
     """State at time t (no early stop). Fixed steps land on t exactly when dt divides it."""
     run_scene = setting.apply(scene, t_end=t, stop_on_settle=False)
-    return final_state(model_params(run_scene), run_settings(run_scene.integration),
-                       state_array(run_scene))[0]
+    return Labeller.of(run_scene).final_state(state_array(run_scene))[0]
 
 
 def state_error(scene: Scene, a: np.ndarray, b: np.ndarray) -> float:
@@ -355,10 +349,12 @@ def resting_scene(scene: Scene) -> Scene:
 def fails(scene: Scene, method: Method | str, dt: float) -> bool:
     """A step fails if the kicked resting coin goes non-finite or gains energy."""
     run_scene = resting_scene(scene).with_overrides(method=method, dt=dt)
-    p = model_params(run_scene)
+    labeller = Labeller.of(run_scene)
+    p = labeller.params
     state0 = state_array(run_scene)
-    final, status = final_state(p, run_settings(run_scene.integration), state0)
-    return status == Status.NONFINITE or not total_energy(p, final) < total_energy(p, state0)
+    final, status = labeller.final_state(state0)
+    energy = labeller.python.total_energy
+    return status == Status.NONFINITE or not energy(p, final) < energy(p, state0)
 
 
 def measured_limit(scene: Scene, method: Method | str, iterations: int = 12) -> StabilityLimit:

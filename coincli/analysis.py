@@ -52,9 +52,8 @@ from .boundary import (
 )
 from .defaults import IC_NAMES
 from .enums import Certainty, Status
-from .integrators.batch import new_control, verified_labels, warm_up
-from .integrators.ladder import ladder_of
-from .params import ParameterError, model_params, run_settings, scene_from_dict
+from .labeller import Labeller, new_control
+from .params import ParameterError, scene_from_dict
 
 DEFAULT_POINTS = 150_000  # about a minute for the default 512 x 512 basin on 2 cores
 # eps relative to each axis's range, one value per decade. The default grid spacing is 1/511 ~
@@ -287,13 +286,13 @@ class BasinAnalysis:
 class VerifiedClassifier:
     """``classify(points) -> (labels, certain)`` for :func:`coincli.boundary.uncertain_fraction`:
     points are values of the two swept initial conditions (M x 2), the other four fixed; each is
-    run up the ladder (verified_labels) on ``threads`` threads (the kernel releases the GIL).
+    run up the ladder (its Labeller) on ``threads`` threads (the kernel releases the GIL).
     A label counts when it is certain (or, for a single-pass ladder, when the run settled).
     Setting ``stop`` (an Event) or Ctrl-C stops the kernels and raises KeyboardInterrupt."""
 
-    def __init__(self, params, settings, ladder, base_state, axes: Sequence[int], *,
+    def __init__(self, labeller: Labeller, base_state, axes: Sequence[int], *,
                  threads: int = 2, progress: Callable[[int], None] | None = None, stop=None):
-        self.params, self.settings, self.ladder = params, settings, ladder
+        self.labeller = labeller
         self.base = np.asarray(base_state, dtype=np.float64)
         self.axes = list(axes)
         self.threads = max(1, int(threads))
@@ -324,8 +323,7 @@ class VerifiedClassifier:
     def _run(self, states):
         if self.control[0]:
             return None
-        out = verified_labels(self.params, self.settings, self.ladder, states, self.control)
-        return out
+        return self.labeller.label(states, self.control)
 
     def __call__(self, points):
         pts = np.asarray(points, dtype=np.float64)
@@ -345,7 +343,7 @@ class VerifiedClassifier:
                 if out is None or self.control[0]:
                     raise KeyboardInterrupt("analysis interrupted")
                 labels[a:b] = out.quarter_turns
-                if self.ladder.verified:
+                if self.labeller.verified:
                     certain[a:b] = out.certainty == Certainty.CERTAIN
                 else:
                     certain[a:b] = out.status == Status.SETTLED
@@ -470,11 +468,10 @@ def analyze_basin(quarter_turns, status, certainty, attrs: dict, *,
     t0, c0 = time.perf_counter(), time.process_time()
     if opts.points > 0:
         scene = scene_of(attrs)
-        params, settings = model_params(scene), run_settings(scene.integration)
-        ladder = ladder_of(scene.integration)
+        labeller = Labeller.of(scene)
         base = base_state_of(attrs)
         indices = [IC_NAMES.index(a["name"]) for a in axes]
-        warm_up(params, settings, base, (verified_labels,))
+        labeller.load(base)
         eps = np.asarray(opts.eps, dtype=float)
         rng = np.random.default_rng(opts.seed)
         ranges = np.array([a["hi"] - a["lo"] for a in axes], dtype=float)
@@ -493,7 +490,7 @@ def analyze_basin(quarter_turns, status, certainty, attrs: dict, *,
             report("perturbation", done, total)
 
         report("perturbation", 0, total)
-        with VerifiedClassifier(params, settings, ladder, base, indices, threads=opts.threads,
+        with VerifiedClassifier(labeller, base, indices, threads=opts.threads,
                                 progress=advance, stop=stop) as classify:
             for i in range(len(rows)):
                 mine = pts[which == i]

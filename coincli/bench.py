@@ -20,10 +20,9 @@ from .accuracy import (
 )
 from .enums import Method
 from .grid import Grid
-from .integrators import label_states, warm_up
-from .integrators.batch import interruptible, new_control, verified_labels
-from .integrators.ladder import ladder_of
-from .params import Scene, model_params, run_settings
+from .integrators.batch import interruptible, new_control
+from .labeller import Labeller
+from .params import Scene
 
 # Each method's default setting: for the fixed-step methods the paper's step (on the chart none
 # of them reaches 1 % label error at any affordable step), for the adaptive ones the cheapest
@@ -48,18 +47,13 @@ def time_cells(scene: Scene, setting: Setting, states: np.ndarray, full_run: boo
     """Seconds per trajectory (per cell of a verified setting: all its rungs) for one pass over
     ``states`` on this thread."""
     run_scene = setting.apply(scene, stop_on_settle=not full_run, t_end=2.0)
-    p = model_params(run_scene)
-    settings = run_settings(run_scene.integration)
-    warm_up(p, settings, states[0])  # load the compiled kernel first
+    labeller = Labeller.of(run_scene)
+    labeller.load(states[0])  # load the compiled kernel first
     control = new_control()
-    ladder = ladder_of(run_scene.integration)
 
     def run() -> float:  # thread time of the thread that runs the kernels
         start = time.thread_time()
-        if setting.verify:
-            verified_labels(p, settings, ladder, states, control)
-        else:
-            label_states(p, settings, states, control)
+        labeller.label(states, control)
         return time.thread_time() - start
 
     return interruptible(run, control) / states.shape[0]

@@ -46,21 +46,18 @@ import numpy as np
 
 from .defaults import AXIS_INFO, DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES, IC_NAMES
 from .integrators import MethodInfo
-from .integrators.batch import NO_LABEL, verified_labels
-from .integrators.ladder import Ladder, ladder_of
-from .jit import python
-from .model import horizon_text, total_energy_at
+from .integrators.batch import NO_LABEL
+from .integrators.ladder import ladder_of
+from .integrators.registry import step_budget
+from .labeller import Labeller
+from .jit import NUMBA
+from .models import horizon_text, model_of
 from .params import (
-    ModelParams,
     ParameterError,
-    RunSettings,
     Scene,
-    model_params,
     parse_whole,
-    run_settings,
     shown,
     state_array,
-    step_budget,
 )
 from .quantities import parse_span, resolve_span
 
@@ -321,9 +318,7 @@ class SweepSpec:
     """Everything a tile needs, as plain picklable values (shipped to Dask workers)."""
 
     grid: Grid
-    params: ModelParams
-    settings: RunSettings
-    ladder: Ladder
+    labeller: Labeller
 
     array_names = ("quarter_turns", "status", "settle_time", "steps", "certainty", "rung")
 
@@ -334,7 +329,7 @@ class SweepSpec:
         (0.2 s of the default basin's 3.4, by its measured tile costs). The order changes no
         result."""
         grid = self.grid
-        energy_at = python(total_energy_at)  # a few calls: not worth numba's loading
+        energy_at = self.labeller.python.total_energy  # a few calls: not worth numba's loading
         # the middle cell's coordinate of each row (and column) of tiles, computed once
         middles = []
         for axis, chunk, n_tiles in zip(grid.axes, grid.chunk, grid.tile_grid, strict=True):
@@ -345,25 +340,26 @@ class SweepSpec:
             state = list(grid.base_state)
             for axis, along, t in zip(grid.axes, middles, tile, strict=True):
                 state[axis.index] = float(along[t])
-            return energy_at(self.params, *state[1:])
+            return energy_at(self.labeller.params, state)
 
         return sorted(grid.work_tiles(), key=energy, reverse=True)
 
 
 def make_spec(scene: Scene, grid: Grid) -> SweepSpec:
-    integ = scene.integration
-    return SweepSpec(grid=grid, params=model_params(scene), settings=run_settings(integ),
-                     ladder=ladder_of(integ))
+    return SweepSpec(grid=grid, labeller=Labeller.of(scene))
 
 
-def method_attrs(scene: Scene, method: MethodInfo) -> dict:
+def method_attrs(scene: Scene, method: MethodInfo, backend: str = NUMBA.name) -> dict:
+    """How a store's labels were computed: the method, its settings and its verification
+    ladder, the model and the backend (what the parameters digest binds)."""
     integ = scene.integration
     return {"name": method.name, "kernel_id": int(method.method), "order": method.order,
             "adaptive": method.adaptive, "symplectic": method.symplectic,
             "dt": integ.dt, "rtol": integ.rtol, "t_end": integ.t_end,
             "horizon": horizon_text(scene),
             "stop_on_settle": integ.stop_on_settle, "max_steps": step_budget(integ),
-            "verification": ladder_of(integ).to_dict()}
+            "verification": ladder_of(integ).to_dict(), "model": model_of(scene).name,
+            "backend": backend}
 
 
 @dataclass
@@ -405,7 +401,7 @@ def compute_tile(spec: SweepSpec, tile: tuple[int, int], control=None) -> TileRe
     states = spec.grid.tile_states(tile)
     s0, s1 = spec.grid.tile_slices(tile)
     shape = (s0.stop - s0.start, s1.stop - s1.start)
-    out = verified_labels(spec.params, spec.settings, spec.ladder, states, control)
+    out = spec.labeller.label(states, control)
     arrays = {name: getattr(out, name).reshape(shape) for name in spec.array_names}
     return TileResult(tile=tuple(tile), arrays=arrays, cpu_seconds=time.thread_time() - cpu0,
                       wall_seconds=time.perf_counter() - wall0)

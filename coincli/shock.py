@@ -25,10 +25,10 @@ import numpy as np
 
 from .enums import Certainty, Status
 from .integrators import check_step
-from .integrators.batch import NO_LABEL, verified_labels, warm_up
-from .integrators.ladder import ladder_of
+from .integrators.batch import NO_LABEL
 from .jsonable import jsonable
-from .params import ParameterError, Scene, model_params, run_settings, validate
+from .labeller import Labeller
+from .params import ParameterError, Scene, validate
 from .statics import POSES, Rest, rest
 
 PRECISION = 1e-4  # the bisection stops when the bracket is this narrow, relative to its top
@@ -219,14 +219,12 @@ class _Runner:
     """Kicks a coin at rest and labels the outcomes (verified, compiled), counting the cost."""
 
     def __init__(self, scene: Scene, at_rest: Rest, kind: Kick):
-        self.p = model_params(scene)
-        self.settings = run_settings(scene.integration)
-        self.ladder = ladder_of(scene.integration)
+        self.labeller = Labeller.of(scene)
         self.rest = at_rest
         self.kind = kind
         self.throws = 0
         self.steps = 0
-        warm_up(self.p, self.settings, self.states([0.0])[0], (verified_labels,))
+        self.labeller.load(self.states([0.0])[0])
 
     def states(self, kicks) -> np.ndarray:
         states = np.zeros((len(kicks), 6))
@@ -236,7 +234,7 @@ class _Runner:
         return states
 
     def labels(self, kicks: list[float]) -> list[KickLabel]:
-        out = verified_labels(self.p, self.settings, self.ladder, self.states(kicks))
+        out = self.labeller.label(self.states(kicks))
         self.throws += len(kicks)
         self.steps += int(out.steps.sum())
         own = self.rest.quarter_turns
@@ -245,7 +243,7 @@ class _Runner:
                                               out.certainty, strict=True):
             certainty = Certainty(int(certainty))
             usable = certainty == Certainty.CERTAIN or (
-                not self.ladder.verified and Status(int(status)) == Status.SETTLED)
+                not self.labeller.verified and Status(int(status)) == Status.SETTLED)
             n = None if n == NO_LABEL else int(n)
             labels.append(KickLabel(float(kick), n, certainty,
                                     (n != own) if usable and n is not None else None))

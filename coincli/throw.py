@@ -19,14 +19,8 @@ from typing import NamedTuple
 import numpy as np
 
 from .enums import Certainty, Engine, Status
-from .integrators import check_step, final_state, integrate, new_control, warm_up
-from .integrators.batch import (
-    NO_LABEL,
-    interruptible,
-    outcome_label,
-    rungs_agree,
-    stops_ladder,
-)
+from .integrators import check_step, new_control
+from .integrators.batch import NO_LABEL
 from .integrators.common import (
     ANGLE_BOUND,
     EVENT_COLUMNS,
@@ -34,19 +28,16 @@ from .integrators.common import (
     LIFTOFF,
     ONSET,
     SAMPLE_COLUMNS,
-    is_finite_state,
 )
-from .integrators.ladder import ladder_of
-from .jit import compiled, is_active, python
-from .model import energies, horizon_text, rounded_quarter_turns, scene_horizon
+from .jit import NUMBA, PYTHON, is_built
+from .labeller import Labeller
+from .models import MODELS, horizon_text, scene_horizon
 from .params import (
     OVERRIDE_KEYS,
     STATE_NAMES,
     ParameterError,
     Scene,
-    model_params,
     require_scene,
-    run_settings,
     state_array,
     validate,
 )
@@ -248,9 +239,8 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     except ValueError:
         raise ParameterError(f"engine must be one of {', '.join(e.label for e in Engine)}, "
                              f"got {engine!r}") from None
-    p = model_params(scene)
-    base = run_settings(integ, float(sample_dt or 0.0))
-    ladder = ladder_of(integ)
+    labeller = Labeller.of(scene, sample_dt=float(sample_dt or 0.0))
+    ladder = labeller.ladder
     state0 = state_array(scene)
     if sample_dt:
         samples = np.empty((_sample_rows(horizon, sample_dt), SAMPLE_COLUMNS))
@@ -260,29 +250,30 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     final = np.empty(6)
     control = new_control() if control is None else control
     if engine == Engine.AUTO:
-        short = method.adaptive and integ.stop_on_settle and not is_active()
+        short = (method.adaptive and integ.stop_on_settle
+                 and not is_built(MODELS[labeller.model], NUMBA))
         engine = Engine.PYTHON if short else Engine.NUMBA
+    rules = labeller.python  # the ladder's rule, run by CPython on a few values
     rungs: list[Rung] = []
     certainty = Certainty.UNVERIFIED if not ladder.verified else Certainty.UNCERTAIN
     wall = 0.0
     previous = None  # the last rung's RunResult and label
     decided = True  # both runs of the last comparison settled (else: undecided, not chaotic)
     for k in range(len(ladder)):
-        settings = base._replace(method=int(ladder.methods[k]), rtol=ladder.rtols[k],
-                                 dt=ladder.dts[k], max_steps=ladder.budget(k, base.max_steps))
-        result, seconds, engine = _run(p, settings, state0, samples, events, final, control,
-                                       engine)
+        settings = labeller.rung_settings(k)
+        result, seconds, engine = _run(labeller, settings, state0, samples, events, final,
+                                       control, engine)
         wall += seconds
-        label = outcome_label(result.status, result.n_well, final[2])
+        label = rules.outcome_label(result.status, result.n_well, final[2])
         rungs.append(Rung(ladder.rung_text(k), None if label == NO_LABEL else int(label),
                           Status(result.status), float(result.settle_time), int(result.steps),
                           float(result.last_change)))
-        if stops_ladder(result):
+        if rules.stops_ladder(result):
             decided = False
             break
         if previous is not None:
             decided = previous[0].status == Status.SETTLED and result.status == Status.SETTLED
-        if previous is not None and rungs_agree(previous[1], previous[0], label, result,
+        if previous is not None and rules.rungs_agree(previous[1], previous[0], label, result,
                                                 ladder.change_tolerance,
                                                 ladder.settle_tolerance):
             certainty = Certainty.CERTAIN
@@ -290,7 +281,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
         previous = (result, label)
     if certainty == Certainty.UNCERTAIN and not decided:
         certainty = Certainty.UNDECIDED
-    return _trajectory(scene, p, state0, final, result, samples, events, sample_dt,
+    return _trajectory(scene, labeller, state0, final, result, samples, events, sample_dt,
                        record_events, wall, certainty, rungs, settings.max_steps)
 
 
@@ -317,30 +308,31 @@ def _check_sample_dt(sample_dt, horizon: float) -> None:
                              f"sample_dt >= {horizon / MAX_SAMPLES:.2g} s")
 
 
-def _run(p, settings, state0, samples, events, final, control, engine: Engine):
+def _run(labeller: Labeller, settings, state0, samples, events, final, control,
+         engine: Engine):
     """One kernel run: (result, wall seconds, the engine for the next rung). A Python run that
     outgrows PYTHON_STEPS is run again compiled, from the start, and so is every rung after."""
     if engine == Engine.PYTHON:
         start = time.perf_counter()
         capped = settings._replace(max_steps=min(settings.max_steps, PYTHON_STEPS))
-        result = python(integrate)(p, capped, state0, samples, events, final, control)
+        result = labeller.with_backend(PYTHON).run(capped, state0, samples, events, final,
+                                                   control)
         if not (result.status == Status.BUDGET and capped.max_steps < settings.max_steps):
             return result, time.perf_counter() - start, engine
-    warm_up(p, settings._replace(sample_dt=0.0), state0, (final_state,))  # before the clock
+    labeller.load(state0, trajectory=True)  # before the clock
     start = time.perf_counter()
-    kernel = compiled(integrate)
-    result = interruptible(lambda: kernel(p, settings, state0, samples, events, final, control),
-                           control)
+    result = labeller.run(settings, state0, samples, events, final, control)
     return result, time.perf_counter() - start, Engine.NUMBA
 
 
-def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, record_events,
+def _trajectory(scene, labeller, state0, final, result, samples, events, sample_dt, record_events,
                 wall, certainty, rungs, budget) -> Throw:
     integ = scene.integration
     status = Status(result.status)
     t = result.t
     finite = status in (Status.SETTLED, Status.UNSETTLED)
-    rounded = int(rounded_quarter_turns(final[2])) if finite else None
+    rules, p = labeller.python, labeller.params
+    rounded = int(rules.rounded_quarter_turns(final[2])) if finite else None
     quarter_turns = rungs[-1].quarter_turns
     settle_time = result.settle_time
     notes = []
@@ -353,7 +345,7 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
                f" (the cap of this throw: {horizon_text(scene)})")
         notes.append(f"the energy is still above E_crit at t = {t:g} s{end}: n = {rounded} is "
                      "round(2 phi / pi) at the end and may still change; raise --t-end")
-    if status == Status.NONFINITE and not is_finite_state(*state0):
+    if status == Status.NONFINITE and not rules.is_finite_state(state0):
         notes.append(f"the initial state is beyond what can be integrated (a value of "
                      f"{FINITE_BOUND:g} or more, or an angle of {ANGLE_BOUND:g} rad or more, "
                      "far outside any throw): no outcome; give physical initial values")
@@ -378,8 +370,8 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
         tried = "; ".join(f"{r.setting}: n = {r.quarter_turns} {r.status.label}" for r in rungs)
         notes.append(f"the label is undecided: a rung did not settle ({tried})")
     with np.errstate(over="ignore", invalid="ignore"):  # a state past FINITE_BOUND: inf
-        e0 = sum(energies(p, state0))
-    e1 = sum(energies(p, final)) if status != Status.NONFINITE else math.nan
+        e0 = sum(rules.energies(p, state0))
+    e1 = sum(rules.energies(p, final)) if status != Status.NONFINITE else math.nan
     return Throw(
         scene=scene, status=status, t_final=float(t), final_state=final.copy(),
         steps=int(sum(r.steps for r in rungs)), settle_time=float(settle_time),

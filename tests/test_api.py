@@ -169,7 +169,8 @@ def test_the_command_line_declares_its_options_without_numpy():
     code = ("import sys, coincli.cli\n"
             "heavy = sorted(m for m in sys.modules if m.split('.')[0] in ('numpy', 'numba', "
             "'zarr', 'xarray', 'scipy', 'matplotlib', 'rerun', 'dask') "
-            "or m.startswith(('coincli.integrators', 'coincli.montecarlo', 'coincli.stores', 'coincli.recordings', 'coincli.charts', 'coincli.engines')))\n"
+            "or m.startswith(('coincli.integrators', 'coincli.montecarlo', 'coincli.stores', "
+            "'coincli.recordings', 'coincli.charts', 'coincli.engines')))\n"
             "assert not heavy, heavy")
     subprocess.run([sys.executable, "-c", code], check=True)
 

@@ -23,11 +23,11 @@ from typer.testing import CliRunner
 import coincli
 from coincli.cli import app
 from coincli.engines.basin import run_tile_task
+from coincli.engines.basin_plan import sweep_attrs
 from coincli.grid import compute_tile, make_grid, make_spec, parse_pair, parse_range
 from coincli.integrators import NO_LABEL, info
 from coincli.params import ParameterError, Scene
 from coincli.stats import basin_stats, wilson
-from coincli.engines.basin_plan import sweep_attrs
 from coincli.stores.basin_store import BasinStore
 
 runner = CliRunner()
@@ -447,7 +447,8 @@ def test_tiles_are_computed_most_energetic_first():
     assert sorted(order) == sorted(grid.work_tiles()) and len(order) == 8  # mirrored: half
     assert order[0] == (3, 0) and order[-1] == (0, 1)  # fastest throw first, slowest last
     middle = [grid.tile_states(t)[len(grid.tile_states(t)) // 2] for t in order]
-    kinetic = [s[4] ** 2 + spec.params.inertia / spec.params.mass * s[5] ** 2 for s in middle]
+    p = spec.labeller.params
+    kinetic = [s[4] ** 2 + p.inertia / p.mass * s[5] ** 2 for s in middle]
     assert kinetic == sorted(kinetic, reverse=True)
 
 

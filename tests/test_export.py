@@ -17,11 +17,11 @@ import coincli
 from coincli.charts import export
 from coincli.cli import app
 from coincli.engines.basin import run_tile_task
+from coincli.engines.basin_plan import sweep_attrs
 from coincli.enums import Status
 from coincli.grid import make_grid, make_spec
 from coincli.integrators import NO_LABEL, info
 from coincli.params import ParameterError, Scene
-from coincli.engines.basin_plan import sweep_attrs
 from coincli.stores.basin_store import BasinStore
 
 runner = CliRunner()

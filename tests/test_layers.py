@@ -8,12 +8,13 @@ from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parent.parent / "coincli"
 
-# parameters, presets -> model -> integrators -> simulate, analysis -> sweeps -> io -> api -> cli
+# parameters, presets -> models -> integrators, the labeller -> simulate, analysis -> sweeps -> io
+# -> api -> cli
 LAYERS = [
     ("parameters", {"version", "enums", "defaults", "params", "quantities", "presets",
                     "jsonable"}),
-    ("model", {"jit", "model", "statics"}),
-    ("integrators", {"integrators"}),
+    ("model", {"jit", "models", "statics"}),
+    ("integrators", {"integrators", "labeller"}),
     ("analysis", {"throw", "grid", "stats", "accuracy", "bench", "boundary", "montecarlo",
                   "analysis", "shock"}),
     ("sweeps", {"engines"}),

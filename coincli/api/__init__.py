@@ -19,13 +19,10 @@ sweep's :func:`coincli.engines.basin.run_sweep`, a Monte Carlo run's
 
 from __future__ import annotations
 
-import numpy as np
-
 from ..charts.fractions_over import FractionsOver
 from ..engines.basin import SweepProgress, SweepReport, SweepStart
 from ..engines.basin_plan import SweepEstimate, SweepPlan, SweepTooLong, estimate_sweep, plan_sweep
 from ..enums import Certainty, Engine, Method, Status, StopReason
-from ..integrators import warm_up
 from ..montecarlo import Fractions
 from ..montecarlo.plan import FractionsPlan, FractionsProgress, plan_fractions
 from ..params import ParameterError, Scene, validate
@@ -97,13 +94,11 @@ def compile_kernels() -> bool:
     argument types, so the default scene's compile serves every later one. True if it
     compiled. Silent: a caller that wants to show the wait does (``coin compile``)."""
     from .. import jit
-    from ..params import model_params, run_settings
+    from ..labeller import Labeller
 
     if jit.kernels_cached():
         return False
-    scene = Scene()
-    warm_up(model_params(scene), run_settings(scene.integration),
-            np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+    Labeller.of(Scene()).compile_all()
     return True
 
 

@@ -330,7 +330,7 @@ def _print_result(plan, r, every_n: bool = False) -> None:
                                      f"{interval(a['standing'])}) of {a['labelled']:,} "
                                      "labelled samples, uncertain ones included"))
     from ..integrators.ladder import describe
-    from ..model import horizon_text
+    from ..models import horizon_text
 
     summary.append(("method", describe(scene.integration)))
     summary.append(("horizon", horizon_text(scene)))

@@ -125,8 +125,8 @@ def resume_command() -> str:
 
 
 def lost_scheduler(exc, kept: str) -> str:
-    """One line for a :class:`coincli.engines.executors.SchedulerLost`: what happened, that the store
-    keeps what was finished (``kept``: 'every finished tile'), and how to resume."""
+    """One line for a :class:`coincli.engines.executors.SchedulerLost`: what happened, that the
+    store keeps what was finished (``kept``: 'every finished tile'), and how to resume."""
     return f"{exc}; the store keeps {kept}: resume with {resume_command()}"
 
 

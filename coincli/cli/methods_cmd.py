@@ -33,10 +33,9 @@ def methods_command(
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
                             inertia=inertia, k=k, c=c, g=g)
     from ..integrators import METHODS
-    from ..model import stiffest_frequency
-    from ..params import model_params
+    from ..models import stiffest_frequency
 
-    omega, zeta = stiffest_frequency(model_params(scene))
+    omega, zeta = stiffest_frequency(scene)
     rows = []
     for m in METHODS.values():
         limit = m.stable_step(scene)

@@ -54,7 +54,7 @@ def check_log_every(scene, log_every, no_rrd_helps: bool = False) -> None:
     smallest --log-every that fits, and --no-rrd where that alone makes the run need none."""
     if isinstance(log_every, bool) or not math.isfinite(log_every) or log_every <= 0:
         raise fail(f"--log-every must be a positive number of seconds, got {log_every}")
-    from ..model import horizon_text, scene_horizon
+    from ..models import horizon_text, scene_horizon
 
     horizon = scene_horizon(scene)  # t_end, or the throw's cap (infinite: from a non-finite start)
     frames = horizon / log_every if math.isfinite(horizon) else 0.0
@@ -128,8 +128,8 @@ def recorded(where) -> str:
 
 
 def record_throw(run, *, rrd, spawn: bool, connect, log_every: float):
-    """Record one throw (:func:`coincli.recordings.rrd.write_recording`): (its RecordingInfo, None), or
-    (None, why it was not written, in one line) for the command to say after its outcome."""
+    """Record one throw (:func:`coincli.recordings.rrd.write_recording`): (its RecordingInfo, None),
+    or (None, why it was not written, in one line) for the command to say after its outcome."""
     from ..files import describe
     from ..recordings.rrd import write_recording
 

@@ -161,7 +161,7 @@ def _announce(scene) -> None:
     """Say before it starts how long a long fixed-step run will take at most."""
     from ..integrators import info
     from ..integrators.ladder import ladder_of
-    from ..model import scene_horizon
+    from ..models import scene_horizon
 
     integ = scene.integration
     if not (info(integ.method).adaptive and integ.stop_on_settle):
@@ -260,7 +260,7 @@ def outcome_text(tr) -> str:
 
 def print_summary(tr) -> None:
     from ..integrators.ladder import describe
-    from ..model import horizon_text, scene_horizon
+    from ..models import horizon_text, scene_horizon
 
     s = tr.summary()
     integ = tr.scene.integration

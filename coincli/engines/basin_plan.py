@@ -24,8 +24,8 @@ from ..grid import (
     parse_pair,
     split_options,
 )
-from ..integrators import check_step, warm_up
-from ..integrators.batch import new_control, verified_labels
+from ..integrators import check_step
+from ..integrators.batch import new_control
 from ..integrators.ladder import describe
 from ..params import ParameterError, Scene, check_start, require_scene, validate
 from ..version import __version__
@@ -148,8 +148,7 @@ def _check_starts(scene: Scene, grid: Grid) -> None:
 
 def load_kernels(spec: SweepSpec) -> None:
     """Load the compiled kernels before a clock starts (and before the threads race to)."""
-    warm_up(spec.params, spec.settings, np.asarray(spec.grid.base_state, dtype=np.float64),
-            (verified_labels,))
+    spec.labeller.load(np.asarray(spec.grid.base_state, dtype=np.float64))
 
 
 # -- how long it should take ----------------------------------------------------------------------
@@ -243,8 +242,7 @@ def estimate_sweep(plan: SweepPlan, threads: int | None = None, *, workers: int 
             state[grid.axes[0].index] = c0[i]
             state[grid.axes[1].index] = c1[j]
             before = time.thread_time()
-            out = verified_labels(spec.params, spec.settings, spec.ladder, state[None, :],
-                                  control)
+            out = spec.labeller.label(state[None, :], control)
             cpu += time.thread_time() - before
             timed += 1
             if out.status[0] == Status.INTERRUPTED:

@@ -11,7 +11,6 @@ from functools import partial
 import numpy as np
 
 from ..enums import StopReason
-from ..integrators.batch import verified_labels, warm_up
 from ..montecarlo import (
     BatchTask,
     Draws,
@@ -183,8 +182,7 @@ class FractionsRun:
         queue = self.queue()
         if not self.executor.dask and any(p.peek() is not None for p in self.progs):
             for spec, scene in zip(self.specs, self.plan.scenes, strict=True):
-                warm_up(spec.params, spec.settings, np.asarray(state_array(scene)),
-                        (verified_labels,))
+                spec.load(np.asarray(state_array(scene)))
         runner = self.executor.run(partial(compute_value_batch, self.specs), queue, stop,
                                    name=lambda t: f"fractions-{t.value}-{t.batch}")
         wall0 = time.perf_counter()

@@ -7,29 +7,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..integrators.batch import verified_labels
-from ..integrators.ladder import Ladder, ladder_of
-from ..params import (
-    ModelParams,
-    RunSettings,
-    Scene,
-    model_params,
-    run_settings,
-)
+from ..labeller import Labeller
+from ..params import Scene
+
+FractionSpec = Labeller  # what a batch of one scene needs (picklable: shipped to Dask workers)
 
 
-@dataclass(frozen=True)
-class FractionSpec:
-    """What a batch of one scene needs, as plain picklable values (shipped to Dask workers)."""
-
-    params: ModelParams
-    settings: RunSettings
-    ladder: Ladder
-
-
-def make_fraction_spec(scene: Scene) -> FractionSpec:
-    return FractionSpec(model_params(scene), run_settings(scene.integration),
-                        ladder_of(scene.integration))
+def make_fraction_spec(scene: Scene) -> Labeller:
+    return Labeller.of(scene)
 
 
 @dataclass(frozen=True)
@@ -56,11 +41,11 @@ class BatchResult:
 LABEL_NAMES = ("quarter_turns", "status", "settle_time", "steps", "certainty", "rung")
 
 
-def compute_batch(spec: FractionSpec, task: BatchTask, control=None) -> BatchResult:
+def compute_batch(spec: Labeller, task: BatchTask, control=None) -> BatchResult:
     """Run every sample of a batch up the verification ladder (compiled; releases the GIL)."""
     cpu0 = time.thread_time()
     states = np.ascontiguousarray(task.states[:task.count], dtype=np.float64)
-    out = verified_labels(spec.params, spec.settings, spec.ladder, states, control)
+    out = spec.label(states, control)
     labels = {name: getattr(out, name) for name in LABEL_NAMES}
     return BatchResult(task.value, task.batch, task.count, states, labels,
                        time.thread_time() - cpu0)

@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..integrators.batch import verified_labels, warm_up
 from ..params import state_array
 from .batch import BatchTask, compute_batch, make_fraction_spec
 from .plan import FractionsPlan
@@ -68,15 +67,14 @@ def estimate_fractions(plan: FractionsPlan, workers: int | None,
     cpu, needs = 0.0, []
     for v in piloted:
         spec = make_fraction_spec(plan.scenes[v])
-        warm_up(spec.params, spec.settings, np.asarray(state_array(plan.scenes[v])),
-                (verified_labels,))  # load (or compile) the kernels outside the clock
+        spec.load(np.asarray(state_array(plan.scenes[v])))  # the kernels, outside the clock
         task = BatchTask(v, 0, count, initial_states(plan.scenes[v], sampling, points))
         result = compute_batch(spec, task)
         cpu += result.cpu_seconds
         if goal.precision is not None:
             lab = result.labels
             tally = Tally.of(lab["quarter_turns"], lab["status"], lab["certainty"],
-                             spec.ladder.verified)
+                             spec.verified)
             needs.append(samples_needed(tally, goal.precision, goal.of))
     per_sample = cpu / (count * len(piloted))
     needed = max(needs) if needs else None

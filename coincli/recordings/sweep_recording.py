@@ -46,7 +46,7 @@ def sweep_recorder(plan, store, where: Destination | None):
     imports Rerun while this one opens the store)."""
     if where is None:
         return None
-    verified = plan.spec.ladder.verified
+    verified = plan.spec.labeller.verified
     if where.notebook is not False:
         return InlineSweep(store, plan.attrs, where, verified=verified)
     return SweepRecorder().start().record(store, plan.attrs, where, verified=verified)

@@ -66,8 +66,8 @@ def grid_of(attrs: dict) -> Grid:
 
 def tile_digest(tile: tuple[int, int], arrays: dict[str, np.ndarray], parameters: bytes) -> int:
     """32-bit BLAKE2b of the parameters the tile was computed with (their digest,
-    :func:`coincli.stores.basin_schema.parameters_digest`), its index and its data (every array of the
-    schema, in a fixed order, as little-endian bytes of its stored dtype): never 0, which means
+    :func:`coincli.stores.basin_schema.parameters_digest`), its index and its data (every array of
+    the schema, in a fixed order, as little-endian bytes of its stored dtype): never 0, which means
     "not done"."""
     h = hashlib.blake2b(digest_size=4, person=b"coin-tile")
     h.update(parameters)
@@ -253,8 +253,9 @@ class StoreView:
 
 # -- which parameters the tiles were computed with ----------------------------------------------
 def read_view(path: Path, grid: Grid | None = None, wanted: dict | None = None) -> StoreView:
-    """What opening the store at ``path`` reads once (:meth:`coincli.stores.basin_store.BasinStore.open`
-    says what): ParameterError if it is none or of another format, StoreDamaged if the
+    """What opening the store at ``path`` reads once
+    (:meth:`coincli.stores.basin_store.BasinStore.open` says what): ParameterError if it is none or
+    of another format, StoreDamaged if the
     parameters its tiles were computed with cannot be recovered."""
     check_is_store(path)
     attrs, copies = meta.read_copies(path)

@@ -2,8 +2,9 @@
 attributes, the differences between two sets of attributes in words a user acts on, and the
 comparison of a metadata file with what the sweep wrote (and its repair).
 
-The sweep's attributes (what determines the labels: :data:`coincli.stores.basin_schema.COMPARED_ATTRS`)
-are kept in three copies, each with its digest: the group's attributes, and the ``done`` array's
+The sweep's attributes (what determines the labels:
+:data:`coincli.stores.basin_schema.COMPARED_ATTRS`) are kept in three copies, each with its digest:
+the group's attributes, and the ``done`` array's
 attributes in the consolidated metadata and in done/zarr.json, so that one damaged or edited copy
 is found out and rebuilt from the others (:class:`coincli.stores.basin_store.BasinStore` judges
 which copy the computed tiles prove). Metadata files are compared parsed, on what the sweep
