@@ -49,8 +49,8 @@ from .integrators import MethodInfo
 from .integrators.batch import NO_LABEL
 from .integrators.ladder import ladder_of
 from .integrators.registry import step_budget
-from .labeller import Labeller
 from .jit import NUMBA
+from .labeller import Labeller
 from .models import horizon_text, model_of
 from .params import (
     ParameterError,
