@@ -35,8 +35,9 @@ the step shorter until its end lands past the crossing or the test clears it. Fl
 closed form (``time_to_touchdown``, ``flight_state``). The settling rule, the label (``well_index``
 once E < E_crit), the error scales and the event band are coincli's.
 
-Kernels here are plain Python until :func:`compile_kernels` wraps them in numba (after coincli's
-own are activated), so tests can run them as Python on a few steps.
+Kernels here are plain Python, calling the plain-Python kernel set of coincli's paper model,
+until :func:`compile_kernels` binds the names they call to the model's compiled kernel set and
+wraps them in numba too, so tests can run them as Python on a few steps.
 """
 
 from __future__ import annotations
@@ -54,8 +55,8 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-from coincli import model  # noqa: E402
 from coincli.integrators import adaptive, dopri, flight  # noqa: E402
+from coincli.models import PAPER  # noqa: E402
 
 RHO_STEP = 8.0  # largest h times the spectral-radius bound of J (Taylor series of phi_k)
 SERIES_TOL = 1e-14  # a term of the phi series below this (relative, scaled max norm) ends it
@@ -65,13 +66,38 @@ MIN_DIP_STEP = 1e-9  # s: below this a possible dip no longer shortens the step
 NEWTON_OVERSHOOT = 1e-3  # an iterate short of the surface steps this much past Newton's root
 BUDGET = 200_000
 
+# the kernels of coincli this module calls, by the name it calls them: those of a kernel set of
+# the paper's model (:func:`bind`), plain Python until :func:`compile_kernels`
+KERNEL_NAMES = ("contact_accelerations", "corner_offset", "corner_heights", "corner_rates",
+                "below", "energy_with_heights", "well_index", "rounded_quarter_turns", "rotate",
+                "time_to_touchdown", "flight_state", "may_cross", "error_scales", "dopri_step")
+
+
+def kernels_of(ks) -> tuple:
+    """The kernels of KERNEL_NAMES in the kernel set ``ks``, in that order."""
+    return (ks.contact_accelerations, ks.corner_offset, ks.corner_heights, ks.corner_rates,
+            ks.below, ks.energy_with_heights, ks.well_index, ks.rounded_quarter_turns, ks.rotate,
+            ks[flight.time_to_touchdown], ks[flight.flight_state], ks[adaptive.may_cross],
+            ks[dopri.error_scales], ks[dopri.step])
+
+
+def bind(ks) -> None:
+    """Bind the names of coincli's kernels this module calls to those of the kernel set ``ks``
+    (numba resolves a global function when it compiles its caller)."""
+    globals().update(zip(KERNEL_NAMES, kernels_of(ks), strict=True))
+
+
+(contact_accelerations, corner_offset, corner_heights, corner_rates, below, energy_with_heights,
+ well_index, rounded_quarter_turns, rotate, time_to_touchdown, flight_state, may_cross,
+ error_scales, dopri_step) = kernels_of(PAPER.kernels("python"))
+
 # counters of one throw, in this order
 COUNTERS = ("accepted", "rejected", "flights", "event_trials", "dip_rejects", "rhs", "matvecs")
 
 
 def rhs(p, mode, st, c, s):
     """F(u): the time derivative of the state in contact mode ``mode``."""
-    ax, ay, aphi = model.contact_accelerations(p, mode, st[1], st[3], st[4], st[5], c, s)
+    ax, ay, aphi = contact_accelerations(p, mode, st, c, s)
     return (st[3], st[4], st[5], ax, ay, aphi)
 
 
@@ -90,7 +116,7 @@ def jacobian(p, mode, st, c, s):
     m_y = m_phi = m_vx = m_vy = m_vphi = 0.0
     for i in range(4):
         if mode & (1 << i):
-            dx, dy = model.corner_offset(p, i, c, s)
+            dx, dy = corner_offset(p, i, c, s)
             fxi = -cc * (vx - vphi * dy)
             fyi = -kk * (y + dy) - cc * (vy + vphi * dx)
             fx_phi += cc * vphi * dx
@@ -164,7 +190,7 @@ def phi_times(jac, h, v, k, weights):
 
 def remainder(p, mode, st, f0, jac, u, c, s):
     """D(U) = F(U) - F(u_n) - J (U - u_n): what the frozen linearisation at u_n leaves out."""
-    cu, su = model.rotate(c, s, u[2] - st[2])
+    cu, su = rotate(c, s, u[2] - st[2])
     fu = rhs(p, mode, u, cu, su)
     diff = (u[0] - st[0], u[1] - st[1], u[2] - st[2], u[3] - st[3], u[4] - st[4],
             u[5] - st[5])
@@ -185,7 +211,7 @@ def exprb32(p, mode, h, st, f0, jac, c, s, weights):
     e = (2.0 * h * b[0], 2.0 * h * b[1], 2.0 * h * b[2], 2.0 * h * b[3], 2.0 * h * b[4],
          2.0 * h * b[5])
     end = (u2[0] + e[0], u2[1] + e[1], u2[2] + e[2], u2[3] + e[3], u2[4] + e[4], u2[5] + e[5])
-    c1, s1 = model.rotate(c, s, end[2] - st[2])
+    c1, s1 = rotate(c, s, end[2] - st[2])
     return end, e, c1, s1, used1 + used3 + 1
 
 
@@ -214,7 +240,7 @@ def exprb43(p, mode, h, st, f0, jac, c, s, weights):
     end = (st[0] + h * (f1[0] + p3[0]) + e[0], st[1] + h * (f1[1] + p3[1]) + e[1],
            st[2] + h * (f1[2] + p3[2]) + e[2], st[3] + h * (f1[3] + p3[3]) + e[3],
            st[4] + h * (f1[4] + p3[4]) + e[4], st[5] + h * (f1[5] + p3[5]) + e[5])
-    c1, s1 = model.rotate(c, s, end[2] - st[2])
+    c1, s1 = rotate(c, s, end[2] - st[2])
     return end, e, c1, s1, u1 + u2n + u1b + u3n + u4n + 2
 
 
@@ -251,7 +277,7 @@ def locate(order, p, mode, h, st, f0, jac, c, s, weights, i, g_end):
     minus level g_end there): safeguarded Newton on re-taken steps, ending on the crossed side.
     Returns (theta, state there, cos, sin, trials, matrix-vector products)."""
     level = adaptive.EVENT_BAND if (mode >> i) & 1 else 0.0
-    heights0 = model.corner_heights(p, st[1], c, s)
+    heights0 = corner_heights(p, st[1], c, s)
     lo = 0.0
     g_lo = heights0[i] - level
     hi = 1.0
@@ -270,8 +296,8 @@ def locate(order, p, mode, h, st, f0, jac, c, s, weights, i, g_end):
         at, _e, ca, sa, u = exp_step(order, p, mode, theta * h, st, f0, jac, c, s, weights)
         trials += 1
         used += u
-        g = model.corner_heights(p, at[1], ca, sa)[i] - level
-        rate = adaptive.corner_rates(p, at[4], at[5], ca, sa)[i]
+        g = corner_heights(p, at[1], ca, sa)[i] - level
+        rate = corner_rates(p, at[4], at[5], ca, sa)[i]
         crossed = (g > 0.0) == (g_hi > 0.0) and g != 0.0
         if crossed:
             hi = theta
@@ -303,41 +329,41 @@ def run_throw(order, p, rtol, t_end, state, counts):
     (an int64 array of len(COUNTERS)) gets the work done."""
     for j in range(len(COUNTERS)):
         counts[j] = 0
-    scales = dopri.error_scales(p, rtol)
+    scales = error_scales(p, rtol)
     weights = (1.0 / scales[0], 1.0 / scales[1], 1.0 / scales[2], 1.0 / scales[3],
                1.0 / scales[4], 1.0 / scales[5])
     first_step = FIRST_STEP / p.omega * (rtol / 1e-6) ** (1.0 / order)
     st = (state[0], state[1], state[2], state[3], state[4], state[5])
     c = math.cos(st[2])
     s = math.sin(st[2])
-    heights = model.corner_heights(p, st[1], c, s)
-    rates = adaptive.corner_rates(p, st[4], st[5], c, s)
-    mode = model.below(heights)
+    heights = corner_heights(p, st[1], c, s)
+    rates = corner_rates(p, st[4], st[5], c, s)
+    mode = below(heights)
     t = 0.0
     h = first_step
     work = 0
-    if model.energy_with_heights(p, st[1], st[3], st[4], st[5], heights) < p.e_crit:
-        return model.well_index(p, st[2]), 0
+    if energy_with_heights(p, st[1], st[3], st[4], st[5], heights) < p.e_crit:
+        return well_index(p, st[2]), 0
     while t < t_end:
         if work >= BUDGET:
             return -32768, 3
         if mode == 0:
-            tau, touching, iterations, c_tau, s_tau = flight.time_to_touchdown(
+            tau, touching, iterations, c_tau, s_tau = time_to_touchdown(
                 p, st, c, s, t_end - t, BUDGET - work)
             work += iterations
             counts[2] += 1
-            st = flight.flight_state(p, st, tau)
+            st = flight_state(p, st, tau)
             if touching == 0:
                 t = t_end
                 break
             c, s = c_tau, s_tau
             t += tau
-            heights = model.corner_heights(p, st[1], c, s)
-            rates = adaptive.corner_rates(p, st[4], st[5], c, s)
+            heights = corner_heights(p, st[1], c, s)
+            rates = corner_rates(p, st[4], st[5], c, s)
             mode = touching
             h = first_step
-            if model.energy_with_heights(p, st[1], st[3], st[4], st[5], heights) < p.e_crit:
-                return model.well_index(p, st[2]), 0
+            if energy_with_heights(p, st[1], st[3], st[4], st[5], heights) < p.e_crit:
+                return well_index(p, st[2]), 0
             continue
         f0 = rhs(p, mode, st, c, s)
         jac = jacobian(p, mode, st, c, s)
@@ -356,11 +382,11 @@ def run_throw(order, p, rtol, t_end, state, counts):
             counts[1] += 1
             h *= max(0.2, 0.9 * err ** (-1.0 / order))
             continue
-        heights_end = model.corner_heights(p, end[1], c1, s1)
-        rates_end = adaptive.corner_rates(p, end[4], end[5], c1, s1)
+        heights_end = corner_heights(p, end[1], c1, s1)
+        rates_end = corner_rates(p, end[4], end[5], c1, s1)
         mask = crossed_corner(mode, heights_end)
-        if mask == 0 and h > MIN_DIP_STEP and adaptive.may_cross(mode, heights, heights_end,
-                                                                 rates, rates_end, h):
+        if mask == 0 and h > MIN_DIP_STEP and may_cross(mode, heights, heights_end, rates,
+                                                        rates_end, h):
             counts[4] += 1  # a corner may have crossed and come back: a shorter step
             h *= 0.5
             continue
@@ -381,8 +407,8 @@ def run_throw(order, p, rtol, t_end, state, counts):
                         event |= 1 << i
             t += theta * h
             st, c, s = end, c1, s1
-            heights = model.corner_heights(p, st[1], c, s)
-            rates = adaptive.corner_rates(p, st[4], st[5], c, s)
+            heights = corner_heights(p, st[1], c, s)
+            rates = corner_rates(p, st[4], st[5], c, s)
             mode ^= event  # h stays: the controller adapts it to the new mode
         else:
             t += h
@@ -392,9 +418,9 @@ def run_throw(order, p, rtol, t_end, state, counts):
             h *= min(5.0, max(0.2, 0.9 * (max(err, 1e-10)) ** (-1.0 / order)))
         if not (abs(st[1]) < math.inf and abs(st[5]) < math.inf):
             return -32768, 2
-        if model.energy_with_heights(p, st[1], st[3], st[4], st[5], heights) < p.e_crit:
-            return model.well_index(p, st[2]), 0
-    return model.rounded_quarter_turns(st[2]), 1
+        if energy_with_heights(p, st[1], st[3], st[4], st[5], heights) < p.e_crit:
+            return well_index(p, st[2]), 0
+    return rounded_quarter_turns(st[2]), 1
 
 
 def run_throws(order, p, rtol, t_end, states, labels, statuses, counts):
@@ -416,14 +442,11 @@ EVENT_RTOLS = (("event rtol 1e-5", 1e-5), ("event rtol 1e-7", 1e-7))
 
 
 def compile_kernels():
-    """Activate coincli's kernels (numba), then wrap this module's in numba too; returns the
-    compiled run_throws."""
+    """Bind coincli's kernels to the paper model's compiled kernel set, then wrap this module's
+    in numba too; returns the compiled run_throws."""
     import numba
 
-    from coincli import jit
-    from coincli.integrators import batch
-
-    jit.compiled(batch.run_batch)  # every coincli kernel name is a dispatcher from here
+    bind(PAPER.kernels())  # every coincli kernel name is a dispatcher from here
     space = globals()
     for name in KERNELS:
         space[name] = numba.njit(fastmath={"contract"})(space[name])
@@ -452,8 +475,7 @@ def references(scene, states, name, threads):
     same label."""
     import numpy as np
 
-    from coincli.integrators.batch import label_states
-    from coincli.params import model_params, run_settings
+    from coincli.labeller import Labeller
 
     sys.path.insert(0, str(HERE))
     from ladder_design import reference_labels
@@ -465,8 +487,9 @@ def references(scene, states, name, threads):
     else:
         rk4_q, rk4_st = reference_labels(scene, states, threads)
         np.savez(cache, q=rk4_q, st=rk4_st)
-    tight = scene.with_overrides(method="event", rtol=1e-12, stop_on_settle=True, t_end=2.0)
-    ref = label_states(model_params(tight), run_settings(tight.integration), states)
+    tight = scene.with_overrides(method="event", rtol=1e-12, stop_on_settle=True, t_end=2.0,
+                                 verify=False)
+    ref = Labeller.of(tight).label(states)  # a single pass
     robust = (ref.status == 0) & (rk4_st == 0) & (ref.quarter_turns == rk4_q)
     return robust, ref.quarter_turns
 
@@ -474,18 +497,21 @@ def references(scene, states, name, threads):
 def measure(preset, res, rounds, threads, run_exprb):
     import numpy as np
 
-    from coincli.integrators import warm_up
-    from coincli.integrators.batch import label_states
-    from coincli.params import model_params, run_settings
+    from coincli.labeller import Labeller
 
     scene = scene_of(preset)
     name = f"{Path(preset).stem}-{res}"
     states = label_grid_states(scene, res)
     bench_states = label_grid_states(scene, 8)  # coin bench's cost grid (--cost-res 8)
     robust, reference = references(scene, states, name, threads)
-    single = scene.with_overrides(method="event", rtol=1e-6, stop_on_settle=True, t_end=2.0)
-    p, settings = model_params(single), run_settings(single.integration)
-    warm_up(p, settings, states[0], runs=(label_states,))
+    single = scene.with_overrides(method="event", rtol=1e-6, stop_on_settle=True, t_end=2.0,
+                                  verify=False)
+    labeller = Labeller.of(single)  # a single pass
+    p = labeller.params
+    labeller.load(states[0])
+    # the single pass at each rtol measured
+    passes = {rtol: Labeller.of(single.with_overrides(rtol=rtol))
+              for rtol in [1e-6] + [r for _, r in EVENT_RTOLS]}
 
     def ours(order, rtol, batch):
         n = len(batch)
@@ -497,7 +523,7 @@ def measure(preset, res, rounds, threads, run_exprb):
 
     def current(batch, rtol=1e-6):
         start = time.thread_time()
-        out = label_states(p, settings._replace(rtol=rtol), batch)
+        out = passes[rtol].label(batch)
         return time.thread_time() - start, out
 
     for _, order, rtol in VARIANTS:
@@ -548,20 +574,20 @@ def local_errors(preset="paper"):
     import numpy as np
     from scipy.integrate import solve_ivp
 
-    from coincli.params import model_params
+    from coincli.models import model_params
 
     p = model_params(scene_of(preset))
 
     def one_corner_field(t, u):
         return rhs(p, ONE_CORNER, tuple(u), math.cos(u[2]), math.sin(u[2]))
 
-    scales = dopri.error_scales(p, 1.0)
+    scales = error_scales(p, 1.0)
     weights = tuple(1.0 / x for x in scales)
     rows = []
     for vphi in (0.0, 10.0, 30.0, 100.0):
         phi = 0.3
         c, s = math.cos(phi), math.sin(phi)
-        dy = model.corner_offset(p, 1, c, s)[1]
+        dy = corner_offset(p, 1, c, s)[1]
         st = (0.0, -dy - 2e-5, phi, 0.1, -0.3, vphi)
         f0 = rhs(p, ONE_CORNER, st, c, s)
         jac = jacobian(p, ONE_CORNER, st, c, s)
@@ -569,7 +595,7 @@ def local_errors(preset="paper"):
         for h in (2.5e-5, 5e-5, 1e-4, 2e-4, 4e-4):
             ref = solve_ivp(one_corner_field, (0.0, h), st, method="DOP853", rtol=1e-13,
                             atol=1e-17).y[:, -1]
-            dp = dopri.step(p, ONE_CORNER, h, st, f0, c, s, scales, 1.0)[0]
+            dp = dopri_step(p, ONE_CORNER, h, st, f0, c, s, scales, 1.0)[0]
             e43 = exprb43(p, ONE_CORNER, h, st, f0, jac, c, s, weights)[0]
             e32 = exprb32(p, ONE_CORNER, h, st, f0, jac, c, s, weights)[0]
             err = [float(np.max(np.abs((np.array(x) - ref) / np.array(scales))))

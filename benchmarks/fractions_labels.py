@@ -85,10 +85,9 @@ def against_rk4(scene, states, n, n_ref, judged, differs, sampled: int, threads:
 
 def main() -> None:
     import coincli
-    from coincli.enums import Certainty, Method, Status
-    from coincli.integrators.batch import label_states
+    from coincli.enums import Certainty, Status
+    from coincli.labeller import Labeller
     from coincli.montecarlo.batch import BatchTask, compute_batch, make_fraction_spec
-    from coincli.params import model_params, run_settings
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--preset", default="paper", help="a preset name or TOML file")
@@ -111,11 +110,11 @@ def main() -> None:
     rung = np.concatenate([r.labels["rung"] for r in results]).astype(int)
     default_seconds = time.time() - started
 
-    p, settings = model_params(scene), run_settings(scene.integration)
     refs = []
-    for rtol in REFERENCE_RTOLS:
-        at = settings._replace(method=int(Method.EVENT), rtol=rtol, stop_on_settle=True)
-        outs = on_threads(lambda s, at=at: label_states(p, at, s), states, args.threads)
+    for rtol in REFERENCE_RTOLS:  # single passes of the event method
+        at = Labeller.of(scene.with_overrides(method="event", rtol=rtol, stop_on_settle=True,
+                                              verify=False))
+        outs = on_threads(lambda s, at=at: at.label(s), states, args.threads)
         refs.append((np.concatenate([o.quarter_turns for o in outs]).astype(int),
                      np.concatenate([o.status for o in outs])))
     (n11, st11), (n12, st12) = refs

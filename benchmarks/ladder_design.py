@@ -57,13 +57,13 @@ BOX = {"y0": "r:5r", "phi0": "-pi:pi", "vx": "-0.5:0.5"}  # the 5-D box of docs/
 def runs(scene, states, rtols=RTOLS):
     """Per rtol and cell: label, status, steps, last change of well, settle time (one compiled
     call each), with the scene's method."""
-    from coincli.integrators import integrate, new_control
-    from coincli.integrators.batch import outcome_label, unrecorded
-    from coincli.jit import compiled
-    from coincli.params import model_params, run_settings
+    from coincli.integrators import new_control
+    from coincli.integrators.batch import integrate, outcome_label, unrecorded
+    from coincli.labeller import Labeller
 
-    p, base = model_params(scene), run_settings(scene.integration)
-    kernel = compiled(integrate)
+    labeller = Labeller.of(scene)
+    p, base = labeller.params, labeller.settings
+    kernel = labeller.kernels[integrate]
     no_samples, no_events, final = unrecorded()
     control = new_control()
     out = {name: np.empty((len(rtols), len(states))) for name in ("q", "st", "steps", "tc", "ts")}
@@ -125,20 +125,19 @@ def measured_cost(scene, states, rounds=3):
     """Seconds a throw of the default ladder (DOP853 past its first rung) and of the former one
     (Dormand-Prince 5(4) alone, rtol 1e-6, 1e-7, ... 1e-12), through the real kernel on one
     thread, thread time, interleaved rounds (medians)."""
-    from coincli.integrators.batch import verified_labels
-    from coincli.integrators.ladder import ladder_of
-    from coincli.params import model_params, run_settings
+    from coincli.labeller import Labeller
 
-    p, settings = model_params(scene), run_settings(scene.integration)
-    default = ladder_of(scene.integration)
+    labeller = Labeller.of(scene)
+    default = labeller.ladder
     rtols = tuple(r for r in RTOLS if r <= default.rtols[0])
     dp5_only = replace(default, methods=(default.methods[0],) * len(rtols), rtols=rtols,
-                       dts=default.dts[:1] * len(rtols))
+                       dts=default.dts[:1] * len(rtols),
+                       budgets=default.budgets[:1] * len(rtols) if default.budgets else ())
     seconds = {"default": [], "dp5_only": []}
     for _ in range(rounds):
         for name, ladder in (("default", default), ("dp5_only", dp5_only)):
             started = time.thread_time()
-            verified_labels(p, settings, ladder, states)
+            replace(labeller, ladder=ladder).label(states)
             seconds[name].append((time.thread_time() - started) / len(states))
     return {name: float(np.median(values)) for name, values in seconds.items()}
 
@@ -157,16 +156,15 @@ def reference_labels(scene, states, threads):
     from concurrent.futures import ThreadPoolExecutor
 
     from coincli.accuracy import REFERENCE_B
-    from coincli.integrators.batch import label_states
-    from coincli.params import model_params, run_settings
+    from coincli.labeller import Labeller
 
     run_scene = REFERENCE_B.apply(scene, stop_on_settle=True, t_end=None)
-    p, settings = model_params(run_scene), run_settings(run_scene.integration)
+    single = Labeller.of(run_scene)  # a single pass (REFERENCE_B does not verify)
     parts = [np.arange(i, len(states), threads) for i in range(threads)]
     q, st = np.empty(len(states), np.int16), np.empty(len(states), np.uint8)
     with ThreadPoolExecutor(threads) as pool:
-        for idx, out in zip(parts, pool.map(lambda i: label_states(p, settings, states[i]),
-                                            parts), strict=True):
+        for idx, out in zip(parts, pool.map(lambda i: single.label(states[i]), parts),
+                            strict=True):
             q[idx], st[idx] = out.quarter_turns, out.status
     return q, st
 

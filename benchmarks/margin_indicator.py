@@ -57,12 +57,11 @@ def closest_call(p, samples) -> float:
 def main() -> None:
     import coincli
     from coincli.accuracy import vy_vphi_grid
-    from coincli.integrators import integrate, new_control
-    from coincli.integrators.batch import outcome_label, rungs_agree
+    from coincli.integrators import new_control
+    from coincli.integrators.batch import integrate, outcome_label, rungs_agree
     from coincli.integrators.common import EVENT_COLUMNS
     from coincli.integrators.ladder import CHANGE_TOLERANCE, SETTLE_TOLERANCE
-    from coincli.jit import compiled
-    from coincli.params import model_params, run_settings
+    from coincli.labeller import Labeller
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--preset", default="paper")
@@ -70,9 +69,11 @@ def main() -> None:
     args = parser.parse_args()
     scene = coincli.load_preset(args.preset)
     states = vy_vphi_grid(scene, res=(args.res, args.res)).states()
-    p, base = model_params(scene), run_settings(scene.integration)
+    labeller = Labeller.of(scene)
+    p, base = labeller.params, labeller.settings
     first, second = base._replace(rtol=1e-6, sample_dt=SAMPLE_DT), base._replace(rtol=1e-7)
-    kernel, control, final = compiled(integrate), new_control(), np.empty(6)
+    kernel, control, final = labeller.kernels[integrate], new_control(), np.empty(6)
+    outcome_label, rungs_agree = labeller.python[outcome_label], labeller.python[rungs_agree]
     samples = np.empty((int(base.t_end / SAMPLE_DT) + 2, 7))
     no_events = np.empty((0, EVENT_COLUMNS))
     started = time.time()

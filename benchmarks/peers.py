@@ -78,15 +78,15 @@ def ours(scene, states, rtol):
     """Our integrator on every row of ``states`` (one pass of the event method at ``rtol``, as
     the peers make one): (labels, seconds per trajectory). Labels are the settled well index,
     NO_LABEL for a run that did not settle by T_END."""
-    from coincli.integrators import label_states, warm_up
-    from coincli.params import model_params, run_settings
+    from coincli.labeller import Labeller
 
-    run = scene.with_overrides(method="event", rtol=rtol, t_end=T_END, stop_on_settle=True)
-    p, settings = model_params(run), run_settings(run.integration)
+    run = scene.with_overrides(method="event", rtol=rtol, t_end=T_END, stop_on_settle=True,
+                               verify=False)
+    labeller = Labeller.of(run)  # a single pass
     states = np.ascontiguousarray(states, dtype=np.float64)
-    warm_up(p, settings, states[0])  # load the compiled kernels before the clock starts
+    labeller.load(states[0])  # load the compiled kernels before the clock starts
     start = time.perf_counter()
-    out = label_states(p, settings, states)
+    out = labeller.label(states)
     seconds = (time.perf_counter() - start) / len(states)
     labels = np.where(out.status == 0, out.quarter_turns.astype(np.int64), NO_LABEL)
     return labels, seconds
@@ -109,20 +109,17 @@ def references(scene, vy, vphi):
 
 def ours_state_at(scene, state0, t, rtol=1e-12):
     """Our state at time t from state0 (no early stop): used only to check the peers' model."""
-    from coincli.integrators import final_state
-    from coincli.params import model_params, run_settings
+    from coincli.labeller import Labeller
 
     run = scene.with_overrides(method="event", rtol=rtol, t_end=t, stop_on_settle=False,
                                verify=False)
-    return final_state(model_params(run), run_settings(run.integration),
-                       np.asarray(state0, float))[0]
+    return Labeller.of(run).final_state(np.asarray(state0, float))[0]
 
 
 def ours_well_index(scene, phi):
-    from coincli.model import well_index as ours_well
-    from coincli.params import model_params
+    from coincli.models import model_of, model_params
 
-    return ours_well(model_params(scene), phi)
+    return model_of(scene).kernels("python").well_index(model_params(scene), phi)
 # ===============================================================================================
 
 

@@ -8,15 +8,19 @@ times both within a second or two, and the ratio of each round's pair is what is
 
 The other checkout's package is copied to a temporary directory as ``coinold`` (every
 ``coincli`` in its sources renamed), so both import at once; its kernels compile on the first
-run (a few minutes, cached afterwards under its copy's path). The throws are the first N of the
-README's five-dimensional box (``fractions_labels.box_throws``). Prints the medians, the median
-and range of the per-round ratios, and how the labels compare (count, certainty, rung).
+run (a few minutes, cached afterwards under its copy's path). Either checkout may have either
+API: the old one (``integrators.batch.label_states`` and ``verified_labels`` on
+``params.model_params`` and ``run_settings``, up to 0.10.0) or the new one (``labeller.Labeller``,
+one per scene); each is run through its own (:func:`runners`). The throws are the first N of
+the README's five-dimensional box (``fractions_labels.box_throws``). Prints the medians, the
+median and range of the per-round ratios, and how the labels compare (count, certainty, rung).
 """
 
 from __future__ import annotations
 
 import argparse
 import hashlib
+import importlib.util
 import shutil
 import sys
 import tempfile
@@ -48,7 +52,30 @@ def copy_as_coinold(tree: Path) -> Path:
 
 
 def runners(package: str, preset: str, states: np.ndarray):
-    """(single pass, verified) of ``package`` on ``states``, each already loaded once."""
+    """(single pass, verified) of ``package`` on ``states``, each already loaded once, through
+    the package's own API: the labeller where it has one, else the old batch functions."""
+    __import__(package)
+    if importlib.util.find_spec(f"{package}.labeller") is not None:
+        return labeller_runners(package, preset, states)
+    return batch_runners(package, preset, states)
+
+
+def labeller_runners(package: str, preset: str, states: np.ndarray):
+    """(single pass, verified) through the new API: a Labeller per scene, the single pass that
+    of the scene without verification (one rung, the scene's first)."""
+    pkg = __import__(package)
+    labeller = __import__(f"{package}.labeller", fromlist=["_"])
+    scene = pkg.load_preset(preset)
+    single = labeller.Labeller.of(scene.with_overrides(verify=False, stop_on_settle=True))
+    verified = labeller.Labeller.of(scene)
+    single.label(states[:2])
+    verified.label(states[:2])
+    return (lambda: single.label(states), lambda: verified.label(states))
+
+
+def batch_runners(package: str, preset: str, states: np.ndarray):
+    """(single pass, verified) through the old API (up to 0.10.0): the batch functions on the
+    kernels' parameters and run settings."""
     pkg = __import__(package)
     batch = __import__(f"{package}.integrators.batch", fromlist=["_"])
     ladder = __import__(f"{package}.integrators.ladder", fromlist=["_"])

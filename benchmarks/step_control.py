@@ -5,20 +5,18 @@ times the previous accepted step's err^(1/32)) and without it (the last error on
     python benchmarks/step_control.py                                   # paper, rtol 1e-8
     python benchmarks/step_control.py --preset thick --rtol 1e-9 --samples 100
 
-The kernels run as plain Python (NUMBA_DISABLE_JIT), so that the driver's calls can be counted:
-about a minute a hundred throws. Stages: 12 a step tried, 3 more for each continuous extension
-(the steps that locate an event).
+The kernels run as plain Python (the model's kernel set for CPython), so that the driver's
+calls can be counted: about a minute a hundred throws. Stages: 12 a step tried, 3 more for each
+continuous extension (the steps that locate an event).
 """
 
 from __future__ import annotations
 
 import argparse
 import collections
-import os
 import sys
 from pathlib import Path
 
-os.environ["NUMBA_DISABLE_JIT"] = "1"
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
@@ -38,11 +36,14 @@ def main() -> None:
     from coincli.enums import Method
     from coincli.integrators import pairs
     from coincli.integrators.batch import integrate, unrecorded
-    from coincli.params import model_params, run_settings
+    from coincli.labeller import Labeller
 
-    # the DOP853 copy of the driver (a plain function here) looks its pair's names up in its
-    # globals, a namespace of its own (coincli.jit.derive)
-    namespace = pairs.integrate_adaptive_dop853.__globals__
+    scene = coincli.load_preset(args.preset)
+    labeller = Labeller.of(scene, backend="python")
+    kernels = labeller.kernels  # plain Python functions
+    # the set's DOP853 copy of the driver looks its pair's names up in its globals, a namespace
+    # of its own (coincli.jit.derive, then the kernel set's copy of it)
+    namespace = kernels[pairs.integrate_adaptive_dop853].__globals__
     shipped = {name: namespace[name] for name in ("step", "dense_coefficients",
                                                   "controller_memory")}
     counts = collections.Counter()
@@ -58,10 +59,9 @@ def main() -> None:
 
     namespace["step"] = step
     namespace["dense_coefficients"] = dense_coefficients
-    scene = coincli.load_preset(args.preset)
     states = box_throws(scene, args.samples)
-    p = model_params(scene)
-    settings = run_settings(scene.integration)._replace(
+    p = labeller.params
+    settings = labeller.settings._replace(
         method=int(Method.EVENT_DOP853), rtol=args.rtol, stop_on_settle=True)
     labels = {}
     print(f"{args.preset}, DOP853 at rtol {args.rtol:g}, {len(states)} box throws, a throw:")
@@ -70,7 +70,8 @@ def main() -> None:
         namespace["controller_memory"] = memory
         counts.clear()
         labels[name] = np.array([
-            integrate(p, settings, s.copy(), *unrecorded(), np.zeros(1, np.int64)).n_well
+            kernels[integrate](p, settings, s.copy(), *unrecorded(),
+                               np.zeros(1, np.int64)).n_well
             for s in states])
         stages = 12 * (counts["accepted"] + counts["rejected"]) + 3 * counts["extensions"]
         print(f"  {name:20s} accepted {counts['accepted'] / len(states):6.2f}  rejected "

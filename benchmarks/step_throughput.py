@@ -34,14 +34,13 @@ def main() -> None:
     import numpy as np
 
     import coincli
-    from coincli import jit, params
-    from coincli.integrators import batch
-
-    jit.compiled(batch.run_batch)  # every kernel name in the package is a dispatcher from here
     from coincli.integrators import dopri
-    from coincli.model import rotate
+    from coincli.models import PAPER, model_params
 
-    combine, derivative, stage, step = dopri.combine, dopri.derivative, dopri.stage, dopri.step
+    kernels = PAPER.kernels()  # the paper model's compiled kernels (numba dispatchers)
+    combine, derivative, stage, step = (kernels[dopri.combine], kernels[dopri.derivative],
+                                        kernels[dopri.stage], kernels[dopri.step])
+    error_scales, rotate = kernels[dopri.error_scales], kernels.rotate
     A2, A3, A4, A5, A6, B, E, D = (dopri.A2, dopri.A3, dopri.A4, dopri.A5, dopri.A6, dopri.B,
                                    dopri.E, dopri.D)
 
@@ -75,7 +74,7 @@ def main() -> None:
         return end, k7, c7, s7, math.sqrt(total / 6.0), (k1, k7, d)
 
     @numba.njit(fastmath={"contract"}, inline="always")
-    def turn(c, s, d):  # the series of coincli.model.rotate for small turns, without its branches
+    def turn(c, s, d):  # the series of coincli.models.rotation.rotate for small turns, no branches
         d2 = d * d
         d4 = d2 * d2
         cd = (1.0 - d2 * (1.0 / 2)) + d4 * (1.0 / 24 - d2 * (1.0 / 720))
@@ -124,7 +123,7 @@ def main() -> None:
         @numba.njit(fastmath={"contract"}, nogil=True)
         def run(p, mode, h, st, n):
             rtol = 1e-6
-            scales = dopri.error_scales(p, rtol)
+            scales = error_scales(p, rtol)
             c, s = math.cos(st[2]), math.sin(st[2])
             k1 = derivative(p, mode, st, c, s)
             total = 0.0
@@ -141,7 +140,7 @@ def main() -> None:
         @numba.njit(fastmath={"contract"}, nogil=True)
         def run(p, mode, h, sa, sb, n):
             rtol = 1e-6
-            scales = dopri.error_scales(p, rtol)
+            scales = error_scales(p, rtol)
             ca, sna = math.cos(sa[2]), math.sin(sa[2])
             cb, snb = math.cos(sb[2]), math.sin(sb[2])
             ka, kb = derivative(p, mode, sa, ca, sna), derivative(p, mode, sb, cb, snb)
@@ -155,7 +154,7 @@ def main() -> None:
             return total + sa[1] + sb[1]
         return run
 
-    p = params.model_params(coincli.load_preset("paper"))
+    p = model_params(coincli.load_preset("paper"))
     rest = p.r_t - 0.5 * p.mass * p.g / p.k  # resting on the two lower corners (mode 3)
     a = (0.0, rest - 1e-5, 0.01, 0.1, 0.0, 1.0)
     b = (0.0, rest - 2e-5, -0.01, -0.1, 0.01, -1.5)

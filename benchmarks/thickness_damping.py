@@ -174,15 +174,15 @@ def landing(n: int, points) -> dict[tuple[float, float], dict]:
     """Where N throws of the box first land and where they end, at each (t/d, c) of
     ``points``: how many end where they landed, how many leave it after a bounce or rolling,
     and how many of those that land in a standing well, and in a lying one, end in it."""
-    from coincli.model import well_index
+    from coincli.models import model_of, model_params
     from coincli.montecarlo import Draws, initial_states, make_sampling
-    from coincli.params import model_params
 
     base = coincli.load_preset("paper")
     out = {}
     for t_d, c in points:
         scene = point_scene(base, {"thickness": D * t_d, "c": c})
         p = model_params(scene)
+        well_index = model_of(scene).kernels("python").well_index
         sampling = make_sampling(scene, **BOX)
         counts = dict.fromkeys(("stays", "bounced", "rolled"), 0)
         landed = {True: 0, False: 0}  # by whether the coin first lands standing

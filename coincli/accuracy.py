@@ -25,7 +25,6 @@ from .grid import Grid, make_grid
 from .integrators import METHODS
 from .integrators.batch import new_control
 from .labeller import Labeller
-from .model import total_energy
 from .params import Scene, state_array
 from .stats import wilson
 
@@ -354,7 +353,8 @@ def fails(scene: Scene, method: Method | str, dt: float) -> bool:
     p = labeller.params
     state0 = state_array(run_scene)
     final, status = labeller.final_state(state0)
-    return status == Status.NONFINITE or not total_energy(p, final) < total_energy(p, state0)
+    energy = labeller.python.total_energy
+    return status == Status.NONFINITE or not energy(p, final) < energy(p, state0)
 
 
 def measured_limit(scene: Scene, method: Method | str, iterations: int = 12) -> StabilityLimit:

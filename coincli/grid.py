@@ -48,16 +48,16 @@ from .defaults import AXIS_INFO, DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES, IC_
 from .integrators import MethodInfo
 from .integrators.batch import NO_LABEL
 from .integrators.ladder import ladder_of
-from .jit import python
+from .integrators.registry import step_budget
+from .jit import NUMBA
 from .labeller import Labeller
-from .model import horizon_text, total_energy_at
+from .models import horizon_text, model_of
 from .params import (
     ParameterError,
     Scene,
     parse_whole,
     shown,
     state_array,
-    step_budget,
 )
 from .quantities import parse_span, resolve_span
 
@@ -329,7 +329,7 @@ class SweepSpec:
         (0.2 s of the default basin's 3.4, by its measured tile costs). The order changes no
         result."""
         grid = self.grid
-        energy_at = python(total_energy_at)  # a few calls: not worth numba's loading
+        energy_at = self.labeller.python.total_energy  # a few calls: not worth numba's loading
         # the middle cell's coordinate of each row (and column) of tiles, computed once
         middles = []
         for axis, chunk, n_tiles in zip(grid.axes, grid.chunk, grid.tile_grid, strict=True):
@@ -340,7 +340,7 @@ class SweepSpec:
             state = list(grid.base_state)
             for axis, along, t in zip(grid.axes, middles, tile, strict=True):
                 state[axis.index] = float(along[t])
-            return energy_at(self.labeller.params, *state[1:])
+            return energy_at(self.labeller.params, state)
 
         return sorted(grid.work_tiles(), key=energy, reverse=True)
 
@@ -349,14 +349,17 @@ def make_spec(scene: Scene, grid: Grid) -> SweepSpec:
     return SweepSpec(grid=grid, labeller=Labeller.of(scene))
 
 
-def method_attrs(scene: Scene, method: MethodInfo) -> dict:
+def method_attrs(scene: Scene, method: MethodInfo, backend: str = NUMBA.name) -> dict:
+    """How a store's labels were computed: the method, its settings and its verification
+    ladder, the model and the backend (what the parameters digest binds)."""
     integ = scene.integration
     return {"name": method.name, "kernel_id": int(method.method), "order": method.order,
             "adaptive": method.adaptive, "symplectic": method.symplectic,
             "dt": integ.dt, "rtol": integ.rtol, "t_end": integ.t_end,
             "horizon": horizon_text(scene),
             "stop_on_settle": integ.stop_on_settle, "max_steps": step_budget(integ),
-            "verification": ladder_of(integ).to_dict()}
+            "verification": ladder_of(integ).to_dict(), "model": model_of(scene).name,
+            "backend": backend}
 
 
 @dataclass

@@ -3,9 +3,11 @@ integration settings.
 
 Everything is a frozen dataclass so that a scene can be hashed, compared and stored verbatim in
 every output (Zarr attributes, Rerun recordings). Kernels never see these objects: they get the
-named tuples of plain floats built once from a scene by :func:`model_params` (the coin, the
-foundation, gravity and what follows from them) and :func:`run_settings` (how to integrate), and
-the float64 state vector of :func:`state_array`; that is what lets numba cache its compiled code.
+named tuples of plain floats built once from a scene, its model's parameters
+(:attr:`coincli.models.Model.params`: the coin, the foundation, gravity and what follows from
+them) and :class:`RunSettings` (how to integrate,
+:func:`coincli.integrators.registry.run_settings`), and the float64 state vector of
+:func:`state_array`; that is what lets numba cache its compiled code.
 """
 
 from __future__ import annotations
@@ -56,10 +58,15 @@ class Coin:
 @dataclass(frozen=True)
 class Foundation:
     """Winkler foundation with viscous damping acting on each penetrating corner: stiffness k
-    (N/m) and damping c (N s/m)."""
+    (N/m) and damping c (N s/m); and Coulomb friction at the corners, regularized: coefficient
+    mu (0, the default, is the paper's frictionless foundation) over a slip velocity
+    slip_velocity (m/s) below which a corner's friction force falls linearly to zero
+    (docs/friction.md)."""
 
     k: float = 1.0e4  # N/m
     c: float = 0.5  # N s/m
+    mu: float = 0.0  # friction coefficient
+    slip_velocity: float = 1.0e-3  # m/s, the regularization's slip velocity v_s
 
 
 @dataclass(frozen=True)
@@ -82,7 +89,7 @@ class Integration:
     ``dt`` is the step of a fixed-step method (or the initial step of an adaptive one), ``rtol``
     the relative tolerance of an adaptive one. ``t_end`` is a fixed horizon; None (the default)
     runs every throw until its outcome is decided, capped at CAP_FACTOR times the throw's
-    :func:`coincli.model.decision_time` (what its energy and the foundation's damping allow:
+    :func:`coincli.models.paper.decision_time` (what its energy and the foundation's damping allow:
     :meth:`Scene.horizon`), with ``max_steps`` as the guard against runs that never end.
     ``stop_on_settle`` stops a run as soon as its outcome is certain (total energy below
     E_crit); the paper's own runs always last ``t_end`` (2 s, preset paper-method).
@@ -151,6 +158,9 @@ class Scene:
             for name in names:
                 if d[group][name] is not None:
                     d[group][name] = float(d[group][name])
+        if not self.foundation.mu:  # the paper's model: no friction, and nothing of it recorded
+            for name in FRICTION_FIELDS:
+                del d["foundation"][name]
         return d
 
     def with_overrides(self, **overrides) -> Scene:
@@ -195,10 +205,14 @@ class Scene:
 # The real quantities of each group of a scene (the others: a method, whole numbers, flags).
 REAL_FIELDS = {
     "coin": ("diameter", "thickness", "mass", "inertia"),
-    "foundation": ("k", "c"),
+    "foundation": ("k", "c", "mu", "slip_velocity"),
     "initial": ("x0", "y0", "phi0", "vx", "vy", "vphi"),
     "integration": ("dt", "rtol", "t_end"),
 }
+
+# What a scene records of friction only where there is friction (mu > 0): a scene without it is
+# the paper's, and so is what it records (a store written before friction reads as mu = 0).
+FRICTION_FIELDS = ("mu", "slip_velocity")
 
 FLAT_KEYS = {
     "coin": [f.name for f in fields(Coin)],
@@ -298,6 +312,8 @@ def validate(scene: Scene) -> Scene:
                              f"({c.diameter:g} m), or equal to it (a square section)")
     check_number("k", f.k, positive=True)
     check_number("c", f.c, nonnegative=True)
+    check_number("mu", f.mu, nonnegative=True)
+    check_number("slip_velocity", f.slip_velocity, positive=True)
     check_number("g", scene.g, positive=True)  # without gravity no coin ever comes to rest
     for name in ("x0", "phi0", "vx", "vy", "vphi"):
         check_number(name, getattr(s, name))
@@ -327,53 +343,6 @@ def validate(scene: Scene) -> Scene:
     return scene
 
 
-class ModelParams(NamedTuple):
-    """What the kernels know of a scene's physics: the coin, the foundation, gravity, and the
-    constants that follow from them (computed once here, not in every step)."""
-
-    mass: float  # kg
-    inertia: float  # kg m^2
-    r_d: float  # m, half the diameter
-    r_t: float  # m, half the thickness
-    k: float  # N/m, foundation stiffness per corner
-    c: float  # N s/m, damping per corner
-    g: float  # m/s^2
-    r: float  # m, half diagonal
-    e_crit: float  # J, below it the count of quarter turns is final
-    phi_cr: float  # rad, the diagonal is vertical
-    inv_mass: float  # 1/kg (a product is cheaper than a quotient in every step)
-    inv_inertia: float  # 1/(kg m^2)
-    omega: float  # rad/s, the stiffest contact mode: rocking on two corners, sqrt(2 k r_d^2 / I)
-    bounce_factor: float  # 1 / (1 - e), e the restitution of a corner (coincli.model.decision_time)
-    decay_time: float  # s, the damping time of rocking on a corner (I + m r^2) / (c r_d^2)
-
-
-def model_params(scene: Scene) -> ModelParams:
-    coin = scene.coin
-    k = float(scene.foundation.k)
-    return ModelParams(mass=float(coin.mass), inertia=float(coin.inertia), r_d=float(coin.r_d),
-                       r_t=float(coin.r_t), k=k, c=float(scene.foundation.c), g=float(scene.g),
-                       r=float(coin.r), e_crit=float(scene.e_crit), phi_cr=float(coin.phi_cr),
-                       inv_mass=1.0 / coin.mass, inv_inertia=1.0 / coin.inertia,
-                       omega=math.sqrt(2.0 * k * coin.r_d ** 2 / coin.inertia),
-                       **_decay(coin, k, float(scene.foundation.c)))
-
-
-def _decay(coin: Coin, k: float, c: float) -> dict:
-    """The damping constants of :func:`coincli.model.decision_time`: the restitution e of a
-    corner hitting the foundation with the whole mass behind it (damping ratio
-    zeta = c / (2 sqrt(k m)), the least damped impact) as the sum of its bounces' flight
-    times, 1 / (1 - e), and the damping time of rocking on a corner; infinite without
-    damping."""
-    if c <= 0 or k <= 0 or coin.mass <= 0:
-        return {"bounce_factor": math.inf, "decay_time": math.inf}
-    zeta = c / (2.0 * math.sqrt(k * coin.mass))
-    # 1 - e, exact for a small zeta (then e rounds to 1); 0 where even that underflows
-    loss = -math.expm1(-math.pi * zeta / math.sqrt(1.0 - zeta * zeta)) if zeta < 1 else 1.0
-    return {"bounce_factor": 1.0 / loss if loss > 0 else math.inf,
-            "decay_time": (coin.inertia + coin.mass * coin.r ** 2) / (c * coin.r_d ** 2)}
-
-
 class RunSettings(NamedTuple):
     """How a kernel integrates one trajectory."""
 
@@ -384,29 +353,6 @@ class RunSettings(NamedTuple):
     stop_on_settle: bool  # stop as soon as the outcome is certain
     max_steps: int  # the step budget (closed-form flights count their iterations)
     sample_dt: float  # s between recorded samples (0: record none)
-
-
-ADAPTIVE_MAX_STEPS = 1_000_000
-FIXED_MAX_STEPS = 100_000_000  # a fixed-step run without a horizon (100 s at dt = 1e-6 s)
-
-
-def step_budget(integration: Integration) -> int:
-    """The run's step budget: ``max_steps`` if given, else the method's default."""
-    if integration.max_steps is not None:
-        return int(integration.max_steps)
-    if integration.method in (Method.DOPRI5, Method.EVENT, Method.EVENT_DOP853):
-        return ADAPTIVE_MAX_STEPS
-    if integration.t_end is None:
-        return FIXED_MAX_STEPS
-    return int(math.ceil(integration.t_end / integration.dt - 1e-9))
-
-
-def run_settings(integration: Integration, sample_dt: float = 0.0) -> RunSettings:
-    return RunSettings(method=int(integration.method), dt=float(integration.dt),
-                       rtol=float(integration.rtol),
-                       t_end=math.inf if integration.t_end is None else float(integration.t_end),
-                       stop_on_settle=bool(integration.stop_on_settle),
-                       max_steps=step_budget(integration), sample_dt=float(sample_dt))
 
 
 def state_array(scene: Scene):

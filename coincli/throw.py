@@ -20,12 +20,7 @@ import numpy as np
 
 from .enums import Certainty, Engine, Status
 from .integrators import check_step, new_control
-from .integrators.batch import (
-    NO_LABEL,
-    outcome_label,
-    rungs_agree,
-    stops_ladder,
-)
+from .integrators.batch import NO_LABEL
 from .integrators.common import (
     ANGLE_BOUND,
     EVENT_COLUMNS,
@@ -33,11 +28,10 @@ from .integrators.common import (
     LIFTOFF,
     ONSET,
     SAMPLE_COLUMNS,
-    is_finite_state,
 )
-from .jit import is_active
+from .jit import NUMBA, PYTHON, is_built
 from .labeller import Labeller
-from .model import energies, horizon_text, rounded_quarter_turns, scene_horizon
+from .models import MODELS, horizon_text, scene_horizon
 from .params import (
     OVERRIDE_KEYS,
     STATE_NAMES,
@@ -246,7 +240,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
         raise ParameterError(f"engine must be one of {', '.join(e.label for e in Engine)}, "
                              f"got {engine!r}") from None
     labeller = Labeller.of(scene, sample_dt=float(sample_dt or 0.0))
-    p, ladder = labeller.params, labeller.ladder
+    ladder = labeller.ladder
     state0 = state_array(scene)
     if sample_dt:
         samples = np.empty((_sample_rows(horizon, sample_dt), SAMPLE_COLUMNS))
@@ -256,8 +250,10 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     final = np.empty(6)
     control = new_control() if control is None else control
     if engine == Engine.AUTO:
-        short = method.adaptive and integ.stop_on_settle and not is_active()
+        short = (method.adaptive and integ.stop_on_settle
+                 and not is_built(MODELS[labeller.model], NUMBA))
         engine = Engine.PYTHON if short else Engine.NUMBA
+    rules = labeller.python  # the ladder's rule, run by CPython on a few values
     rungs: list[Rung] = []
     certainty = Certainty.UNVERIFIED if not ladder.verified else Certainty.UNCERTAIN
     wall = 0.0
@@ -268,16 +264,16 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
         result, seconds, engine = _run(labeller, settings, state0, samples, events, final,
                                        control, engine)
         wall += seconds
-        label = outcome_label(result.status, result.n_well, final[2])
+        label = rules.outcome_label(result.status, result.n_well, final[2])
         rungs.append(Rung(ladder.rung_text(k), None if label == NO_LABEL else int(label),
                           Status(result.status), float(result.settle_time), int(result.steps),
                           float(result.last_change)))
-        if stops_ladder(result):
+        if rules.stops_ladder(result):
             decided = False
             break
         if previous is not None:
             decided = previous[0].status == Status.SETTLED and result.status == Status.SETTLED
-        if previous is not None and rungs_agree(previous[1], previous[0], label, result,
+        if previous is not None and rules.rungs_agree(previous[1], previous[0], label, result,
                                                 ladder.change_tolerance,
                                                 ladder.settle_tolerance):
             certainty = Certainty.CERTAIN
@@ -285,7 +281,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
         previous = (result, label)
     if certainty == Certainty.UNCERTAIN and not decided:
         certainty = Certainty.UNDECIDED
-    return _trajectory(scene, p, state0, final, result, samples, events, sample_dt,
+    return _trajectory(scene, labeller, state0, final, result, samples, events, sample_dt,
                        record_events, wall, certainty, rungs, settings.max_steps)
 
 
@@ -319,7 +315,8 @@ def _run(labeller: Labeller, settings, state0, samples, events, final, control,
     if engine == Engine.PYTHON:
         start = time.perf_counter()
         capped = settings._replace(max_steps=min(settings.max_steps, PYTHON_STEPS))
-        result = labeller.run(capped, state0, samples, events, final, control, compiled=False)
+        result = labeller.with_backend(PYTHON).run(capped, state0, samples, events, final,
+                                                   control)
         if not (result.status == Status.BUDGET and capped.max_steps < settings.max_steps):
             return result, time.perf_counter() - start, engine
     labeller.load(state0, trajectory=True)  # before the clock
@@ -328,13 +325,14 @@ def _run(labeller: Labeller, settings, state0, samples, events, final, control,
     return result, time.perf_counter() - start, Engine.NUMBA
 
 
-def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, record_events,
+def _trajectory(scene, labeller, state0, final, result, samples, events, sample_dt, record_events,
                 wall, certainty, rungs, budget) -> Throw:
     integ = scene.integration
     status = Status(result.status)
     t = result.t
     finite = status in (Status.SETTLED, Status.UNSETTLED)
-    rounded = int(rounded_quarter_turns(final[2])) if finite else None
+    rules, p = labeller.python, labeller.params
+    rounded = int(rules.rounded_quarter_turns(final[2])) if finite else None
     quarter_turns = rungs[-1].quarter_turns
     settle_time = result.settle_time
     notes = []
@@ -347,7 +345,7 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
                f" (the cap of this throw: {horizon_text(scene)})")
         notes.append(f"the energy is still above E_crit at t = {t:g} s{end}: n = {rounded} is "
                      "round(2 phi / pi) at the end and may still change; raise --t-end")
-    if status == Status.NONFINITE and not is_finite_state(*state0):
+    if status == Status.NONFINITE and not rules.is_finite_state(state0):
         notes.append(f"the initial state is beyond what can be integrated (a value of "
                      f"{FINITE_BOUND:g} or more, or an angle of {ANGLE_BOUND:g} rad or more, "
                      "far outside any throw): no outcome; give physical initial values")
@@ -372,8 +370,8 @@ def _trajectory(scene, p, state0, final, result, samples, events, sample_dt, rec
         tried = "; ".join(f"{r.setting}: n = {r.quarter_turns} {r.status.label}" for r in rungs)
         notes.append(f"the label is undecided: a rung did not settle ({tried})")
     with np.errstate(over="ignore", invalid="ignore"):  # a state past FINITE_BOUND: inf
-        e0 = sum(energies(p, state0))
-    e1 = sum(energies(p, final)) if status != Status.NONFINITE else math.nan
+        e0 = sum(rules.energies(p, state0))
+    e1 = sum(rules.energies(p, final)) if status != Status.NONFINITE else math.nan
     return Throw(
         scene=scene, status=status, t_final=float(t), final_state=final.copy(),
         steps=int(sum(r.steps for r in rungs)), settle_time=float(settle_time),

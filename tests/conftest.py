@@ -1,5 +1,5 @@
 """Shared fixtures: the shipped scenes, and one call of the compiled kernel through its
-contract (ModelParams and RunSettings in, a RunResult and the final state out)."""
+contract (the model's parameters and RunSettings in, a RunResult and the final state out)."""
 
 from __future__ import annotations
 
@@ -13,10 +13,11 @@ import numpy as np
 import pytest
 
 from coincli.enums import Method
-from coincli.integrators import integrate, new_control
+from coincli.integrators import new_control
+from coincli.integrators.batch import integrate
 from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS, RunResult
-from coincli.jit import compiled
-from coincli.params import RunSettings, model_params
+from coincli.models import PAPER, model_params
+from coincli.params import RunSettings
 from coincli.presets import load
 
 
@@ -39,12 +40,10 @@ def pytest_configure(config):
 
     if hasattr(config, "workerinput") or kernels_cached():
         return  # a worker: the controller has compiled them
-    from coincli.integrators import warm_up
-    from coincli.params import run_settings
+    from coincli.labeller import Labeller
 
     scene = load("paper").scene
-    warm_up(model_params(scene), run_settings(scene.integration),
-            np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+    Labeller.of(scene).compile_all(np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
 
 
 TEST_COLUMNS = "80"  # the width every command prints at in the tests, as CI has it
@@ -93,9 +92,9 @@ def run_kernel(scene, state, *, method: Method | str, t_end: float, dt: float = 
     final = np.empty(6)
     samples = np.empty((max_samples, SAMPLE_COLUMNS))
     events = np.empty((max_events, EVENT_COLUMNS))
-    result = compiled(integrate)(model_params(scene), settings,
-                                 np.ascontiguousarray(state, dtype=np.float64), samples, events,
-                                 final, new_control())
+    result = PAPER.kernels()[integrate](model_params(scene), settings,
+                                        np.ascontiguousarray(state, dtype=np.float64), samples,
+                                        events, final, new_control())
     return KernelRun(result, final, samples[:result.n_samples], events[:result.n_events])
 
 

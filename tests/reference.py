@@ -3,7 +3,7 @@
 Written from the model's definition (NOTES.md, rigid-body kinematics), not from the kernels:
 
 * corner i sits at body coordinates p_i = (SX[i] r_d, SY[i] r_t) (same corner order as
-  coincli.model: 0 = (+,-), 1 = (-,-), 2 = (-,+), 3 = (+,+));
+  coincli.models.rectangle: 0 = (+,-), 1 = (-,-), 2 = (-,+), 3 = (+,+));
 * its offset from the centroid is d_i = R(phi) p_i, its height y_i = y + d_yi;
 * its velocity is v_i = (vx - vphi d_yi, vy + vphi d_xi);
 * a penetrating corner (y_i < 0) carries F_i = (-c v_xi, -k y_i - c v_yi);

@@ -22,9 +22,8 @@ from coincli.analysis import (
 from coincli.boundary import LOG2
 from coincli.cli import app
 from coincli.enums import Certainty, Status
-from coincli.integrators.batch import verified_labels
-from coincli.integrators.ladder import ladder_of
-from coincli.params import ParameterError, model_params, run_settings
+from coincli.labeller import Labeller
+from coincli.params import ParameterError
 
 # A chaotic corner of the default map (vy0 1.2-2 m/s): every measure has something to measure.
 REGION = dict(vy=(1.2, 2.0), vphi=(4.0, 12.0), res=40)
@@ -97,22 +96,22 @@ def coincli_jsonable(value):
 def test_classifier_gives_the_verified_labels_on_any_thread_count(store):
     ds = coincli.open_basin(store)
     scene = scene_of(coincli.basin_attrs(ds))
-    p, s, lad = model_params(scene), run_settings(scene.integration), ladder_of(scene.integration)
+    labeller = Labeller.of(scene)
     base = base_state_of(coincli.basin_attrs(ds))
     assert base[0] == 0.0 and base[2] == 0.0 and base[1] == pytest.approx(scene.coin.r)
     # the store's own cells: the classifier at cell centres reproduces the stored labels
     vy, vphi = ds["vy"].values, ds["vphi"].values
     pts = np.column_stack([np.repeat(vy[:5], 40), np.tile(vphi, 5)])
-    with VerifiedClassifier(p, s, lad, base, [4, 5], threads=2) as classify:
+    with VerifiedClassifier(labeller, base, [4, 5], threads=2) as classify:
         lab2, cert2 = classify(pts)
-    with VerifiedClassifier(p, s, lad, base, [4, 5], threads=1) as classify:
+    with VerifiedClassifier(labeller, base, [4, 5], threads=1) as classify:
         lab1, cert1 = classify(pts)
     np.testing.assert_array_equal(lab1, lab2)
     np.testing.assert_array_equal(cert1, cert2)
     stored = ds["quarter_turns"].values[:5].ravel()
     np.testing.assert_array_equal(lab2, stored)
     np.testing.assert_array_equal(cert2, ds["certainty"].values[:5].ravel() == Certainty.CERTAIN)
-    direct = verified_labels(p, s, lad, VerifiedClassifier(p, s, lad, base, [4, 5]).states(pts))
+    direct = labeller.label(VerifiedClassifier(labeller, base, [4, 5]).states(pts))
     np.testing.assert_array_equal(direct.quarter_turns, lab2)
 
 

@@ -16,10 +16,9 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
 from coincli import load_preset as load
-from coincli import model
 from coincli.accuracy import vy_vphi_grid
-from coincli.integrators.batch import label_states
-from coincli.params import model_params, run_settings
+from coincli.labeller import Labeller
+from coincli.models import PAPER, model_params
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import contact_methods as cm  # noqa: E402
@@ -45,7 +44,7 @@ def full_rhs(p, mode):
 
 def one_corner_state(p, corner=1, phi=0.3, depth=2e-5, vphi=30.0):
     """A coin turning on one corner that is ``depth`` below the surface."""
-    dy = model.corner_offset(p, corner, *trig(phi))[1]
+    dy = PAPER.kernels("python").corner_offset(p, corner, *trig(phi))[1]
     return (0.0, -dy - depth, phi, 0.1, -0.3, vphi), 1 << corner
 
 
@@ -179,8 +178,9 @@ def test_whole_throws_agree_with_the_event_method(p):
     throws as coincli's event method does, and counts its work."""
     scene = load("paper")
     states = vy_vphi_grid(scene, vy=(0.05, 0.8), res=(3, 3)).states()
-    single = scene.with_overrides(method="event", rtol=1e-6, stop_on_settle=True, t_end=2.0)
-    ref = label_states(model_params(single), run_settings(single.integration), states)
+    single = scene.with_overrides(method="event", rtol=1e-6, stop_on_settle=True, t_end=2.0,
+                                  verify=False)
+    ref = Labeller.of(single).label(states)  # a single pass
     counts = np.zeros(len(cm.COUNTERS), np.int64)
     for state, label, status in zip(states, ref.quarter_turns, ref.status, strict=True):
         q, st = cm.run_throw(4, p, 1e-6, 2.0, state, counts)

@@ -193,16 +193,27 @@ def test_same_labels_as_dopri_at_tight_tolerance(paper):
 
 
 def test_the_driver_compiled_first_is_the_one_integrate_calls():
-    """A first compilation builds the DOP853 driver first (batch.warm_up), from arrays typed as
-    integrate passes them: had the types differed, integrate would compile a second
+    """A first compilation builds the DOP853 driver first (Labeller.compile_all), from arrays
+    typed as integrate passes them: had the types differed, integrate would compile a second
     specialisation of its own. The driver holds one specialisation, looked up in the cache
     once (loaded, or compiled if this process made the cache) and found in memory after."""
-    from coincli.integrators import batch
-    from coincli.jit import compiled
+    from dataclasses import replace
 
-    driver = compiled(batch.integrate_adaptive_dop853)
-    batch.final_state(*batch.dop853_sample_run())  # integrate, which calls the driver: loaded
-    batch.compile_dop853_driver()  # what a first compilation does first, in this process
+    from coincli.enums import Method
+    from coincli.integrators.pairs import integrate_adaptive_dop853
+    from coincli.labeller import Labeller
+    from coincli.models import PAPER
+    from coincli.params import Scene
+
+    driver = PAPER.kernels()[integrate_adaptive_dop853]
+    scene = Scene()
+    labeller = Labeller.of(scene)
+    # a short DOP853 throw of the default scene (only the argument types matter)
+    short = replace(labeller, settings=labeller.settings._replace(
+        method=int(Method.EVENT_DOP853), t_end=labeller.settings.dt * 4))
+    # integrate, which calls the driver: loaded
+    short.final_state(np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+    labeller.compile_all()  # what a first compilation does first, in this process
     stats = driver.stats  # numba's public counts of this dispatcher's cache look-ups
     assert sum(stats.cache_hits.values()) + sum(stats.cache_misses.values()) == 1, stats
     assert len(driver.signatures) == 1

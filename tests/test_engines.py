@@ -53,13 +53,13 @@ def test_python_and_numba_engines_agree_to_rounding():
 def test_auto_engine_redoes_a_long_run_compiled():
     """A run longer than the Python engine's cap is redone compiled, with the same result."""
     code = """
-import json, coincli, coincli.throw as throw
+import json, coincli, coincli.models, coincli.throw as throw
 from coincli.enums import Engine
-from coincli.jit import is_active
+from coincli.jit import is_built
 throw.PYTHON_STEPS = 10  # the fig.-2 throw takes 45 and 27 steps
 scene = coincli.load_preset("paper").with_overrides(vy=1.197, vphi=3.508)
 auto = coincli.simulate(scene)
-assert is_active(), "the long run must have gone to numba"
+assert is_built(coincli.models.PAPER), "the long run must have gone to numba"
 again = coincli.simulate(scene, engine=Engine.NUMBA)
 print(json.dumps([auto.steps, again.steps, auto.final_state.tolist() == again.final_state.tolist(),
                   auto.quarter_turns]))

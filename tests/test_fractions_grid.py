@@ -18,10 +18,11 @@ from typer.testing import CliRunner
 
 import coincli
 from coincli.cli import app
+from coincli.models import model_params
 from coincli.montecarlo import corner_restitution, parse_over
 from coincli.montecarlo.estimate import pilot_values
 from coincli.montecarlo.results import level_crossing
-from coincli.params import ParameterError, model_params
+from coincli.params import ParameterError
 from coincli.stores.fractions_store import FractionsStore
 
 PAPER = coincli.load_preset("paper")

@@ -12,10 +12,10 @@ import pytest
 import coincli
 from coincli.charts.basin_render import UNCERTAIN, UNDECIDED, basin_rgba
 from coincli.enums import Certainty, Status
-from coincli.integrators.batch import verified_labels
-from coincli.integrators.ladder import ladder_of
-from coincli.model import CAP_FACTOR, decision_time, horizon_text, scene_horizon
-from coincli.params import ParameterError, model_params, run_settings, validate
+from coincli.labeller import Labeller
+from coincli.models import horizon_text, model_params, scene_horizon
+from coincli.models.paper import CAP_FACTOR, decision_time
+from coincli.params import ParameterError, validate
 from coincli.stores.dataset import from_dataset
 
 # the coin of the issue: d = 2 cm, t = 1 cm (t/d = 0.5), mass and inertia of a solid disc of the
@@ -76,9 +76,7 @@ def test_half_thick_coin_settles_everywhere_and_counts_uncertain_cells_by_cause(
 
 
 def _ladder_certainty(scene, states):
-    integ = scene.integration
-    return verified_labels(model_params(scene), run_settings(integ), ladder_of(integ),
-                           np.asarray(states, dtype=np.float64))
+    return Labeller.of(scene).label(np.asarray(states, dtype=np.float64))
 
 
 def test_a_budget_too_small_makes_labels_undecided_not_chaotic():

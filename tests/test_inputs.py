@@ -21,21 +21,15 @@ from coincli import simulate
 from coincli.cli import app, run
 from coincli.enums import Engine, Method, Status
 from coincli.grid import compute_tile, make_grid, make_spec, parse_pair, parse_range
-from coincli.integrators import integrate, new_control
-from coincli.integrators.batch import verified_labels
+from coincli.integrators import new_control
+from coincli.integrators.batch import integrate
 from coincli.integrators.common import EVENT_COLUMNS, SAMPLE_COLUMNS
 from coincli.integrators.ladder import ladder_of
-from coincli.jit import compiled, python
-from coincli.model import rotate
-from coincli.params import (
-    ADAPTIVE_MAX_STEPS,
-    Integration,
-    ParameterError,
-    model_params,
-    parse_number,
-    run_settings,
-    shown,
-)
+from coincli.integrators.registry import ADAPTIVE_MAX_STEPS, run_settings
+from coincli.labeller import Labeller
+from coincli.models import PAPER, model_params
+from coincli.models.rotation import rotate
+from coincli.params import Integration, ParameterError, parse_number, shown
 from coincli.presets import load
 
 REPO = Path(__file__).resolve().parent.parent
@@ -68,7 +62,7 @@ def one_error_line(capsys, *args) -> str:
                                            ("--vx", "1e308"), ("--vy", "-1e300"),
                                            ("--phi0", "1e20")])
 def test_a_throw_too_large_to_integrate_is_non_finite_not_a_traceback(option, value):
-    """Was `ValueError: math domain error` in model.rotate (the plain-Python engine)."""
+    """Was `ValueError: math domain error` in rotate (the plain-Python engine)."""
     args = ["simulate", "--vy", "1", option, value, "--no-rrd"]
     result = coin(*args)
     assert result.exit_code == 1, (result.stdout, result.stderr, result.exception)
@@ -100,9 +94,9 @@ def test_both_engines_say_non_finite(method):
                   [0.0, scene.y0, 1e300, 0.0, 1.0, 3.0], [0.0, scene.y0, 0.0, 0.0, 1.0, 1e160],
                   [0.0, scene.y0, 1e16, 0.0, 1.0, 3.0]):  # past ANGLE_BOUND: no count
         state = np.array(state)
-        for engine in (compiled, python):
+        for engine in (PAPER.kernels(), PAPER.kernels("python")):
             final = np.empty(6)
-            result = engine(integrate)(p, settings, state, np.empty((0, SAMPLE_COLUMNS)),
+            result = engine[integrate](p, settings, state, np.empty((0, SAMPLE_COLUMNS)),
                                        np.empty((0, EVENT_COLUMNS)), final, new_control())
             assert result.status == Status.NONFINITE, (method, engine, state)
             assert result.t == 0.0 and result.steps == 0
@@ -228,8 +222,7 @@ def test_the_sweep_ladder_gives_each_rung_its_budget():
     """The compiled ladder (basin, fractions, accuracy) as simulate's."""
     scene = load("paper").scene.with_overrides(method="symplectic_euler", dt=1e-4)
     states = np.array([[0.0, scene.y0, 0.0, 0.0, 1.197, 3.508]])
-    out = verified_labels(model_params(scene), run_settings(scene.integration),
-                          ladder_of(scene.integration), states)
+    out = Labeller.of(scene).label(states)
     assert out.status[0] == Status.SETTLED and out.rung[0] >= 1
     assert out.steps[0] > 20_000  # the second rung took more steps than the first's budget
 

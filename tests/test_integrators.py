@@ -17,13 +17,14 @@ from coincli.enums import Certainty, Status
 from coincli.integrators import METHODS, info
 from coincli.integrators.batch import rungs_agree
 from coincli.integrators.ladder import CHANGE_TOLERANCE, SETTLE_TOLERANCE
-from coincli.jit import python
-from coincli.model import energies, rounded_quarter_turns, well_index
-from coincli.params import ParameterError, model_params, state_array
+from coincli.models import PAPER, model_params
+from coincli.params import ParameterError, state_array
 from coincli.presets import load
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import reference as R  # noqa: E402
+
+PY = PAPER.kernels("python")  # the model's kernels as plain Python
 
 FIXED = [m.name for m in METHODS.values() if not m.adaptive]
 ADAPTIVE = [m.name for m in METHODS.values() if m.adaptive]
@@ -113,7 +114,7 @@ def at_rest_at_end(scene, name, dt, throw):
     tr = simulate(scene, force=True)
     if tr.status == Status.NONFINITE:
         return False, "non-finite"
-    kinetic, gravity, elastic = energies(model_params(scene), tr.final_state)
+    kinetic, gravity, elastic = PY.energies(model_params(scene), tr.final_state)
     total = kinetic + gravity + elastic
     ok = total < scene.e_crit and kinetic < 1e-12 * scene.e_crit
     return ok, (f"E/E_crit = {total / scene.e_crit:.3g}, "
@@ -276,8 +277,8 @@ def test_rungs_that_settle_apart_do_not_agree(paper):
     assert first.quarter_turns == second.quarter_turns == 10
     assert abs(first.last_change - second.last_change) < 1e-3
     assert abs(first.settle_time - second.settle_time) > 1e-2
-    assert not python(rungs_agree)(first.quarter_turns, first, second.quarter_turns, second,
-                                   CHANGE_TOLERANCE, SETTLE_TOLERANCE)
+    assert not PY[rungs_agree](first.quarter_turns, first, second.quarter_turns, second,
+                               CHANGE_TOLERANCE, SETTLE_TOLERANCE)
     tr = simulate(scene.with_overrides(verify=True))  # DOP853 at 1e-8 gets it at once
     assert tr.certainty == Certainty.CERTAIN and tr.quarter_turns == 8
 
@@ -434,12 +435,12 @@ def check_early_stop(paper, name, vy, vphi):
     assert early.settled and early.t_final < 2.0 and early.t_final == early.settle_time
     assert early.energy_final < paper.e_crit
     assert full.settled and full.t_final == pytest.approx(2.0)
-    kinetic = energies(p, full.final_state)[0]
+    kinetic = PY.energies(p, full.final_state)[0]
     # at rest an adaptive step hovers at the contact mode's stability limit: the kinetic energy
     # fluctuates between 1e-15 and 4e-12 J (1e-11 to 1e-8 of E_crit), a numerical floor
     assert kinetic < 1e-7 * paper.e_crit, "the full run must end at rest"
-    at_rest = rounded_quarter_turns(full.final_state[2])
-    assert well_index(p, full.final_state[2]) == at_rest
+    at_rest = PY.rounded_quarter_turns(full.final_state[2])
+    assert PY.well_index(p, full.final_state[2]) == at_rest
     assert early.quarter_turns == at_rest, (vy, vphi)
     assert full.quarter_turns == at_rest  # the well at the settle time, reported at t_end
     return early
@@ -468,7 +469,7 @@ def test_unsettled_run_is_reported_unsettled(paper, name):
     assert math.isnan(tr.settle_time)
     assert tr.t_final == pytest.approx(0.05)
     assert tr.energy_final > tr.e_crit
-    assert tr.quarter_turns == rounded_quarter_turns(tr.final_state[2])
+    assert tr.quarter_turns == PY.rounded_quarter_turns(tr.final_state[2])
     summary = tr.summary()
     assert summary["settled"] is False and summary["settle_time"] is None
     assert any("E_crit" in note for note in tr.notes)
@@ -491,7 +492,7 @@ def test_the_step_factor_reads_frexp_and_ldexp_from_the_bits():
         root = ((fifth[0] * x + fifth[1]) * x + fifth[2]) * x + fifth[3]
         return min(largest, max(0.2, 0.9 * math.ldexp(root * two_fifths[e - 5 * q], -q)))
 
-    factor = python(dopri.step_factor)
+    factor = PY[dopri.step_factor]
     rng = np.random.default_rng(0)
     errors = np.concatenate([np.geomspace(1e-11, 1e6, 4000), 10.0 ** rng.uniform(-10, 6, 4000),
                              [1e-10, 0.5, 1.0, 2.0 ** -33, 2.0 ** 20, 1e300, math.inf]])

@@ -108,11 +108,14 @@ def test_numba_caches_the_kernels_in_the_folder_and_keeps_its_own_setting(tmp_pa
 import sys
 import numba
 import numpy as np
-from coincli import jit, model
-from coincli.params import Scene, model_params
+from coincli import jit
+from coincli.models import PAPER, model_params
+from coincli.params import Scene
 first = sys.argv[1] == "first"
 assert jit.kernels_cached() != first
-energy = jit.compiled(model.total_energy)
+assert not jit.is_built(PAPER)
+energy = PAPER.kernels().total_energy
+assert jit.is_built(PAPER) and not jit.is_built(PAPER, jit.PYTHON)
 assert energy(model_params(Scene()), np.array([0.0, 0.01, 0.0, 0.0, 1.0, 3.0])) > 0
 assert numba.config.CACHE_DIR == sys.argv[2], numba.config.CACHE_DIR
 hits = sum(energy.stats.cache_hits.values())
@@ -138,16 +141,16 @@ def test_kernels_compiled_here_give_the_bits_the_cache_gives(tmp_path):
     code = """
 import hashlib
 import coincli
-from coincli import jit
-from coincli.integrators.batch import run_ladder, verified_labels
+from coincli.integrators.batch import run_ladder
+from coincli.models import PAPER
 from coincli.montecarlo import Draws, initial_states, make_sampling
 from coincli.montecarlo.batch import make_fraction_spec
 scene = coincli.load_preset("paper")
-spec = make_fraction_spec(scene)
+labeller = make_fraction_spec(scene)
 sampling = make_sampling(scene, phi0="-pi:pi")
 states = initial_states(scene, sampling, Draws(sampling).batch(0)[:4096])
-out = verified_labels(spec.params, spec.settings, spec.ladder, states)
-stats = jit.compiled(run_ladder).stats
+out = labeller.label(states)
+stats = PAPER.kernels()[run_ladder].stats
 print(sum(stats.cache_hits.values()), sum(stats.cache_misses.values()))
 print(hashlib.sha256(b"".join(a.tobytes() for a in out)).hexdigest())
 """

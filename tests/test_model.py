@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from conftest import run_kernel
 
-from coincli import model, simulate
+from coincli import simulate
 from coincli.enums import Status
 from coincli.integrators import METHODS, info
-from coincli.jit import compiled
-from coincli.params import model_params, state_array
+from coincli.models import PAPER, model_params
+from coincli.params import state_array
 from coincli.statics import analyse
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -91,14 +91,15 @@ def test_accelerations_and_energies_match_reference(paper, n_pen):
     rng = np.random.default_rng(100 + n_pen)
     for _ in range(200):
         st = random_state(rng, P, n_pen)
-        assert compiled(model.contact_mask)(p, st[1], st[2]) == R.mask(P, st[1], st[2])
-        got = compiled(model.accelerations_auto)(p, *st)
+        K = PAPER.kernels()
+        assert K.contact_mask(p, st[1], st[2]) == R.mask(P, st[1], st[2])
+        got = K.accelerations_auto(p, st)
         want = R.accelerations(P, st)
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * max(map(abs, want)))
-        got_e = compiled(model.energies)(p, np.array(st))
+        got_e = K.energies(p, np.array(st))
         want_e = R.energies(P, st)
         np.testing.assert_allclose(got_e, want_e, rtol=1e-12, atol=1e-15 * sum(want_e))
-        total = compiled(model.total_energy)(p, np.array(st))
+        total = K.total_energy(p, np.array(st))
         assert total == pytest.approx(sum(want_e), rel=1e-12)
 
 
@@ -111,7 +112,8 @@ def test_accelerations_with_given_mask_extend_the_force_law(paper):
     for _ in range(100):
         st = random_state(rng, P, int(rng.integers(0, 5)))
         m = int(rng.integers(0, 16))
-        got = compiled(model.accelerations)(p, *st, m)
+        got = PAPER.kernels().contact_accelerations(p, m, st, math.cos(st[2]),
+                                                    math.sin(st[2]))
         want = R.accelerations(P, st, {i for i in range(4) if m >> i & 1})
         np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * max(map(abs, want)))
 
@@ -153,19 +155,19 @@ def test_well_index(paper, phi_deg, well):
     one only +-5.71 deg; so 46 deg is still lying (round(2 phi / pi) would say 1)."""
     p = model_params(paper)
     phi = math.radians(phi_deg)
-    assert compiled(model.well_index)(p, phi) == well
+    assert PAPER.kernels().well_index(p, phi) == well
 
 
 def test_well_index_edges(paper):
     p = model_params(paper)
     phi_cr = paper.coin.phi_cr
     eps = 1e-9
-    assert compiled(model.well_index)(p, phi_cr - eps) == 0
-    assert compiled(model.well_index)(p, phi_cr + eps) == 1
-    assert compiled(model.well_index)(p, math.pi - phi_cr - eps) == 1
-    assert compiled(model.well_index)(p, math.pi - phi_cr + eps) == 2
-    assert compiled(model.well_index)(p, -phi_cr - eps) == -1
-    assert compiled(model.rounded_quarter_turns)(math.radians(46.0)) == 1
+    assert PAPER.kernels().well_index(p, phi_cr - eps) == 0
+    assert PAPER.kernels().well_index(p, phi_cr + eps) == 1
+    assert PAPER.kernels().well_index(p, math.pi - phi_cr - eps) == 1
+    assert PAPER.kernels().well_index(p, math.pi - phi_cr + eps) == 2
+    assert PAPER.kernels().well_index(p, -phi_cr - eps) == -1
+    assert PAPER.kernels().rounded_quarter_turns(math.radians(46.0)) == 1
 
 
 def test_e_crit_formula(paper):

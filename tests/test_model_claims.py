@@ -15,10 +15,9 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from coincli import model, simulate
+from coincli import simulate
 from coincli.enums import Status
-from coincli.jit import compiled
-from coincli.params import model_params
+from coincli.models import PAPER, model_params
 from coincli.presets import load
 from coincli.statics import analyse
 
@@ -30,8 +29,9 @@ M_PI_G = math.pi * 1e-3  # kg
 K = 1.0e4  # N/m
 C = 0.5  # N s/m
 INERTIA = 7.06e-8  # kg m^2
+PY = PAPER.kernels("python")  # the model's kernels as plain Python
 
-# body coordinates of the corners in the order of coincli.model (paper's corners 1..4)
+# body coordinates of the corners in the order of coincli.models.rectangle (paper's corners 1..4)
 BODY = [(R_D, -R_T), (-R_D, -R_T), (-R_D, R_T), (R_D, R_T)]
 
 
@@ -107,7 +107,7 @@ def test_printed_eq3_is_not_a_rigid_rotation():
 def test_implemented_corners_are_a_rigid_rotation():
     """The kernel's corner heights are y + (R(phi) p_i)_y, and |R(phi) p_i| = r."""
     p = model_params(load("paper").scene)
-    heights = compiled(model.corner_heights)
+    heights = PAPER.kernels().corner_heights
     for phi in np.linspace(-7.0, 7.0, 57):
         out = heights(p, 0.003, math.cos(phi), math.sin(phi))
         for i, b in enumerate(BODY):
@@ -173,7 +173,7 @@ def test_energy_balance_of_the_implemented_forces():
         offsets = [rotate(phi, b)[1] for b in BODY]
         y = rng.uniform(-max(offsets) - 1e-4, -min(offsets) + 1e-4)
         vx, vy, vphi = rng.normal(0, 0.5), rng.normal(0, 0.5), rng.normal(0, 20.0)
-        ax, ay, aphi = model.accelerations_auto(p, 0.0, y, phi, vx, vy, vphi)
+        ax, ay, aphi = PY.accelerations_auto(p, (0.0, y, phi, vx, vy, vphi))
         de_dt = (M_PI_G * (vx * ax + vy * ay) + INERTIA * vphi * aphi + M_PI_G * G * vy)
         loss = 0.0
         n_pen = 0
@@ -320,26 +320,26 @@ def test_wells_tile_the_angle_axis_and_match_well_index():
     for phi in rng.uniform(-20.0, 20.0, 4000):
         j = independent_well(phi)
         assert j is not None  # every angle off the boundaries is in exactly one well
-        assert model.well_index(p, phi) == j
+        assert PY.well_index(p, phi) == j
     # the boundaries are +-phi_cr + j pi: the well changes there, from j to j + 1
     for j in range(-3, 4):
         for b in (PHI_CR + j * math.pi, -PHI_CR + j * math.pi):
             below, above = independent_well(b - 1e-9), independent_well(b + 1e-9)
             assert below is not None and above == below + 1
-            assert model.well_index(p, b - 1e-9) == below
-            assert model.well_index(p, b + 1e-9) == above
+            assert PY.well_index(p, b - 1e-9) == below
+            assert PY.well_index(p, b + 1e-9) == above
 
 
 def test_well_and_rounding_differ_between_45_degrees_and_phi_cr():
     p = model_params(load("paper").scene)
     for deg in (46.0, 60.0, 84.0, -50.0, 180.0 + 70.0):
         phi = math.radians(deg)
-        j_round = model.rounded_quarter_turns(phi)
+        j_round = PY.rounded_quarter_turns(phi)
         assert j_round % 2 == 1  # rounding says standing
-        assert model.well_index(p, phi) % 2 == 0  # the coin is in a lying well
+        assert PY.well_index(p, phi) % 2 == 0  # the coin is in a lying well
     for deg in (30.0, 85.0, 95.0, 180.0):
         phi = math.radians(deg)
-        assert model.well_index(p, phi) == model.rounded_quarter_turns(phi)
+        assert PY.well_index(p, phi) == PY.rounded_quarter_turns(phi)
 
 
 # -- the standing well: k_cr / 2, and the rocking limit ------------------------------------------

@@ -15,9 +15,8 @@ from conftest import outputs_in_a_kernel, shows_a_widget
 import coincli
 from coincli.defaults import DEFAULT_LOG_EVERY
 from coincli.integrators.common import EVENT_COLUMNS, LIFTOFF, ONSET, SAMPLE_COLUMNS
-from coincli.jit import python
-from coincli.model import energies
-from coincli.params import STATE_NAMES, ParameterError, model_params
+from coincli.models import PAPER, model_params
+from coincli.params import STATE_NAMES, ParameterError
 from coincli.recordings import rrd as rrd_io
 from coincli.recordings import stream as rerun_stream
 from coincli.recordings.frames import build_frames
@@ -72,7 +71,7 @@ def test_to_dataset_names_every_variable_with_units(run, scene):
     # the energies are the model's own, sample by sample
     p = model_params(scene)
     for row in (0, len(run.samples) // 2, len(run.samples) - 1):
-        kinetic, gravity, elastic = python(energies)(p, run.samples[row, 1:])
+        kinetic, gravity, elastic = PAPER.kernels("python").energies(p, run.samples[row, 1:])
         assert ds.kinetic.values[row] == pytest.approx(kinetic, rel=1e-12)
         assert ds.elastic.values[row] == pytest.approx(elastic, rel=1e-12, abs=1e-18)
         assert ds.energy.values[row] == pytest.approx(kinetic + gravity + elastic, rel=1e-12)

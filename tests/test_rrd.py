@@ -16,9 +16,8 @@ from typer.testing import CliRunner
 
 from coincli import __version__, simulate
 from coincli.cli import app
-from coincli.model import accelerations
-from coincli.model import energies as model_energies
-from coincli.params import Scene, model_params
+from coincli.models import PAPER, model_params
+from coincli.params import Scene
 from coincli.presets import load
 from coincli.recordings import frames as frames_io
 from coincli.recordings import rrd as rrd_io
@@ -271,14 +270,16 @@ def test_blueprint_is_stored(fig2):
 def test_energies_and_forces_match_the_model(fig2):
     tr, frames, _, _ = fig2
     p = model_params(tr.scene)
+    model = PAPER.kernels("python")
     for row in range(0, len(frames), 7):
         state = frames.state[row]
-        kinetic, gravity, elastic = model_energies(p, state)
+        kinetic, gravity, elastic = model.energies(p, state)
         assert frames.kinetic[row] == pytest.approx(kinetic, rel=1e-12, abs=1e-18)
         assert frames.gravitational[row] == pytest.approx(gravity, rel=1e-12, abs=1e-18)
         assert frames.elastic[row] == pytest.approx(elastic, rel=1e-12, abs=1e-18)
         mask = int(sum(1 << i for i in range(4) if frames.contact[row, i]))
-        ax, ay, _ = accelerations(p, *state, mask)
+        ax, ay, _ = model.contact_accelerations(p, mask, state, math.cos(state[2]),
+                                                math.sin(state[2]))
         fx, fy = frames.forces[row].sum(axis=0)
         m = tr.scene.coin.mass
         assert fx == pytest.approx(m * ax, rel=1e-9, abs=1e-12)

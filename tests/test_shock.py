@@ -14,9 +14,7 @@ import coincli
 from coincli import ParameterError
 from coincli.cli import app, stability_cmd
 from coincli.enums import Certainty, Status
-from coincli.jit import python
-from coincli.model import accelerations_auto, total_energy_at
-from coincli.params import model_params
+from coincli.models import PAPER, model_params
 from coincli.shock import PRECISION, Kick, minimal_shock
 from coincli.statics import analyse, rest
 
@@ -42,10 +40,11 @@ def test_the_rest_state_is_at_rest_in_the_model(paper, pose):
     (to rounding of g) and its energy is the one statics gives; the depth is E_crit minus it."""
     at_rest = rest(paper, pose)
     p = model_params(paper)
-    ax, ay, aphi = python(accelerations_auto)(p, 0.0, at_rest.y, at_rest.phi, 0.0, 0.0, 0.0)
+    python = PAPER.kernels("python")
+    ax, ay, aphi = python.accelerations_auto(p, (0.0, at_rest.y, at_rest.phi, 0.0, 0.0, 0.0))
     assert abs(ax) < 1e-12 and abs(ay) < 1e-12 * paper.g
     assert abs(aphi) < 1e-9  # rad/s^2: cos(pi/2) is 6e-17, not 0
-    energy = python(total_energy_at)(p, at_rest.y, at_rest.phi, 0.0, 0.0, 0.0)
+    energy = python.total_energy(p, (0.0, at_rest.y, at_rest.phi, 0.0, 0.0, 0.0))
     assert energy == pytest.approx(at_rest.energy, rel=1e-12)
     assert at_rest.depth == pytest.approx(paper.e_crit - energy, rel=1e-9)
     assert at_rest.quarter_turns == (1 if pose == "standing" else 0)

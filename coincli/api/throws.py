@@ -84,11 +84,10 @@ def method_table(scene: Scene) -> MethodTable:
     mode does not grow (``simulate`` and ``basin`` refuse a larger ``dt`` without
     ``force``)."""
     from ..integrators import METHODS
-    from ..model import stiffest_frequency
-    from ..params import model_params
+    from ..models import stiffest_frequency
 
     scene = validate(scene)
-    omega, zeta = stiffest_frequency(model_params(scene))
+    omega, zeta = stiffest_frequency(scene)
     rows = tuple({"name": m.name, "order": m.order, "adaptive": m.adaptive,
                   "symplectic": m.symplectic, "stable_step": m.stable_step(scene),
                   "summary": m.summary, "default": m.method == scene.integration.method}
@@ -116,7 +115,7 @@ def step_bound(scene: Scene) -> StepBound:
 
     from ..integrators import info
     from ..integrators.ladder import ladder_of
-    from ..model import scene_horizon
+    from ..models import scene_horizon
 
     integ = scene.integration
     if info(integ.method).adaptive:
@@ -134,16 +133,11 @@ def compile_kernels() -> bool:
     ``FIRST_COMPILE_SECONDS``. Whatever the scene, the kernels take the same argument types, so
     the default scene's compile serves every later one. True if it compiled. Silent: a caller
     that wants to show the wait does (``coin compile``)."""
-    import numpy as np
-
-    from ..integrators import warm_up
-    from ..params import model_params, run_settings
+    from ..labeller import Labeller
 
     if jit.kernels_cached():
         return False
-    scene = Scene()
-    warm_up(model_params(scene), run_settings(scene.integration),
-            np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+    Labeller.of(Scene()).compile_all()
     return True
 
 

@@ -25,10 +25,10 @@ def _registry():
     return registry
 
 
-def _model():
-    from .. import model
+def _models():
+    from .. import models
 
-    return model
+    return models
 
 
 def _files():
@@ -64,8 +64,8 @@ _LAZY = {
     "setting_text": (_registry, "setting_text"),
     "ladder_of": (_ladder, "ladder_of"),
     # how long a run may last (s: t_end, or the throw's cap) and that rule in words
-    "scene_horizon": (_model, "scene_horizon"),
-    "horizon_text": (_model, "horizon_text"),
+    "scene_horizon": (_models, "scene_horizon"),
+    "horizon_text": (_models, "horizon_text"),
     # an OSError in one line ('cannot write out.zarr: read-only file system'); any error in
     # one line; the errnos of a disk that refuses a write; the OSError of an output found
     # unwritable before any work (its str() is the whole line)

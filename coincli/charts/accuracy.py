@@ -10,12 +10,11 @@ import json
 import math
 from pathlib import Path
 
-from ..enums import Method
 from ..files import atomic_output, save_figure
+from ..integrators.registry import METHODS
 from ..version import __version__
 
-COLOURS = {Method.SYMPLECTIC_EULER: "#d62728", Method.VERLET: "#ff7f0e", Method.RK4: "#2ca02c",
-           Method.DOPRI5: "#1f77b4", Method.EVENT: "#9467bd", Method.EVENT_DOP853: "#8c564b"}
+COLOURS = {method: entry.colour for method, entry in METHODS.items()}  # the registry's
 
 
 PANELS_HINT = " (panels= says which to draw)"  # for the charts of several panels

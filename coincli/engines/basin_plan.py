@@ -205,8 +205,7 @@ def estimate_sweep(plan: SweepPlan, threads: int | None = None, *, workers: int 
             state[grid.axes[0].index] = c0[i]
             state[grid.axes[1].index] = c1[j]
             before = time.thread_time()
-            out = spec.labeller.label(state[None, :],
-                                  control)
+            out = spec.labeller.label(state[None, :], control)
             cpu += time.thread_time() - before
             timed += 1
             if out.status[0] == Status.INTERRUPTED:

@@ -1,8 +1,7 @@
-"""Integration methods: fixed-step kernels, the adaptive event-locating kernel, the batch runner
-and the registry that describes them."""
+"""Integration methods: fixed-step kernels, the adaptive event-locating kernel, the verification
+ladder over a batch, and the registry that describes them (the one list of methods)."""
 
-from .batch import NO_LABEL, Labels, final_state, integrate, label_states, new_control, warm_up
+from .batch import NO_LABEL, new_control
 from .registry import METHODS, MethodInfo, check_step, info
 
-__all__ = ["METHODS", "Labels", "MethodInfo", "NO_LABEL", "check_step", "final_state", "info",
-           "integrate", "label_states", "new_control", "warm_up"]
+__all__ = ["METHODS", "MethodInfo", "NO_LABEL", "check_step", "info", "new_control"]

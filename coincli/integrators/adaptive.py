@@ -39,24 +39,26 @@ from __future__ import annotations
 
 import math
 
-from ..enums import Method, Status
+from ..enums import Status
 from ..jit import kernel
-from ..model import (
+from ..models.interface import (
+    CORNERS,
     below,
     corner_heights,
-    corner_offset,
+    corner_rates,
     energy_with_heights,
     last_boundary,
-    rotate,
     run_horizon,
     well_index,
 )
+from ..models.rotation import rotate
 from .common import (
     NO_WELL,
     RunResult,
     is_finite_state,
     record_events,
     record_sample,
+    store_state,
     unstartable,
 )
 from .dopri import (
@@ -70,6 +72,7 @@ from .dopri import (
     step_factor,
 )
 from .flight import flight_state, time_to_touchdown
+from .registry import CLOSED_FORM_FLIGHT
 
 EVENT_BAND = 1e-13  # m, a contact corner lifts off above this height (hysteresis; the state
 # error it causes is proportional to it and ~1e-9 of the coin's scale; rounding of y is 1e-18 m)
@@ -79,13 +82,6 @@ MAX_TURN = 0.1  # rad, largest rotation in one step (a corner's dip lasts ~0.2 r
 SCAN_TURN = math.pi / 64.0  # rad, pieces in which a step is scanned for crossings
 FIRST_STEP = 0.5  # the first step of a contact phase, in units of 1 / omega
 NO_EVENT = 2.0  # theta of a step without an event
-
-
-@kernel
-def corner_rates(p, vy, vphi, c, s):
-    """Vertical speeds vy + vphi d_xi of the four corners (c, s: trig of the angle)."""
-    return (vy + vphi * corner_offset(p, 0, c, s)[0], vy + vphi * corner_offset(p, 1, c, s)[0],
-            vy + vphi * corner_offset(p, 2, c, s)[0], vy + vphi * corner_offset(p, 3, c, s)[0])
 
 
 @kernel
@@ -193,7 +189,7 @@ def crossing_in(p, rc, h, mode, lo, hi, before, after, v_before, v_after, c, s):
     the corners that switch there), or (NO_EVENT, 0)."""
     theta_event = NO_EVENT
     event_mask = 0
-    for i in range(4):
+    for i in range(CORNERS):
         in_contact = (mode >> i) & 1
         level = EVENT_BAND if in_contact else 0.0
         crossed = after[i] > level if in_contact else after[i] < level
@@ -252,7 +248,7 @@ def find_event(p, rc, h, mode, pieces, heights_start, heights_end, rates_start, 
 def may_cross(mode, heights_start, heights_end, rates_start, rates_end, h):
     """Whether any corner ends a step of h seconds on the other side of its event level, or
     may have crossed it and come back within the step."""
-    for i in range(4):
+    for i in range(CORNERS):
         in_contact = (mode >> i) & 1
         if in_contact:
             if heights_end[i] > EVENT_BAND:
@@ -270,13 +266,13 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
     """Dormand-Prince 5(4) (or, in the copy of :mod:`.pairs`, DOP853) with located contact
     events; for the event methods, closed-form flight between contacts. Same contract as
     :func:`coincli.integrators.fixed.integrate_fixed`."""
-    if not is_finite_state(state[0], state[1], state[2], state[3], state[4], state[5]):
+    if not is_finite_state(state):
         return unstartable(state, final)
     rtol = settings.rtol
     t_end = run_horizon(p, settings.t_end, state)
     stop_on_settle = settings.stop_on_settle
     budget = settings.max_steps
-    exact_flight = settings.method != Method.DOPRI5
+    exact_flight = CLOSED_FORM_FLIGHT[settings.method]
     sample_dt = settings.sample_dt
     record = samples.shape[0] > 0 and sample_dt > 0.0
     scales = error_scales(p, rtol)
@@ -290,11 +286,10 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
     n_samples = 0
     n_events = 0
     if record:
-        n_samples = record_sample(samples, 0, 0.0, st[0], st[1], st[2], st[3], st[4], st[5])
+        n_samples = record_sample(samples, 0, 0.0, st)
     next_sample = sample_dt
     if events.shape[0] > 0 and mode != 0:
-        n_events = record_events(events, 0, 0.0, 0, mode, st[0], st[1], st[2], st[3], st[4],
-                                 st[5])
+        n_events = record_events(events, 0, 0.0, 0, mode, st)
     status = Status.UNSETTLED
     settle_time = math.nan
     n_well = NO_WELL
@@ -326,14 +321,13 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             if record:
                 while next_sample <= t + tau and n_samples < samples.shape[0]:
                     at = flight_state(p, st, next_sample - t)
-                    n_samples = record_sample(samples, n_samples, next_sample, at[0], at[1],
-                                              at[2], at[3], at[4], at[5])
+                    n_samples = record_sample(samples, n_samples, next_sample, at)
                     next_sample += sample_dt
             crossed = last_boundary(p, st[2], st[2] + st[5] * tau)
             if crossed == crossed:  # not NaN: exact, the flight turns uniformly
                 last_change = t + (crossed - st[2]) / st[5]
             st = flight_state(p, st, tau)
-            if not is_finite_state(st[0], st[1], st[2], st[3], st[4], st[5]):
+            if not is_finite_state(st):
                 # a flight that overflows (or a NaN tau) must not end at t_end as if it had
                 # landed well: no outcome, and no cosine of an infinite angle below
                 t = t + tau if tau < t_end - t else t_end
@@ -349,8 +343,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             t = t + tau if touching != 0 else t_end
             steps += 1
             if touching != 0:
-                n_events = record_events(events, n_events, t, mode, touching, st[0], st[1],
-                                         st[2], st[3], st[4], st[5])
+                n_events = record_events(events, n_events, t, mode, touching, st)
                 mode = touching
                 h = first_step
                 k1 = derivative(p, mode, st, c, s)
@@ -389,8 +382,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             if record:
                 while next_sample <= t_new and n_samples < samples.shape[0]:
                     at = dense_point(rc, (next_sample - t) / h)
-                    n_samples = record_sample(samples, n_samples, next_sample, at[0], at[1],
-                                              at[2], at[3], at[4], at[5])
+                    n_samples = record_sample(samples, n_samples, next_sample, at)
                     next_sample += sample_dt
             if event_mask != 0:
                 end = dense_point(rc, theta)
@@ -408,13 +400,12 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
         s = s7
         heights = heights_end
         rates = rates_end
-        if not is_finite_state(st[0], st[1], st[2], st[3], st[4], st[5]):
+        if not is_finite_state(st):
             status = Status.NONFINITE
             break
         if event_mask != 0:
             new_mode = mode ^ event_mask
-            n_events = record_events(events, n_events, t, mode, new_mode, st[0], st[1], st[2],
-                                     st[3], st[4], st[5])
+            n_events = record_events(events, n_events, t, mode, new_mode, st)
             if mode == 0:
                 h = first_step  # a touch-down: the contact's own time scale
             mode = new_mode
@@ -430,16 +421,14 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
             h *= step_factor(err, memory, 5.0)
             memory = controller_memory(err)
     if record and n_samples > 0 and samples[n_samples - 1, 0] < t:
-        n_samples = record_sample(samples, n_samples, t, st[0], st[1], st[2], st[3], st[4],
-                                  st[5])
+        n_samples = record_sample(samples, n_samples, t, st)
     if status == Status.SETTLED and not (energy_with_heights(p, st[1], st[3], st[4], st[5],
                                                              heights) < p.e_crit):
         # energy cannot rise again physically: a void certificate (see integrate_fixed)
         status = Status.UNSETTLED
         n_well = NO_WELL
         settle_time = math.nan
-    for j in range(6):
-        final[j] = st[j]
+    store_state(final, st)
     return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events, last_change)
 
 

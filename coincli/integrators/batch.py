@@ -1,5 +1,7 @@
-"""One entry point for every method (:func:`integrate`), the batch runner the sweeps use, and
-their plain-Python conveniences (the shapes and dtypes every caller uses).
+"""One entry point for every method (:func:`integrate`), the verification ladder over a batch
+of initial states (:func:`run_ladder`), and what their callers hand them and get back (the
+shapes and dtypes every caller uses). The labeller (:mod:`coincli.labeller`) is the one door to
+them: it runs them from the kernel set of a scene's model and backend.
 
 Methods are identified by their :class:`coincli.enums.Method` value so that one compiled kernel
 serves them all; their names, orders and properties live in :mod:`.registry`.
@@ -11,26 +13,29 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..enums import Certainty, Method, Status
-from ..jit import compiled, kernel, kernels_cached, mark_cached, python
-from ..model import rounded_quarter_turns
+from ..enums import Certainty, Status
+from ..jit import kernel
+from ..models.interface import rounded_quarter_turns
 from ..params import RunSettings
 from .adaptive import integrate_adaptive
 from .common import EVENT_COLUMNS, NO_WELL, SAMPLE_COLUMNS
 from .fixed import integrate_fixed
 from .pairs import integrate_adaptive_dop853
+from .registry import DOP853_PAIR, DOPRI5_PAIR, DRIVER_OF
 
 NO_LABEL = NO_WELL  # quarter_turns of a cell without a count (int16 fill of the stores)
 
 
 @kernel(inline=True)  # in the batch runners, a run costs no call and no reference counting
 def integrate(p, settings, state, samples, events, final, control):
-    """Run one trajectory from ``state`` with ``settings`` (a RunSettings); returns a RunResult
-    and writes the final state into ``final``. Setting ``control[0]`` (from another thread)
+    """Run one trajectory from ``state`` with ``settings`` (a RunSettings), on the driver the
+    registry names for its method; returns a RunResult and writes the final state into
+    ``final``. Setting ``control[0]`` (from another thread)
     stops it with status INTERRUPTED."""
-    if settings.method == Method.DOPRI5 or settings.method == Method.EVENT:
+    driver = DRIVER_OF[settings.method]
+    if driver == DOPRI5_PAIR:
         return integrate_adaptive(p, settings, state, samples, events, final, control)
-    if settings.method == Method.EVENT_DOP853:
+    if driver == DOP853_PAIR:
         return integrate_adaptive_dop853(p, settings, state, samples, events, final, control)
     return integrate_fixed(p, settings, state, samples, events, final, control)
 
@@ -45,22 +50,6 @@ def outcome_label(status, n_well, final_phi):
     if status == Status.UNSETTLED:
         return rounded_quarter_turns(final_phi)
     return NO_LABEL
-
-
-@kernel
-def run_batch(p, settings, states, no_samples, no_events, final, quarter_turns, status,
-              settle_time, steps, control):
-    """Integrate every row of ``states`` (N x 6) and write the outcome of each into the output
-    arrays (quarter_turns int16, status uint8, settle_time float32, steps int64); no_samples,
-    no_events and final are the runs' scratch (:func:`unrecorded`). Releases the GIL, so
-    threads run batches on all cores; ``control[0]`` set stops every row still to run (status
-    INTERRUPTED)."""
-    for row in range(states.shape[0]):
-        result = integrate(p, settings, states[row], no_samples, no_events, final, control)
-        quarter_turns[row] = outcome_label(result.status, result.n_well, final[2])
-        status[row] = result.status
-        settle_time[row] = result.settle_time
-        steps[row] = result.steps
 
 
 @kernel(inline=True)
@@ -149,15 +138,6 @@ def run_ladder(p, settings, methods, rtols, dts, budgets, change_tolerance, sett
         rung[row] = last
 
 
-class Labels(NamedTuple):
-    """Per-trajectory outcomes of a batch, one entry per row of the states."""
-
-    quarter_turns: np.ndarray  # int16, NO_LABEL where there is none
-    status: np.ndarray  # uint8 Status values
-    settle_time: np.ndarray  # float32 s, NaN where never settled
-    steps: np.ndarray  # int64
-
-
 class VerifiedLabels(NamedTuple):
     """Per-trajectory verified outcomes: Labels plus how sure each is."""
 
@@ -167,22 +147,6 @@ class VerifiedLabels(NamedTuple):
     steps: np.ndarray  # int64, summed over the rungs run
     certainty: np.ndarray  # uint8 Certainty values
     rung: np.ndarray  # int8, index of the last rung run
-
-
-def verified_labels(p, settings, ladder, states, control=None) -> VerifiedLabels:
-    """Run every row of ``states`` up the ladder (a Ladder; compiled, releases the GIL)."""
-    n = states.shape[0]
-    out = VerifiedLabels(np.empty(n, np.int16), np.empty(n, np.uint8), np.empty(n, np.float32),
-                         np.empty(n, np.int64), np.empty(n, np.uint8), np.empty(n, np.int8))
-    compiled(run_ladder)(p, settings, np.asarray(ladder.methods, dtype=np.int64),
-                         np.asarray(ladder.rtols, dtype=np.float64),
-                         np.asarray(ladder.dts, dtype=np.float64),
-                         np.asarray([ladder.budget(k, settings.max_steps)
-                                     for k in range(len(ladder))], dtype=np.int64),
-                         float(ladder.change_tolerance), float(ladder.settle_tolerance),
-                         np.ascontiguousarray(states, dtype=np.float64), *unrecorded(), *out,
-                         new_control() if control is None else control)
-    return out
 
 
 def new_control():
@@ -220,17 +184,6 @@ def interruptible(run, control):
     return value
 
 
-def label_states(p, settings, states, control=None) -> Labels:
-    """Run every row of ``states`` (compiled; releases the GIL)."""
-    n = states.shape[0]
-    out = Labels(np.empty(n, np.int16), np.empty(n, np.uint8), np.empty(n, np.float32),
-                 np.empty(n, np.int64))
-    compiled(run_batch)(p, settings, np.ascontiguousarray(states, dtype=np.float64),
-                        *unrecorded(), *out,
-                        new_control() if control is None else control)
-    return out
-
-
 def unrecorded():
     """(no_samples, no_events, final): what a run that records nothing on the way is given, the
     arrays typed as the batch kernels pass them on. Made here, once per batch, rather than in
@@ -238,75 +191,5 @@ def unrecorded():
     return np.empty((0, SAMPLE_COLUMNS)), np.empty((0, EVENT_COLUMNS)), np.empty(6)
 
 
-def _run_once(kernel_fn, p, settings, state):
-    """(final state, RunResult) of one compiled run of ``kernel_fn`` (integrate or one of the
-    drivers it calls, which take the same arguments), nothing recorded on the way, so that a
-    driver compiled by this call is the specialisation integrate calls."""
-    no_samples, no_events, final = unrecorded()
-    result = compiled(kernel_fn)(p, settings, np.ascontiguousarray(state, dtype=np.float64),
-                                 no_samples, no_events, final, new_control())
-    return final, result
-
-
-def integrate_once(p, settings, state, samples, events, final, control, interpreted=False):
-    """:func:`integrate` once, compiled (or, ``interpreted``, as plain Python)."""
-    kernel = python(integrate) if interpreted else compiled(integrate)
-    return kernel(p, settings, state, samples, events, final, control)
-
-
-def final_state(p, settings, state) -> tuple[np.ndarray, Status]:
-    """(final state, status) of one compiled run, nothing recorded on the way."""
-    final, result = _run_once(integrate, p, settings, state)
-    return final, Status(result.status)
-
-
-def dop853_sample_run():
-    """(p, settings, state) of a short DOP853 throw of the default scene: what compiles the
-    DOP853 driver (only the argument types matter)."""
-    from ..params import Scene, model_params, run_settings
-
-    scene = Scene()
-    settings = run_settings(scene.integration)
-    settings = settings._replace(method=int(Method.EVENT_DOP853), t_end=settings.dt * 4)
-    return model_params(scene), settings, np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0])
-
-
-def compile_dop853_driver() -> None:
-    """Compile the DOP853 driver, the largest kernel, into the cache, as the specialisation
-    integrate calls (:func:`_run_once`)."""
-    _run_once(integrate_adaptive_dop853, *dop853_sample_run())
-
-
-def warm_up(p, settings, state, runs=None) -> None:
-    """Load the compiled kernels behind ``runs`` (some of final_state, label_states and
-    verified_labels; default all three) from numba's cache before a clock starts. Each is
-    loaded by a short call whose arrays have the same types as in every real call, so the same
-    specialisations load. A command loads only those it runs (the first load also imports what
-    numba needs to load machine code, 0.3 s; each after it 0.03 s), except on the first run of
-    these sources on this machine, which compiles all three at once, as the notice before it
-    says (:func:`coincli.jit.kernels_cached`), and marks them compiled."""
-    from .ladder import Ladder
-
-    every = (final_state, label_states, verified_labels)
-    first = not kernels_cached()
-    runs = every if runs is None or first else runs
-    if first:
-        # the largest compilation first, while the process holds the least: the lowest peak
-        # memory (docs/performance.md, "First compile")
-        compile_dop853_driver()
-    short = settings._replace(t_end=settings.dt * 4)
-    states = np.array([state], dtype=np.float64)
-    if final_state in runs:
-        final_state(p, short._replace(stop_on_settle=False), state)
-    if label_states in runs:
-        label_states(p, short._replace(stop_on_settle=True), states)
-    if verified_labels in runs:
-        verified_labels(p, short, Ladder((settings.method,) * 2, (settings.rtol,) * 2,
-                                         (settings.dt,) * 2, True), states)
-    if runs == every:
-        mark_cached()
-
-
-__all__ = ["Labels", "NO_LABEL", "VerifiedLabels", "final_state", "integrate", "interruptible",
-           "label_states", "new_control", "outcome_label", "run_batch", "run_ladder", "rungs_agree",
-           "stops_ladder", "verified_labels", "warm_up"]
+__all__ = ["NO_LABEL", "VerifiedLabels", "integrate", "interruptible", "new_control",
+           "outcome_label", "run_ladder", "rungs_agree", "stops_ladder", "unrecorded"]

@@ -8,6 +8,7 @@ from typing import NamedTuple
 
 from ..enums import Status
 from ..jit import kernel
+from ..models.interface import CORNERS
 
 NO_WELL = -32768  # n_well of a run that has not settled (the int16 fill of the stores)
 
@@ -35,13 +36,14 @@ ANGLE_BOUND = 1e15  # rad: past it a quarter turn is below the angle's rounding 
 
 
 @kernel
-def is_finite_state(x, y, phi, vx, vy, vphi):
-    # NaN fails every comparison; FINITE_BOUND catches a blow-up before it overflows to inf.
-    # An angle past ANGLE_BOUND has no count of quarter turns (round(2 phi / pi) would be
-    # rounding noise, and past 1.4e19 rad overflow the count's integer).
+def is_finite_state(st):
+    """Whether the state (a 6-tuple or array) can be integrated on. NaN fails every comparison;
+    FINITE_BOUND catches a blow-up before it overflows to inf. An angle past ANGLE_BOUND has no
+    count of quarter turns (round(2 phi / pi) would be rounding noise, and past 1.4e19 rad
+    overflow the count's integer)."""
     big = FINITE_BOUND
-    return (abs(x) < big and abs(y) < big and abs(phi) < ANGLE_BOUND and abs(vx) < big
-            and abs(vy) < big and abs(vphi) < big)
+    return (abs(st[0]) < big and abs(st[1]) < big and abs(st[2]) < ANGLE_BOUND
+            and abs(st[3]) < big and abs(st[4]) < big and abs(st[5]) < big)
 
 
 @kernel
@@ -50,54 +52,44 @@ def unstartable(state, final):
     (a speed of 1e308 m/s, which a sweep's range can hold): status NONFINITE at t = 0, not a
     step taken. Run, it would overflow at once (to a NaN that ends a closed-form flight at
     t_end as if it had gone well) and, as plain Python, stop on a math domain error."""
-    for j in range(6):
-        final[j] = state[j]
+    store_state(final, state)
     return RunResult(0.0, 0, Status.NONFINITE, math.nan, NO_WELL, 0, 0, math.nan)
 
 
 @kernel
-def record_events(events, n_events, t, old_mask, new_mask, x, y, phi, vx, vy, vphi):
-    """Append one row per corner whose contact state changed between old_mask and new_mask."""
+def record_events(events, n_events, t, old_mask, new_mask, st):
+    """Append one row per corner whose contact state changed between old_mask and new_mask,
+    with the state ``st`` there."""
     changed = old_mask ^ new_mask
     if changed == 0:
         return n_events
-    for i in range(4):
+    for i in range(CORNERS):
         if changed & (1 << i) and n_events < events.shape[0]:
             row = events[n_events]
             row[0] = t
             row[1] = i
             row[2] = ONSET if new_mask & (1 << i) else LIFTOFF
-            row[3] = x
-            row[4] = y
-            row[5] = phi
-            row[6] = vx
-            row[7] = vy
-            row[8] = vphi
+            for j in range(6):
+                row[3 + j] = st[j]
             n_events += 1
     return n_events
 
 
 @kernel
-def store_state(out, x, y, phi, vx, vy, vphi):
-    out[0] = x
-    out[1] = y
-    out[2] = phi
-    out[3] = vx
-    out[4] = vy
-    out[5] = vphi
+def store_state(out, st):
+    """The state ``st`` into the array ``out``."""
+    for j in range(6):
+        out[j] = st[j]
 
 
 @kernel
-def record_sample(samples, n_samples, t, x, y, phi, vx, vy, vphi):
+def record_sample(samples, n_samples, t, st):
+    """Append the state ``st`` at time ``t`` to the samples, while they have room."""
     if n_samples < samples.shape[0]:
         row = samples[n_samples]
         row[0] = t
-        row[1] = x
-        row[2] = y
-        row[3] = phi
-        row[4] = vx
-        row[5] = vy
-        row[6] = vphi
+        for j in range(6):
+            row[1 + j] = st[j]
         n_samples += 1
     return n_samples
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 
 from ..jit import kernel
-from ..model import rotate
+from ..models.rotation import rotate
 from .dopri import ZERO, combine, derivative, stage
 
 # A2: stages 1

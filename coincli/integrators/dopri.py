@@ -1,16 +1,16 @@
 """One Dormand-Prince 5(4) step of the coin in a fixed contact mode, its error estimate and its
 continuous extension (Hairer's ``contd5``, 4th order).
 
-States and stage derivatives are 6-tuples of floats (x, y, phi, vx, vy, vphi), which numba keeps
-in registers: no arrays, no calls in the step (every helper here is inlined). The derivative of
-the positions is the stage's velocity; only the accelerations need the model. The cosine and
-sine of each stage's angle come from those at the step's start by a small rotation
-(:func:`coincli.model.rotate`), and so are those at its end, which the next step, the event
-scan and the energy check start from. The driver takes them from the library once, at the start
-of a run, and carries them through flights (:mod:`.flight`) and events (a rotation over the
-step, as here): they follow the angle the run computes to within 2e-14 over whole 2 s box throws
-at rtol 1e-6 and 1e-10 (measured against the library's cos and sin of that angle at every
-contact onset and event), a few of its own rounding units at the tens of radians a throw turns.
+States and stage derivatives are 6-tuples of floats (x, y, phi, vx, vy, vphi), which numba keeps in
+registers: no arrays, no calls in the step (every helper here is inlined). The derivative of the
+positions is the stage's velocity; only the accelerations need the model. The cosine and sine of
+each stage's angle come from those at the step's start by a small rotation
+(:func:`coincli.models.rotation.rotate`), and so are those at its end, which the next step, the
+event scan and the energy check start from. The driver takes them from the library once, at the
+start of a run, and carries them through flights (:mod:`.flight`) and events (a rotation over the
+step, as here): they follow the angle the run computes to within 2e-14 over whole 2 s box throws at
+rtol 1e-6 and 1e-10 (measured against the library's cos and sin of that angle at every contact onset
+and event), a few of its own rounding units at the tens of radians a throw turns.
 """
 
 from __future__ import annotations
@@ -20,7 +20,8 @@ import math
 import numpy as np
 
 from ..jit import kernel
-from ..model import contact_accelerations, rotate
+from ..models.interface import contact_accelerations
+from ..models.rotation import rotate
 
 # Dormand-Prince 5(4): rows of the tableau, the 5th-order weights B, the error weights E (5th
 # minus 4th order, including the FSAL stage 7) and the dense-output weights D (Hairer, contd5).
@@ -59,7 +60,7 @@ def combine(base, h, weights, stages):
 @kernel(inline=True)
 def derivative(p, mode, state, c, s):
     """Time derivative of ``state`` (c, s: cosine and sine of its angle) in contact mode."""
-    ax, ay, aphi = contact_accelerations(p, mode, state[1], state[3], state[4], state[5], c, s)
+    ax, ay, aphi = contact_accelerations(p, mode, state, c, s)
     return (state[3], state[4], state[5], ax, ay, aphi)
 
 

@@ -2,14 +2,14 @@
 
 Between contacts the centroid flies on a parabola and the coin turns uniformly, so the ``event``
 method does not integrate flight: it jumps to the next touch-down. That instant is found by
-second-order conservative advancement: each corner's height h obeys h'' >= -(g + vphi^2 r)
-(gravity, and the centripetal term of a point at distance r turning at vphi), so
-h(t + s) >= h + h' s - (g + vphi^2 r) s^2 / 2, and advancing by the first root of that bound
-can never step over a contact, however grazing. Near a transversal root the bound is tight to
-O(s^2), so convergence is quadratic (3-5 iterations per flight). The angle's cosine and sine
-are carried from one iteration to the next by rotation (:func:`coincli.model.rotate`, exact to
-rounding) rather than taken from the library at each: a box throw's flights iterate about 54
-times, and libm's sincos at angles of up to 100 rad was a tenth of a single pass.
+second-order conservative advancement: each corner's height h obeys h'' >= -(g + vphi^2 r) (gravity,
+and the centripetal term of a point at distance r turning at vphi), so h(t + s) >= h + h' s - (g +
+vphi^2 r) s^2 / 2, and advancing by the first root of that bound can never step over a contact,
+however grazing. Near a transversal root the bound is tight to O(s^2), so convergence is quadratic
+(3-5 iterations per flight). The angle's cosine and sine are carried from one iteration to the next
+by rotation (:func:`coincli.models.rotation.rotate`, exact to rounding) rather than taken from the
+library at each: a box throw's flights iterate about 54 times, and libm's sincos at angles of up to
+100 rad was a tenth of a single pass.
 """
 
 from __future__ import annotations
@@ -17,7 +17,8 @@ from __future__ import annotations
 import math
 
 from ..jit import kernel
-from ..model import corner_offset, rotate
+from ..models.interface import CORNERS, corner_offset
+from ..models.rotation import rotate
 
 LANDING_GAP = 1e-14  # m, how close conservative advancement brings a corner before touch-down
 
@@ -48,7 +49,7 @@ def time_to_touchdown(p, state, c, s, t_max, budget):
         advance = math.inf
         touching = 0  # corners on the surface (within LANDING_GAP) and not rising
         lowest = 0
-        for i in range(4):
+        for i in range(CORNERS):
             dx, dy = corner_offset(p, i, c, s)
             height = y + dy
             rate = vy + w * dx

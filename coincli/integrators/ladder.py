@@ -29,16 +29,13 @@ import math
 from dataclasses import dataclass, replace
 
 from ..enums import Method
-from ..params import Integration, step_budget
-from .registry import info, setting_text
+from ..params import Integration
+from .registry import info, setting_text, step_budget
 
 RTOL_FLOOR = 1e-12  # the tightest tolerance a ladder climbs to (README: "Verified labels")
 FIXED_RUNGS = 3
 CHANGE_TOLERANCE = 1e-3  # s: two agreeing runs enter their final well this close in time
 SETTLE_TOLERANCE = 1e-2  # s: and fall below E_crit this close in time
-# the rungs past the first: their method, and their first rtol as a divisor of the first rung's
-# (a method not named climbs on itself, a decade a rung)
-UPPER_RUNGS = {Method.EVENT: (Method.EVENT_DOP853, 100.0)}
 
 
 @dataclass(frozen=True)
@@ -93,7 +90,9 @@ def ladder_of(integration: Integration) -> Ladder:
                       budgets=(step_budget(integration),))
     if method.adaptive:
         rtol = integration.rtol
-        upper, start = UPPER_RUNGS.get(first, (first, 10.0))
+        # the rungs past the first: the registry's method and start, or the method itself a
+        # decade below
+        upper, start = method.upper_rungs or (first, 10.0)
         # the second rung: `start` below the first, but not below the floor unless the first is
         # within a decade of it
         rtols = [rtol, max(rtol / start, min(rtol / 10.0, RTOL_FLOOR))]
@@ -128,5 +127,5 @@ def describe(integration: Integration) -> str:
     return f"{base}, verified up to {ladder.rung_text(len(ladder) - 1)}"
 
 
-__all__ = ["FIXED_RUNGS", "Ladder", "RTOL_FLOOR", "UPPER_RUNGS", "describe", "fixed_budgets",
+__all__ = ["FIXED_RUNGS", "Ladder", "RTOL_FLOOR", "describe", "fixed_budgets",
            "ladder_of"]

@@ -1,5 +1,9 @@
-"""The registry of integration methods: one entry per method, used by ``simulate``, ``basin``,
-``accuracy`` and ``methods``.
+"""The registry of integration methods: one entry per method, the one list of them. What a method
+is (adaptive or fixed step, its order), which driver the kernels dispatch it to
+(:func:`coincli.integrators.batch.integrate`, through :data:`DRIVER_OF`), whether it flies in
+closed form between contacts, what the verification ladder climbs on past its first rung, its
+step budget and its colour in the charts all come from here; a method missing an entry fails
+the tests (tests/test_integrators.py).
 
 Each fixed-step method declares its stable step for the current parameters, predicted from the
 stiffest contact mode (a lying coin rocking on two corners, omega = sqrt(2 k r_d^2 / I), with its
@@ -9,13 +13,14 @@ spectral radius <= 1.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..enums import Method
-from ..model import stiffest_frequency
-from ..params import ParameterError, Scene, model_params
+from ..models import stiffest_frequency
+from ..params import Integration, ParameterError, RunSettings, Scene
 
 
 def _map_symplectic_euler(h: float, omega: float, zeta: float) -> np.ndarray:
@@ -62,6 +67,11 @@ def _stable_limit(step_map, omega: float, zeta: float) -> float:
     return lo
 
 
+# The drivers the kernels dispatch a method to (coincli.integrators.batch.integrate): the
+# fixed-step driver, and the adaptive driver with each Runge-Kutta pair (coincli.integrators.pairs)
+FIXED, DOPRI5_PAIR, DOP853_PAIR = 0, 1, 2
+
+
 @dataclass(frozen=True)
 class MethodInfo:
     method: Method
@@ -69,6 +79,12 @@ class MethodInfo:
     adaptive: bool
     symplectic: bool
     summary: str
+    colour: str  # in the charts (matplotlib's tab10)
+    driver: int = FIXED  # FIXED, DOPRI5_PAIR or DOP853_PAIR
+    closed_form_flight: bool = False  # flies in closed form between contacts (adaptive only)
+    # the verification ladder past its first rung: on that method, starting that many times
+    # below the first rung's rtol (None: on itself, a decade below)
+    upper_rungs: tuple[Method, float] | None = None
     step_map: object = None  # one-step map of the damped oscillator, fixed-step methods only
 
     @property
@@ -79,7 +95,7 @@ class MethodInfo:
         """Predicted largest stable step (s), or None for an adaptive method."""
         if self.step_map is None:
             return None
-        omega, zeta = stiffest_frequency(model_params(scene))
+        omega, zeta = stiffest_frequency(scene)
         return _stable_limit(self.step_map, omega, zeta)
 
 
@@ -87,25 +103,56 @@ METHODS: dict[Method, MethodInfo] = {
     m.method: m
     for m in (
         MethodInfo(Method.SYMPLECTIC_EULER, 1, False, True,
-                   "the paper's scheme: kick with the old force, then drift",
-                   _map_symplectic_euler),
+                   "the paper's scheme: kick with the old force, then drift", "#d62728",
+                   step_map=_map_symplectic_euler),
         MethodInfo(Method.VERLET, 2, False, True,
                    "Stormer-Verlet (Lobatto IIIA-IIIB): first half kick implicit in the damping",
-                   _map_verlet),
+                   "#ff7f0e", step_map=_map_verlet),
         MethodInfo(Method.RK4, 4, False, False,
-                   "classical Runge-Kutta, 4 force evaluations a step", _map_rk4),
+                   "classical Runge-Kutta, 4 force evaluations a step", "#2ca02c",
+                   step_map=_map_rk4),
         MethodInfo(Method.DOPRI5, 5, True, False,
                    "Dormand-Prince 5(4) with error control; lands on the contact onsets and "
-                   "lift-offs it sees (flight integrated: a dip under ~3 um can hide in a step)"),
+                   "lift-offs it sees (flight integrated: a dip under ~3 um can hide in a step)",
+                   "#1f77b4", DOPRI5_PAIR),
         MethodInfo(Method.EVENT, 5, True, False,
                    "dopri5 in contact, closed-form flight between contacts, stops once "
-                   "the outcome is decided (E < E_crit)"),
+                   "the outcome is decided (E < E_crit)", "#9467bd", DOPRI5_PAIR, True,
+                   (Method.EVENT_DOP853, 100.0)),
         MethodInfo(Method.EVENT_DOP853, 8, True, False,
                    "event with Hairer's DOP853 in contact (12 stages, 7th-order dense output "
                    "from 3 more): fewer steps from rtol 1e-7 down; the verified ladder's upper "
-                   "rungs"),
+                   "rungs", "#8c564b", DOP853_PAIR, True),
     )
 }
+
+
+# What the kernels read of the registry, indexed by a method's value (compile-time constants)
+DRIVER_OF = tuple(METHODS[m].driver for m in sorted(Method, key=int))
+CLOSED_FORM_FLIGHT = tuple(METHODS[m].closed_form_flight for m in sorted(Method, key=int))
+
+ADAPTIVE_MAX_STEPS = 1_000_000
+FIXED_MAX_STEPS = 100_000_000  # a fixed-step run without a horizon (100 s at dt = 1e-6 s)
+
+
+def step_budget(integration: Integration) -> int:
+    """The run's step budget: ``max_steps`` if given, else the method's default."""
+    if integration.max_steps is not None:
+        return int(integration.max_steps)
+    if METHODS[integration.method].adaptive:
+        return ADAPTIVE_MAX_STEPS
+    if integration.t_end is None:
+        return FIXED_MAX_STEPS
+    return int(math.ceil(integration.t_end / integration.dt - 1e-9))
+
+
+def run_settings(integration: Integration, sample_dt: float = 0.0) -> RunSettings:
+    """What a kernel takes of an integration's settings."""
+    return RunSettings(method=int(integration.method), dt=float(integration.dt),
+                       rtol=float(integration.rtol),
+                       t_end=math.inf if integration.t_end is None else float(integration.t_end),
+                       stop_on_settle=bool(integration.stop_on_settle),
+                       max_steps=step_budget(integration), sample_dt=float(sample_dt))
 
 
 def info(method: Method | str) -> MethodInfo:
@@ -130,7 +177,7 @@ def check_step(scene: Scene, force: bool = False) -> MethodInfo:
         raise ParameterError(
             f"--dt {scene.integration.dt:g} s is beyond the stable step of {method.name} for "
             f"these parameters ({limit:.3g} s, from the rocking frequency "
-            f"{stiffest_frequency(model_params(scene))[0]:.4g} rad/s); use a smaller --dt "
+            f"{stiffest_frequency(scene)[0]:.4g} rad/s); use a smaller --dt "
             "or --force")
     if (method.adaptive and scene.fixed_horizon
             and scene.integration.dt >= scene.integration.t_end):
@@ -140,4 +187,6 @@ def check_step(scene: Scene, force: bool = False) -> MethodInfo:
     return method
 
 
-__all__ = ["METHODS", "MethodInfo", "check_step", "info", "setting_text"]
+__all__ = ["ADAPTIVE_MAX_STEPS", "CLOSED_FORM_FLIGHT", "DOP853_PAIR", "DOPRI5_PAIR",
+           "DRIVER_OF", "FIXED", "FIXED_MAX_STEPS", "METHODS", "MethodInfo", "check_step", "info",
+           "run_settings", "setting_text", "step_budget"]

@@ -9,9 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..jit import python
-from ..model import corner_force, corner_offset
-from ..params import model_params
+from ..models import model_of
 
 
 @dataclass
@@ -32,6 +30,8 @@ class Frames:
     elastic: np.ndarray  # (N,) J
     events: np.ndarray  # (M, 9) the contact events: t, corner, kind, state
     implied: np.ndarray | None = None  # (N,) bool: the resting pose a settled run implies
+    normal: np.ndarray | None = None  # (N, 4) normal force on each corner, N
+    tangential: np.ndarray | None = None  # (N, 4) tangential force beside the damper's, N
 
     def __len__(self) -> int:
         return len(self.t)
@@ -86,7 +86,8 @@ def build_frames(trajectory) -> Frames:
     keep[1:] = rows[1:, 0] != rows[:-1, 0]
     rows, is_event = rows[keep], is_event[keep]
     scene = trajectory.scene
-    p = model_params(scene)
+    model = model_of(scene)
+    p, python = model.params(scene), model.kernels("python")
     implied = np.zeros(len(rows), bool)
     rest = resting_state(trajectory)
     if rest is not None:
@@ -96,27 +97,21 @@ def build_frames(trajectory) -> Frames:
     t = rows[:, 0].copy()
     state = rows[:, 1:].copy()
 
-    x, y, phi, vx, vy, vphi = (column[:, None] for column in state.T)
-    c, s = np.cos(phi), np.sin(phi)
-    # the model's own formulas (its kernels in plain Python) on (N, 4) arrays
-    offsets = [python(corner_offset)(p, i, c, s) for i in range(4)]
-    dx = np.concatenate([o[0] for o in offsets], axis=1)
-    dy = np.concatenate([o[1] for o in offsets], axis=1)
-    heights = y + dy
-    corners = np.stack([x + dx, heights], axis=-1)
-
+    # the model's own formulas, its kernels run by CPython (a throw's few thousand frames)
+    n_corners = python.CORNERS
+    corners = np.empty((len(state), n_corners, 2))
+    python.corner_table(p, state, corners)
+    heights = corners[..., 1]
     contact = _contact_sets(t, heights, events)
     contact[implied] = heights[implied] < 0.0
-    fx, fy = python(corner_force)(p, y, dx, dy, vx, vy, vphi)
-    forces = np.stack([np.where(contact, fx, 0.0), np.where(contact, fy, 0.0)], axis=-1)
-
-    kinetic = 0.5 * p.mass * (vx ** 2 + vy ** 2) + 0.5 * p.inertia * vphi ** 2
-    gravitational = p.mass * p.g * y
-    elastic = 0.5 * p.k * np.sum(np.where(heights < 0.0, heights ** 2, 0.0), axis=1)
-    kinetic, gravitational = kinetic[:, 0], gravitational[:, 0]
+    parts = np.empty((len(state), n_corners, 4))
+    python.force_table(p, state, contact, parts)
+    energy = np.empty((len(state), 3))
+    python.energy_table(p, state, energy)
     return Frames(t=t, state=state, is_event=is_event, contact=contact, corners=corners,
-                  heights=heights, forces=forces, kinetic=kinetic, gravitational=gravitational,
-                  elastic=elastic, events=events, implied=implied)
+                  heights=heights, forces=parts[..., :2], kinetic=energy[:, 0],
+                  gravitational=energy[:, 1], elastic=energy[:, 2], events=events,
+                  implied=implied, normal=parts[..., 2], tangential=parts[..., 3])
 
 
 REST_DELAY = 0.05  # s after a settled run's last frame, where its implied rest pose is shown
@@ -144,7 +139,7 @@ def _contact_sets(t: np.ndarray, heights: np.ndarray, events: np.ndarray) -> np.
     if len(events) == 0 or len(events) >= MAX_EVENTS:
         return heights < 0.0
     contact = np.zeros(heights.shape, bool)
-    for i in range(4):
+    for i in range(heights.shape[1]):
         ev = events[events[:, 1] == i]
         if len(ev) == 0:
             continue

@@ -28,7 +28,7 @@ from ..charts.timeseries import with_samples
 from ..enums import Status
 from ..files import check_connect_url, check_rrd_path
 from ..integrators.registry import setting_text
-from ..model import horizon_text
+from ..models import horizon_text
 from ..params import ParameterError, check_number
 from ..version import __version__
 from .frames import ARROW_PEAK_DIAMETERS, Frames, build_frames, force_arrows

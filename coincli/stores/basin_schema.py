@@ -21,16 +21,25 @@ COMPARED_ATTRS = ("version", "parameters", "sweep", "method")
 # Earlier versions whose stores hold the labels this one computes (the kernels, the ladder and
 # the store's layout unchanged since): a store of one of them is resumed as its own sweep, in
 # its own version (its tiles keep binding its parameters digest).
-RESUMES = ("0.9.0",)
+RESUMES = ("0.9.0", "0.10.0")
+# What a sweep's method attributes say since 0.11.0, and what a store of an earlier version
+# means without them: the paper's model, run by numba's compiled kernels.
+LATER_METHOD_ATTRS = {"model": "paper", "backend": "numba"}
 
 
 def resumable_as(stored: dict, wanted: dict) -> dict | None:
     """``wanted`` in the version of the ``stored`` attributes, if that is all that tells them
-    apart and that version's stores are :data:`RESUMES`'s; else None."""
+    apart and that version's stores are :data:`RESUMES`'s; else None. Those versions recorded
+    no model and no backend: ``wanted`` in their words drops them where they are what those
+    versions computed with (:data:`LATER_METHOD_ATTRS`)."""
     version = stored.get("version")
     if version == wanted.get("version") or version not in RESUMES:
         return None
-    return {**wanted, "version": version}
+    method = dict(wanted.get("method") or {})
+    for key, value in LATER_METHOD_ATTRS.items():
+        if method.get(key) == value and key not in (stored.get("method") or {}):
+            del method[key]
+    return {**wanted, "version": version, "method": method}
 MARK = "coin_basin"  # the root attribute that makes a group a basin store
 COPY = "sweep_attributes"  # the copy of COMPARED_ATTRS in the done array's attributes
 
@@ -102,5 +111,5 @@ def tile_dims(grid: Grid) -> tuple[str, str]:
 
 
 __all__ = ["COMPARED_ATTRS", "COORD_NOTE", "COPY", "DIGEST_NOTE", "DONE_ATTRS", "DTYPES", "FILLS",
-           "FORMAT", "MARK", "RESUMES", "VARIABLES", "done_attrs", "owned",
+           "FORMAT", "LATER_METHOD_ATTRS", "MARK", "RESUMES", "VARIABLES", "done_attrs", "owned",
            "parameters_digest", "resumable_as", "root_attrs", "tile_dims"]

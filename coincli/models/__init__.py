@@ -1,0 +1,106 @@
+"""The models the kernels integrate, one registry entry each (:data:`MODELS`), and which one a
+scene needs (:func:`model_of`).
+
+A model is the seam's meaning (:mod:`.interface`): a cross-section (its corners, its wells and
+the label they give) and a contact law (the forces on the corners, the energy the foundation
+stores, how long a throw may take), each in kernel modules of its own, and the parameter tuple
+its kernels take, made from a scene. The paper's model (:mod:`.rectangle` and :mod:`.paper`) is
+the first; another law or another cross-section is a module that gives the names it changes,
+and an entry here that names it before the modules it reuses. The integrators, the labeller
+and the recordings never name a model: they ask :func:`coincli.jit.kernels` for the set of the
+scene's model.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from types import ModuleType
+
+from ..jit import NUMBA, Placeholder, kernels
+from . import interface, paper, rectangle
+
+
+@dataclass(frozen=True)
+class Model:
+    """One model: its ``name`` (what a store's method attributes record), its kernel modules
+    (the first that gives a seam name gives its meaning), ``params(scene)`` (the kernels'
+    parameter tuple), ``parameters`` (the names of the scene's values it reads beyond the
+    coin, k, c and g), and what a user reads of it."""
+
+    name: str
+    summary: str
+    modules: tuple[ModuleType, ...]
+    params: Callable
+    parameters: tuple[str, ...] = ()
+    stiffest_frequency: Callable = paper.stiffest_frequency
+    horizon_rule: Callable = paper.horizon_rule
+
+    def kernels(self, backend=NUMBA):
+        """This model's kernel set for ``backend`` (:func:`coincli.jit.kernels`)."""
+        return kernels(self, backend)
+
+    def implementations(self) -> dict:
+        """The model's meaning of every name of the seam: from the first of its kernel modules
+        that defines the name (so a model extends another by naming its own module first);
+        TypeError naming the first name it lacks."""
+        found = {}
+        for name, value in vars(interface).items():
+            if not isinstance(value, Placeholder):
+                continue
+            for module in self.modules:
+                meaning = vars(module).get(name)
+                if meaning is not None and not isinstance(meaning, Placeholder):
+                    found[name] = meaning
+                    break
+            else:
+                raise TypeError(f"model {self.name} gives no {name}, a name of the seam "
+                                "(coincli.models.interface)")
+        return found
+
+
+PAPER = Model("paper", "the paper's: a Winkler spring and a viscous damper at each corner of a "
+                       "rectangle (eqs. 1-2)", (paper, rectangle), paper.params)
+
+MODELS: dict[str, Model] = {m.name: m for m in (PAPER,)}
+
+
+def model_of(scene) -> Model:
+    """The model ``scene`` needs: the paper's."""
+    return PAPER
+
+
+def model_params(scene):
+    """The kernels' parameter tuple of ``scene`` under its model."""
+    return model_of(scene).params(scene)
+
+
+def scene_horizon(scene) -> float:
+    """How long a run of ``scene`` from its initial state may last: its t_end, or without one
+    the cap of its model's horizon rule (:func:`coincli.models.paper.run_horizon`)."""
+    import math
+
+    s, t_end = scene.initial, scene.integration.t_end
+    state = (s.x0, scene.y0, s.phi0, s.vx, s.vy, s.vphi)  # Python floats: an absurd start's
+    # energy overflows to inf (an infinite cap) without numpy's overflow warning
+    model = model_of(scene)
+    return float(model.kernels("python").run_horizon(
+        model.params(scene), math.inf if t_end is None else t_end, state))
+
+
+def horizon_text(scene) -> str:
+    """The horizon of ``scene`` as a user reads it: ``t_end = 2 s`` or the cap's rule."""
+    if scene.fixed_horizon:
+        return f"t_end = {scene.integration.t_end:g} s"
+    model = model_of(scene)
+    return model.horizon_rule(model.params(scene))
+
+
+def stiffest_frequency(scene) -> tuple[float, float]:
+    """(omega, zeta) of the stiffest contact mode of ``scene`` under its model."""
+    model = model_of(scene)
+    return model.stiffest_frequency(model.params(scene))
+
+
+__all__ = ["MODELS", "Model", "PAPER", "horizon_text", "model_of", "model_params",
+           "scene_horizon", "stiffest_frequency"]
