@@ -13,7 +13,7 @@ kernel cache: the other's kernels compile on its first run). Checked:
   array (quarter_turns, status, settle_time, steps, certainty, rung) equal, element for element;
 - **counts**: `coin fractions --samples 16k`: every count of the JSON result equal;
 - **a store resumed**: a 512 x 512 map the other version started and was interrupted in (SIGINT
-  after about a second), resumed by this one: every file of the store (but the cost records
+  after 2.5 s, a few tiles in), resumed by this one: every file of the store (but the cost records
   beside it, which name hosts, processes and times) byte-identical to the store the other
   version computes in one go.
 
@@ -61,12 +61,12 @@ def same_arrays(a: dict, b: dict) -> list[str]:
 
 
 def store_files(store: Path) -> dict[str, bytes]:
-    """Every file of a store, by its path inside it; not its cost records (beside it, or in
-    its ``.cost`` folder): hosts, processes and times."""
+    """Every file of a store, by its path inside it; not its records (its ``.coin`` folder, or
+    0.10.0's ``NAME.zarr.cost`` beside it): hosts, processes and times."""
     out = {}
     for path in sorted(store.rglob("*")):
         rel = path.relative_to(store)
-        if path.is_file() and not any(part.endswith(".cost") or part == ".cost"
+        if path.is_file() and not any(part.endswith(".cost") or part == ".coin"
                                       for part in rel.parts):
             out[str(rel)] = path.read_bytes()
     return out
@@ -84,9 +84,9 @@ def check_counts(old: Path, new: Path) -> dict:
     for tree, side in ((old, "old"), (new, "new")):
         out = coin(tree, "fractions", "--samples", "16k", "--json", "--threads", "2")
         data = json.loads(out.stdout)
-        results[side] = {key: data[key] for key in data if key in (
-            "samples", "counted", "decided", "standing", "lying", "n_counts", "counts",
-            "uncertain", "chaotic", "undecided")}
+        results[side] = {key: data[key] for key in (
+            "samples", "counted", "standing", "lying", "uncertain", "outcomes", "all_decided",
+            "all_labelled", "status", "stopped")}
     differ = [key for key in results["old"] if results["old"][key] != results["new"].get(key)]
     return {"check": "fractions --samples 16k", "same": not differ and bool(results["old"]),
             "differ": differ, "compared": sorted(results["old"])}
@@ -114,7 +114,7 @@ def check_resume(old: Path, new: Path, work: Path, after: float) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("old", type=Path, help="the other checkout (a directory with coincli/)")
-    parser.add_argument("--after", type=float, default=1.0,
+    parser.add_argument("--after", type=float, default=2.5,
                         help="seconds before the other version's sweep is interrupted")
     parser.add_argument("--json", type=Path, help="write the results here too")
     args = parser.parse_args()

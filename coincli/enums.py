@@ -95,6 +95,8 @@ class Method(_Named):
     DOPRI5 = 3
     EVENT = 4
     EVENT_DOP853 = 5
+    EVENT_RODAS = 6
+    EVENT_DOP853_RODAS = 7
 
 
 class Certainty(_Named):

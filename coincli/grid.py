@@ -47,7 +47,7 @@ import numpy as np
 from .defaults import AXIS_INFO, DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES, IC_NAMES
 from .integrators import MethodInfo
 from .integrators.batch import NO_LABEL
-from .integrators.ladder import ladder_of
+from .integrators.ladder import scene_ladder
 from .integrators.registry import step_budget
 from .jit import NUMBA
 from .labeller import Labeller
@@ -358,7 +358,8 @@ def method_attrs(scene: Scene, method: MethodInfo, backend: str = NUMBA.name) ->
             "dt": integ.dt, "rtol": integ.rtol, "t_end": integ.t_end,
             "horizon": horizon_text(scene),
             "stop_on_settle": integ.stop_on_settle, "max_steps": step_budget(integ),
-            "verification": ladder_of(integ).to_dict(), "model": model_of(scene).name,
+            "verification": scene_ladder(scene).to_dict(),
+            "model": model_of(scene).name,
             "backend": backend}
 
 

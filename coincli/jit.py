@@ -71,7 +71,9 @@ _PACKAGE = Path(__file__).resolve().parent
 # Every module that defines kernels (or derives them, or declares the seam): all are imported
 # before any kernel set is built, so that every set holds every kernel.
 KERNEL_MODULES = ("coincli.models.interface", "coincli.models.rotation",
-                  "coincli.models.rectangle", "coincli.models.paper", "coincli.models.tables",
+                  "coincli.models.rectangle", "coincli.models.paper", "coincli.models.friction",
+                  "coincli.models.tables", "coincli.integrators.rodas",
+                  "coincli.integrators.switching",
                   "coincli.integrators.common", "coincli.integrators.fixed",
                   "coincli.integrators.dopri", "coincli.integrators.dop853",
                   "coincli.integrators.flight", "coincli.integrators.adaptive",

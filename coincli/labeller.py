@@ -58,7 +58,7 @@ class Labeller:
         """The labeller of ``scene``'s model, settings and ladder."""
         model, integ = model_of(scene), scene.integration
         return cls(model.name, model.params(scene), run_settings(integ, sample_dt),
-                   ladder_of(integ), jit.backend_named(backend).name)
+                   ladder_of(integ, stiff=model.stiff), jit.backend_named(backend).name)
 
     @property
     def kernels(self) -> jit.KernelSet:

@@ -267,7 +267,7 @@ def inspect_cell(basin, *, cell=None, **values) -> CellRecord:
     scene (as :func:`cell_scene`) and what the basin holds for it: a :class:`CellRecord`. Of
     a store only the cell's tile is read, checked against its digest (a damaged tile's cells
     read as not computed). :func:`replay_cell` runs its throw again."""
-    from ..integrators.ladder import ladder_of
+    from ..integrators.ladder import scene_ladder
     from ..stores.basin_store import BasinStore
     from ..stores.cells import cell_scene as scene_of
     from ..stores.cells import ladder_matches, locate, read_stored_cell, stored_cell
@@ -280,7 +280,7 @@ def inspect_cell(basin, *, cell=None, **values) -> CellRecord:
     else:
         stored = stored_cell(as_basin(basin).arrays, index)
     scene = scene_of(attrs, index)
-    ladder = ladder_of(scene.integration)
+    ladder = scene_ladder(scene)
     return CellRecord(index, tuple(attrs["sweep"]["dims"]), scene, stored,
                       None if stored.rung is None else ladder.rung_text(stored.rung),
                       ladder_matches(attrs, scene))

@@ -114,13 +114,13 @@ def step_bound(scene: Scene) -> StepBound:
     import math
 
     from ..integrators import info
-    from ..integrators.ladder import ladder_of
+    from ..integrators.ladder import scene_ladder
     from ..models import scene_horizon
 
     integ = scene.integration
     if info(integ.method).adaptive:
         return StepBound(True, None, ())
-    ladder = ladder_of(integ)
+    ladder = scene_ladder(scene)
     horizon = scene_horizon(scene)  # t_end, or the throw's cap (infinite: a non-finite start)
     steps = sum(min(budget, math.ceil(horizon / dt)) if math.isfinite(horizon) else budget
                 for budget, dt in zip(ladder.budgets, ladder.dts, strict=True))

@@ -60,9 +60,9 @@ _LAZY = {
     # a scene's integration as a user reads it, with its verification ('event, rtol = 1e-06,
     # verified up to rtol = 1e-12'); a setting alone ('rtol = 1e-06', 'dt = 1e-06 s'); the
     # ladder of settings that verifies a label (its rungs' text: rung_text(i))
-    "describe_method": (_ladder, "describe"),
+    "describe_method": (_ladder, "describe_scene"),
     "setting_text": (_registry, "setting_text"),
-    "ladder_of": (_ladder, "ladder_of"),
+    "ladder_of": (_ladder, "scene_ladder"),
     # how long a run may last (s: t_end, or the throw's cap) and that rule in words
     "scene_horizon": (_models, "scene_horizon"),
     "horizon_text": (_models, "horizon_text"),

@@ -332,7 +332,7 @@ def _print_result(plan, r, every_n: bool = False) -> None:
     from ..api.words import describe_method as describe
     from ..api.words import horizon_text
 
-    summary.append(("method", describe(scene.integration)))
+    summary.append(("method", describe(scene)))
     summary.append(("horizon", horizon_text(scene)))
     cost = r.cost
     if cost.get("computed"):
@@ -373,7 +373,7 @@ def _print_over(plan, res) -> None:
     say(console, f"drawn: {plan.sampling.describe()}")
     from ..api.words import describe_method as describe
 
-    say(console, f"method: {describe(plan.scene.integration)}")
+    say(console, f"method: {describe(plan.scene)}")
     if res.note:
         say(console, f"note: {res.note}")
     basis = "certain labels" if first.verified else "settled runs"

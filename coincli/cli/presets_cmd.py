@@ -36,5 +36,5 @@ def presets_command(json_out: JsonOpt = False) -> None:
         integ = p.scene.integration
         run_to = ("stop when decided" if integ.stop_on_settle else "run to the end") + (
             f", t_end = {integ.t_end:g} s" if p.scene.fixed_horizon else ", capped (no t_end)")
-        say(console, f"[bold]{p.name}[/]: {describe(integ)}, {run_to}. "
+        say(console, f"[bold]{p.name}[/]: {describe(p.scene)}, {run_to}. "
                      f"{p.description}")

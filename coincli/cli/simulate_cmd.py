@@ -278,7 +278,7 @@ def print_summary(tr) -> None:
                            f"mJ ({lost * 1e3:.5g} mJ dissipated)"))
     horizon = scene_horizon(tr.scene)
     run_to = "stop when decided" if integ.stop_on_settle else f"full {horizon:g} s"
-    rows.append(("method", f"{describe(integ)}, {run_to}"))
+    rows.append(("method", f"{describe(tr.scene)}, {run_to}"))
     rows.append(("horizon", f"{horizon:.4g} s" + (
         "" if tr.scene.fixed_horizon else f": {horizon_text(tr.scene)}")))
     if len(tr.rungs) > 1:

@@ -25,7 +25,7 @@ from ..grid import (
 )
 from ..integrators import check_step
 from ..integrators.batch import new_control
-from ..integrators.ladder import describe
+from ..integrators.ladder import describe_scene
 from ..params import ParameterError, Scene, check_start, require_scene, validate
 from ..values import format_duration
 from ..version import __version__
@@ -55,7 +55,7 @@ class SweepPlan:
         axes = " x ".join(f"{a.name} {a.lo:g}:{a.hi:g} ({a.n})" for a in g.axes)
         tiles = math.prod(g.tile_grid)
         return (f"SweepPlan({axes}, {tiles} tile{'s' * (tiles != 1)}, {g.work_cells:,} of "
-                f"{g.n_cells:,} cells computed, {describe(self.scene.integration)})")
+                f"{g.n_cells:,} cells computed, {describe_scene(self.scene)})")
 
 
 def plan_sweep(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, force: bool = False,

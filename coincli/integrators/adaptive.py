@@ -49,6 +49,8 @@ from ..models.interface import (
     energy_with_heights,
     last_boundary,
     run_horizon,
+    sliding,
+    step_limit,
     well_index,
 )
 from ..models.rotation import rotate
@@ -261,6 +263,27 @@ def may_cross(mode, heights_start, heights_end, rates_start, rates_end, h):
     return False
 
 
+GAUSS_NODES = (0.5 - 0.5 * math.sqrt(0.6), 0.5, 0.5 + 0.5 * math.sqrt(0.6))
+GAUSS_WEIGHTS = (5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0)
+
+
+@kernel
+def slide_over_step(p, mode, rc, theta, span, phi0, c, s, friction_work, sliding_work):
+    """The friction work and the sliding work (the seam's ``sliding``: the friction power and
+    the sliding load) integrated over the part [0, theta] of an accepted step, ``span``
+    seconds, on its continuous extension (Gauss-Legendre, 3 points: exact for polynomials of
+    degree 5, as far as the extension follows the run), added to the running totals."""
+    if mode == 0:
+        return friction_work, sliding_work
+    for k in range(3):
+        point = dense_point(rc, theta * GAUSS_NODES[k])
+        cp, sp = rotate(c, s, point[2] - phi0)
+        power, load = sliding(p, mode, point, cp, sp)
+        friction_work -= span * GAUSS_WEIGHTS[k] * power
+        sliding_work += span * GAUSS_WEIGHTS[k] * load
+    return friction_work, sliding_work
+
+
 @kernel
 def integrate_adaptive(p, settings, state, samples, events, final, control):
     """Dormand-Prince 5(4) (or, in the copy of :mod:`.pairs`, DOP853) with located contact
@@ -297,6 +320,8 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
     steps = 0
     work = 0  # steps tried (accepted and rejected) and flight iterations: the budget's count
     last_change = math.nan
+    friction_work = 0.0  # J taken by friction, and J per unit friction coefficient (recorded)
+    sliding_work = 0.0
     h = settings.dt if mode == 0 else min(settings.dt, first_step)
     memory = controller_memory(1e-4)  # the step-size controller's, as if the last error was 1e-4
     k1 = derivative(p, mode, st, c, s)
@@ -358,6 +383,7 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
         # A long step could carry a corner below the surface and back unseen: bound the turn.
         if abs(st[5]) * h > MAX_TURN:
             h = MAX_TURN / abs(st[5])
+        h = step_limit(p, mode, st, k1, c, s, h)  # the law may see a sharp turn ahead
         end, k7, c7, s7, err, stages = step(p, mode, h, st, k1, c, s, scales, rtol)
         work += 1
         if not (err <= 1.0):  # also catches NaN
@@ -372,8 +398,10 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
         pieces = scan_pieces(st, end)
         theta = NO_EVENT
         event_mask = 0
-        dense = (pieces > 1 or may_cross(mode, heights, heights_end, rates, rates_end, h)
-                 or (record and next_sample <= t + h))
+        # a recorded run takes every step's continuous extension: the sliding is integrated
+        # on it (an unrecorded one needs it only for an event or a sample)
+        dense = (record or pieces > 1
+                 or may_cross(mode, heights, heights_end, rates, rates_end, h))
         if dense:
             rc = dense_coefficients(p, mode, st, end, h, stages, c, s)
             theta, event_mask = find_event(p, rc, h, mode, pieces, heights, heights_end, rates,
@@ -384,6 +412,9 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
                     at = dense_point(rc, (next_sample - t) / h)
                     n_samples = record_sample(samples, n_samples, next_sample, at)
                     next_sample += sample_dt
+                friction_work, sliding_work = slide_over_step(
+                    p, mode, rc, (t_new - t) / h, t_new - t, st[2], c, s, friction_work,
+                    sliding_work)
             if event_mask != 0:
                 end = dense_point(rc, theta)
                 c7, s7 = rotate(c, s, end[2] - st[2])
@@ -429,7 +460,8 @@ def integrate_adaptive(p, settings, state, samples, events, final, control):
         n_well = NO_WELL
         settle_time = math.nan
     store_state(final, st)
-    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events, last_change)
+    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events, last_change,
+                     friction_work, sliding_work)
 
 
 __all__ = ["EVENT_BAND", "MAX_TURN", "integrate_adaptive"]

@@ -15,13 +15,23 @@ import numpy as np
 
 from ..enums import Certainty, Status
 from ..jit import kernel
-from ..models.interface import rounded_quarter_turns
+from ..models.interface import FRICTION, rounded_quarter_turns
 from ..params import RunSettings
 from .adaptive import integrate_adaptive
 from .common import EVENT_COLUMNS, NO_WELL, SAMPLE_COLUMNS
 from .fixed import integrate_fixed
-from .pairs import integrate_adaptive_dop853
-from .registry import DOP853_PAIR, DOPRI5_PAIR, DRIVER_OF
+from .pairs import (
+    integrate_adaptive_dop853,
+    integrate_adaptive_dop853_rodas,
+    integrate_adaptive_rodas,
+)
+from .registry import (
+    DOP853_PAIR,
+    DOP853_RODAS_PAIR,
+    DOPRI5_PAIR,
+    DOPRI5_RODAS_PAIR,
+    DRIVER_OF,
+)
 
 NO_LABEL = NO_WELL  # quarter_turns of a cell without a count (int16 fill of the stores)
 
@@ -33,6 +43,20 @@ def integrate(p, settings, state, samples, events, final, control):
     ``final``. Setting ``control[0]`` (from another thread)
     stops it with status INTERRUPTED."""
     driver = DRIVER_OF[settings.method]
+    if FRICTION:
+        # a model with friction runs its adaptive methods on their switching pairs (the
+        # explicit pair where friction is not stiff, which is what the pair alone would do,
+        # Rodas5P where it is), and only those are compiled for it
+        if driver == DOPRI5_PAIR or driver == DOPRI5_RODAS_PAIR:
+            return integrate_adaptive_rodas(p, settings, state, samples, events, final, control)
+        if driver == DOP853_PAIR or driver == DOP853_RODAS_PAIR:
+            return integrate_adaptive_dop853_rodas(p, settings, state, samples, events, final,
+                                                   control)
+        return integrate_fixed(p, settings, state, samples, events, final, control)
+    if driver == DOPRI5_RODAS_PAIR:  # without friction the switching pair is its explicit pair
+        driver = DOPRI5_PAIR
+    elif driver == DOP853_RODAS_PAIR:
+        driver = DOP853_PAIR
     if driver == DOPRI5_PAIR:
         return integrate_adaptive(p, settings, state, samples, events, final, control)
     if driver == DOP853_PAIR:

@@ -29,6 +29,9 @@ class RunResult(NamedTuple):
     n_samples: int  # rows written to the samples buffer
     n_events: int  # rows written to the events buffer
     last_change: float  # s, when the coin last passed from one well to another (NaN: never)
+    friction_work: float  # J friction took from the coin (a recorded run; 0 otherwise)
+    sliding_work: float  # J per unit friction coefficient: the integral of max(0, N_i) |v_xi|
+    # over the corners in contact (a recorded run): what friction mu would take, about mu x it
 
 
 FINITE_BOUND = 1e30  # a state value this large counts as non-finite (is_finite_state)
@@ -53,7 +56,7 @@ def unstartable(state, final):
     step taken. Run, it would overflow at once (to a NaN that ends a closed-form flight at
     t_end as if it had gone well) and, as plain Python, stop on a math domain error."""
     store_state(final, state)
-    return RunResult(0.0, 0, Status.NONFINITE, math.nan, NO_WELL, 0, 0, math.nan)
+    return RunResult(0.0, 0, Status.NONFINITE, math.nan, NO_WELL, 0, 0, math.nan, 0.0, 0.0)
 
 
 @kernel

@@ -18,6 +18,7 @@ from ..models.interface import (
     contact_mask,
     last_boundary,
     run_horizon,
+    sliding,
     total_energy,
     verlet_half_kick,
     well_index,
@@ -129,6 +130,8 @@ def integrate_fixed(p, settings, state, samples, events, final, control):
     steps = 0
     t = 0.0
     last_change = math.nan
+    friction_work = 0.0  # J taken by friction, and J per unit friction coefficient (recorded)
+    sliding_work = 0.0
     if total_energy(p, state) < e_crit:
         status = Status.SETTLED
         settle_time = 0.0
@@ -152,9 +155,15 @@ def integrate_fixed(p, settings, state, samples, events, final, control):
                 new_mask = contact_mask(p, st[1], st[2])
                 n_events = record_events(events, n_events, t, mask, new_mask, st)
                 mask = new_mask
-            if record and t >= next_sample - 0.5 * dt:
-                n_samples = record_sample(samples, n_samples, t, st)
-                next_sample += sample_dt
+            if record:
+                # the sliding, by the rectangle rule over the step (its own error: the step's)
+                power, load = sliding(p, contact_mask(p, st[1], st[2]), st, math.cos(st[2]),
+                                      math.sin(st[2]))
+                friction_work -= dt * power
+                sliding_work += dt * load
+                if t >= next_sample - 0.5 * dt:
+                    n_samples = record_sample(samples, n_samples, t, st)
+                    next_sample += sample_dt
             if status != Status.SETTLED:
                 if total_energy(p, st) < e_crit:
                     status = Status.SETTLED
@@ -173,4 +182,5 @@ def integrate_fixed(p, settings, state, samples, events, final, control):
         n_well = NO_WELL
         settle_time = math.nan
     store_state(final, st)
-    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events, last_change)
+    return RunResult(t, steps, status, settle_time, n_well, n_samples, n_events, last_change,
+                     friction_work, sliding_work)

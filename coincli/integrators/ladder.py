@@ -29,6 +29,7 @@ import math
 from dataclasses import dataclass, replace
 
 from ..enums import Method
+from ..models import model_of
 from ..params import Integration
 from .registry import info, setting_text, step_budget
 
@@ -81,9 +82,13 @@ class Ladder:
                         "settle_tolerance seconds of each other; uncertain if no two do"}
 
 
-def ladder_of(integration: Integration) -> Ladder:
-    """The ladder of an integration's settings (one rung if it does not verify)."""
+def ladder_of(integration: Integration, *, stiff: bool = False) -> Ladder:
+    """The ladder of an integration's settings (one rung if it does not verify); ``stiff``: of
+    a stiff model's scene (:attr:`coincli.models.Model.stiff`), whose rungs climb on the
+    method's switching pair where it has one (the registry's ``stiff_variant``)."""
     method = info(integration.method)
+    if stiff and method.stiff_variant is not None:
+        method = info(method.stiff_variant)
     first = method.method
     if not integration.verify:
         return Ladder((first,), (integration.rtol,), (integration.dt,), method.adaptive,
@@ -106,6 +111,11 @@ def ladder_of(integration: Integration) -> Ladder:
                   budgets=fixed_budgets(integration, dts))
 
 
+def scene_ladder(scene) -> Ladder:
+    """The ladder of a scene's settings under its model (:func:`ladder_of`)."""
+    return ladder_of(scene.integration, stiff=model_of(scene).stiff)
+
+
 def fixed_budgets(integration: Integration, dts: tuple[float, ...]) -> tuple[int, ...]:
     """The step budgets of fixed-step rungs: each the t_end / dt its own step takes (exactly
     the steps its run makes), or, with ``max_steps`` given (or no horizon), that budget of the
@@ -116,16 +126,21 @@ def fixed_budgets(integration: Integration, dts: tuple[float, ...]) -> tuple[int
     return tuple(math.ceil(first * dts[0] / dt - 1e-9) for dt in dts)
 
 
-def describe(integration: Integration) -> str:
+def describe(integration: Integration, *, stiff: bool = False) -> str:
     """The method and setting of a run as a user reads it, with its verification:
-    ``event, rtol = 1e-06, verified up to rtol = 1e-12``."""
-    ladder = ladder_of(integration)
-    base = (f"{integration.method.label}, "
-            f"{setting_text(integration.method, integration.dt, integration.rtol)}")
+    ``event, rtol = 1e-06, verified up to rtol = 1e-12`` (``stiff``: as :func:`ladder_of`)."""
+    ladder = ladder_of(integration, stiff=stiff)
+    first = ladder.methods[0]
+    base = f"{first.label}, {setting_text(first, integration.dt, integration.rtol)}"
     if not ladder.verified:
         return f"{base}, single pass"
     return f"{base}, verified up to {ladder.rung_text(len(ladder) - 1)}"
 
 
-__all__ = ["FIXED_RUNGS", "Ladder", "RTOL_FLOOR", "describe", "fixed_budgets",
-           "ladder_of"]
+def describe_scene(scene) -> str:
+    """:func:`describe` of a scene's settings under its model."""
+    return describe(scene.integration, stiff=model_of(scene).stiff)
+
+
+__all__ = ["FIXED_RUNGS", "Ladder", "RTOL_FLOOR", "describe", "describe_scene", "fixed_budgets",
+           "ladder_of", "scene_ladder"]

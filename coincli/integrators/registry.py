@@ -69,7 +69,7 @@ def _stable_limit(step_map, omega: float, zeta: float) -> float:
 
 # The drivers the kernels dispatch a method to (coincli.integrators.batch.integrate): the
 # fixed-step driver, and the adaptive driver with each Runge-Kutta pair (coincli.integrators.pairs)
-FIXED, DOPRI5_PAIR, DOP853_PAIR = 0, 1, 2
+FIXED, DOPRI5_PAIR, DOP853_PAIR, DOPRI5_RODAS_PAIR, DOP853_RODAS_PAIR = 0, 1, 2, 3, 4
 
 
 @dataclass(frozen=True)
@@ -80,11 +80,14 @@ class MethodInfo:
     symplectic: bool
     summary: str
     colour: str  # in the charts (matplotlib's tab10)
-    driver: int = FIXED  # FIXED, DOPRI5_PAIR or DOP853_PAIR
+    driver: int = FIXED  # FIXED, or the pair of the adaptive driver (DOPRI5_PAIR, ...)
     closed_form_flight: bool = False  # flies in closed form between contacts (adaptive only)
     # the verification ladder past its first rung: on that method, starting that many times
     # below the first rung's rtol (None: on itself, a decade below)
     upper_rungs: tuple[Method, float] | None = None
+    # the method a stiff model's ladder climbs on in its place (its switching pair: the same
+    # explicit pair where the law is not stiff, Rodas5P where it is)
+    stiff_variant: Method | None = None
     step_map: object = None  # one-step map of the damped oscillator, fixed-step methods only
 
     @property
@@ -118,11 +121,18 @@ METHODS: dict[Method, MethodInfo] = {
         MethodInfo(Method.EVENT, 5, True, False,
                    "dopri5 in contact, closed-form flight between contacts, stops once "
                    "the outcome is decided (E < E_crit)", "#9467bd", DOPRI5_PAIR, True,
-                   (Method.EVENT_DOP853, 100.0)),
+                   (Method.EVENT_DOP853, 100.0), Method.EVENT_RODAS),
         MethodInfo(Method.EVENT_DOP853, 8, True, False,
                    "event with Hairer's DOP853 in contact (12 stages, 7th-order dense output "
                    "from 3 more): fewer steps from rtol 1e-7 down; the verified ladder's upper "
-                   "rungs", "#8c564b", DOP853_PAIR, True),
+                   "rungs", "#8c564b", DOP853_PAIR, True, None, Method.EVENT_DOP853_RODAS),
+        MethodInfo(Method.EVENT_RODAS, 5, True, False,
+                   "event where the law is stiff (friction that sticks) takes a Rodas5P step "
+                   "(Rosenbrock, order 5, the analytic Jacobian); a friction scene's event "
+                   "method", "#e377c2", DOPRI5_RODAS_PAIR, True),
+        MethodInfo(Method.EVENT_DOP853_RODAS, 8, True, False,
+                   "event_dop853 where the law is stiff takes a Rodas5P step", "#7f7f7f",
+                   DOP853_RODAS_PAIR, True),
     )
 }
 
@@ -187,6 +197,7 @@ def check_step(scene: Scene, force: bool = False) -> MethodInfo:
     return method
 
 
-__all__ = ["ADAPTIVE_MAX_STEPS", "CLOSED_FORM_FLIGHT", "DOP853_PAIR", "DOPRI5_PAIR",
+__all__ = ["ADAPTIVE_MAX_STEPS", "CLOSED_FORM_FLIGHT", "DOP853_PAIR", "DOP853_RODAS_PAIR",
+           "DOPRI5_PAIR", "DOPRI5_RODAS_PAIR",
            "DRIVER_OF", "FIXED", "FIXED_MAX_STEPS", "METHODS", "MethodInfo", "check_step", "info",
            "run_settings", "setting_text", "step_budget"]

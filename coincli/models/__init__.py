@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from types import ModuleType
 
 from ..jit import NUMBA, Placeholder, kernels
-from . import interface, paper, rectangle
+from . import friction, interface, paper, rectangle
 
 
 @dataclass(frozen=True)
@@ -33,6 +33,9 @@ class Model:
     modules: tuple[ModuleType, ...]
     params: Callable
     parameters: tuple[str, ...] = ()
+    # stiff beyond the contact's spring and damper: its verification ladder climbs on the
+    # switching pairs (coincli.integrators.switching) where a method has them
+    stiff: bool = False
     stiffest_frequency: Callable = paper.stiffest_frequency
     horizon_rule: Callable = paper.horizon_rule
 
@@ -61,13 +64,17 @@ class Model:
 
 PAPER = Model("paper", "the paper's: a Winkler spring and a viscous damper at each corner of a "
                        "rectangle (eqs. 1-2)", (paper, rectangle), paper.params)
+FRICTION_MODEL = Model("friction", "the paper's with regularized Coulomb friction at the corners "
+                                   "(mu, slip_velocity)", (friction, paper, rectangle),
+                       friction.params, ("mu", "slip_velocity"), stiff=True)
 
-MODELS: dict[str, Model] = {m.name: m for m in (PAPER,)}
+MODELS: dict[str, Model] = {m.name: m for m in (PAPER, FRICTION_MODEL)}
 
 
 def model_of(scene) -> Model:
-    """The model ``scene`` needs: the paper's."""
-    return PAPER
+    """The model ``scene`` needs, and no more: friction's where its foundation has a friction
+    coefficient (mu > 0), else the paper's."""
+    return FRICTION_MODEL if scene.foundation.mu > 0 else PAPER
 
 
 def model_params(scene):
@@ -102,5 +109,5 @@ def stiffest_frequency(scene) -> tuple[float, float]:
     return model.stiffest_frequency(model.params(scene))
 
 
-__all__ = ["MODELS", "Model", "PAPER", "horizon_text", "model_of", "model_params",
+__all__ = ["FRICTION_MODEL", "MODELS", "Model", "PAPER", "horizon_text", "model_of", "model_params",
            "scene_horizon", "stiffest_frequency"]

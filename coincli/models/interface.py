@@ -35,6 +35,17 @@ below = placeholder("below", "(heights) -> the mask of the corners below the sur
 contact_mask = placeholder("contact_mask", "(p, y, phi) -> the mask of the corners below the "
                                            "surface")
 # -- the contact law --------------------------------------------------------------------------
+FRICTION = placeholder("FRICTION", "whether the law has friction at the corners (True: its "
+                                   "stiff drivers are compiled, and a recorded run integrates "
+                                   "the work friction does)")
+corner_force = placeholder(
+    "corner_force", "(p, y, dx, dy, vx, vy, vphi) -> (Fx, Fy): the force on a corner in contact "
+                    "at offset (dx, dy) from the centroid at height y, the coin moving at (vx, "
+                    "vy, vphi)")
+corner_force_gradient = placeholder(
+    "corner_force_gradient", "(p, y, dx, dy, vx, vy, vphi) -> (Fx, Fy, dFx, dFy): the force and "
+                             "its derivatives along (y, phi, vx, vy, vphi), two 5-tuples (the "
+                             "Jacobian of the implicit steps)")
 contact_accelerations = placeholder(
     "contact_accelerations", "(p, mode, state, c, s) -> (ax, ay, aphi): gravity and the contact "
                              "forces of the corners in ``mode`` (whatever their height: the "
@@ -42,6 +53,24 @@ contact_accelerations = placeholder(
 accelerations_auto = placeholder(
     "accelerations_auto", "(p, state) -> (ax, ay, aphi), the corners in contact taken from the "
                           "state (below the surface)")
+contact_jacobian = placeholder(
+    "contact_jacobian", "(p, mode, state, c, s) -> (aq, av): the derivatives of the "
+                        "accelerations in the fixed ``mode``, d a / d(y, phi) as a 6-tuple by "
+                        "rows and d a / d(vx, vy, vphi) as a 9-tuple by rows")
+stiffness = placeholder(
+    "stiffness", "(p, mode, state, c, s) -> 1/s: a bound of the law's stiffness beyond the "
+                 "contact's spring and damper (friction where a corner sticks; 0 without): "
+                 "where it times a step passes an explicit pair's stability, the switching "
+                 "pairs step implicitly")
+step_limit = placeholder(
+    "step_limit", "(p, mode, state, k1, c, s, h) -> the longest step to try from ``state`` "
+                  "(k1: its derivative): ``h``, or less where the law turns sharply ahead (a "
+                  "corner sliding into a stick)")
+sliding = placeholder(
+    "sliding", "(p, mode, state, c, s) -> (friction power, sliding load): the power of the "
+               "friction forces (W, <= 0) and sum over the corners in ``mode`` of max(0, N_i) "
+               "|v_xi| (W per unit friction coefficient: what a friction coefficient mu would "
+               "take, mu times it, to first order)")
 verlet_half_kick = placeholder(
     "verlet_half_kick", "(p, h2, state) -> (vx, vy, vphi): the velocity after the first half "
                         "kick of Stormer-Verlet, v + h2 a(q, v_half), implicit in what the law "
@@ -66,7 +95,9 @@ rounded_quarter_turns = placeholder("rounded_quarter_turns", "(phi) -> the paper
 run_horizon = placeholder("run_horizon", "(p, t_end, state) -> how long a run may last: t_end, "
                                          "or without one (infinite) the cap of the throw")
 
-__all__ = ["CORNERS", "accelerations_auto", "below", "contact_accelerations", "contact_forces",
-           "contact_mask", "corner_heights", "corner_offset", "corner_rates", "energies",
-           "energy_with_heights", "last_boundary", "rounded_quarter_turns", "run_horizon",
-           "total_energy", "verlet_half_kick", "well_index"]
+__all__ = ["CORNERS", "FRICTION", "accelerations_auto", "below", "contact_accelerations",
+           "contact_forces", "contact_jacobian", "contact_mask", "corner_force",
+           "corner_force_gradient", "corner_heights", "corner_offset", "corner_rates",
+           "energies", "energy_with_heights", "last_boundary", "rounded_quarter_turns",
+           "run_horizon", "sliding", "step_limit", "stiffness", "total_energy",
+           "verlet_half_kick", "well_index"]

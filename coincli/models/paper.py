@@ -15,12 +15,19 @@ import math
 from typing import NamedTuple
 
 from ..jit import kernel
+
+# law_force: the force on a corner as the model has it (this module's corner_force, or a
+# model's that extends the law: coincli.models.friction), so that the sums below serve it too
 from .interface import (
     CORNERS,
     below,
     corner_heights,
     corner_offset,
 )
+from .interface import corner_force as law_force
+from .interface import corner_force_gradient as law_force_gradient
+
+FRICTION = False
 
 
 class PaperParams(NamedTuple):
@@ -105,11 +112,78 @@ def contact_accelerations(p, mode, state, c, s):
         for i in range(CORNERS):
             if mode & (1 << i):
                 dx, dy = corner_offset(p, i, c, s)
-                fxi, fyi = corner_force(p, y, dx, dy, vx, vy, vphi)
+                fxi, fyi = law_force(p, y, dx, dy, vx, vy, vphi)
                 fx += fxi
                 fy += fyi
                 moment += dx * fyi - dy * fxi
     return fx * p.inv_mass, fy * p.inv_mass - p.g, moment * p.inv_inertia
+
+
+@kernel(inline=True)
+def corner_force_gradient(p, y, dx, dy, vx, vy, vphi):
+    """(F_x, F_y) of :func:`corner_force` and their derivatives along (y, phi, vx, vy, vphi),
+    with d d_x / d phi = -d_y and d d_y / d phi = d_x (docs/contact-methods.md)."""
+    fx, fy = corner_force(p, y, dx, dy, vx, vy, vphi)
+    cc = p.c
+    k = p.k
+    return (fx, fy, (0.0, cc * vphi * dx, -cc, 0.0, cc * dy),
+            (-k, -k * dx + cc * vphi * dy, 0.0, -cc, -cc * dx))
+
+
+@kernel
+def contact_jacobian(p, mode, state, c, s):
+    """The derivatives of :func:`contact_accelerations` in the fixed ``mode``: (aq, av), aq =
+    d a / d(y, phi) as a 6-tuple by rows (a does not depend on x), av = d a / d(vx, vy, vphi)
+    as a 9-tuple by rows; each corner's force and gradient from the law
+    (:func:`corner_force_gradient`), its moment d_x F_y - d_y F_x turning with the angle."""
+    y, vx, vy, vphi = state[1], state[3], state[4], state[5]
+    gx = (0.0, 0.0, 0.0, 0.0, 0.0)
+    gy = (0.0, 0.0, 0.0, 0.0, 0.0)
+    gm = (0.0, 0.0, 0.0, 0.0, 0.0)
+    for i in range(CORNERS):
+        if mode & (1 << i):
+            dx, dy = corner_offset(p, i, c, s)
+            fxi, fyi, ax, ay = law_force_gradient(p, y, dx, dy, vx, vy, vphi)
+            gx = (gx[0] + ax[0], gx[1] + ax[1], gx[2] + ax[2], gx[3] + ax[3], gx[4] + ax[4])
+            gy = (gy[0] + ay[0], gy[1] + ay[1], gy[2] + ay[2], gy[3] + ay[3], gy[4] + ay[4])
+            gm = (gm[0] + dx * ay[0] - dy * ax[0],
+                  gm[1] + dx * ay[1] - dy * ax[1] - dy * fyi - dx * fxi,
+                  gm[2] + dx * ay[2] - dy * ax[2], gm[3] + dx * ay[3] - dy * ax[3],
+                  gm[4] + dx * ay[4] - dy * ax[4])
+    im = p.inv_mass
+    ii = p.inv_inertia
+    aq = (gx[0] * im, gx[1] * im, gy[0] * im, gy[1] * im, gm[0] * ii, gm[1] * ii)
+    av = (gx[2] * im, gx[3] * im, gx[4] * im, gy[2] * im, gy[3] * im, gy[4] * im,
+          gm[2] * ii, gm[3] * ii, gm[4] * ii)
+    return aq, av
+
+
+@kernel(inline=True)
+def stiffness(p, mode, state, c, s):
+    """No stiffness beyond the spring's and the damper's, which the explicit pairs follow."""
+    return 0.0
+
+
+@kernel(inline=True)
+def step_limit(p, mode, state, k1, c, s, h):
+    """No sharp turn of the law ahead of any step: ``h``."""
+    return h
+
+
+@kernel
+def sliding(p, mode, state, c, s):
+    """(0: no friction, the sliding load sum over the corners in ``mode`` of max(0, N_i)
+    |v_xi|, N_i = -k y_i - c v_yi): what a friction coefficient mu would take, about mu times
+    it."""
+    y, vx, vy, vphi = state[1], state[3], state[4], state[5]
+    load = 0.0
+    for i in range(CORNERS):
+        if mode & (1 << i):
+            dx, dy = corner_offset(p, i, c, s)
+            normal = -p.k * (y + dy) - p.c * (vy + vphi * dx)
+            if normal > 0.0:
+                load += normal * abs(vx - vphi * dy)
+    return 0.0, load
 
 
 @kernel
@@ -128,7 +202,7 @@ def contact_forces(p, state, c, s, i):
     dx, dy = corner_offset(p, i, c, s)
     if state[1] + dy >= 0.0:
         return 0.0, 0.0, 0.0, 0.0
-    fx, fy = corner_force(p, state[1], dx, dy, state[3], state[4], state[5])
+    fx, fy = law_force(p, state[1], dx, dy, state[3], state[4], state[5])
     return fx, fy, fy, 0.0
 
 
@@ -265,7 +339,9 @@ def horizon_rule(p) -> str:
             f", + {p.decay_time * 1e3:.3g} ms of damping)")
 
 
-__all__ = ["CAP_FACTOR", "PaperParams", "accelerations_auto", "constants", "contact_accelerations",
-           "contact_forces", "corner_force", "damping_split", "decision_time", "elastic_energy",
+__all__ = ["CAP_FACTOR", "FRICTION", "PaperParams", "accelerations_auto", "constants",
+           "contact_accelerations", "contact_forces", "contact_jacobian", "corner_force",
+           "corner_force_gradient", "damping_split", "decision_time", "elastic_energy",
            "energies", "energy_with_heights", "horizon_rule", "params", "run_horizon",
-           "solve_damped_velocity", "stiffest_frequency", "total_energy", "verlet_half_kick"]
+           "sliding", "solve_damped_velocity", "step_limit", "stiffest_frequency",
+           "stiffness", "total_energy", "verlet_half_kick"]

@@ -100,11 +100,10 @@ class FractionsRecorder(InProcessRecording):
     that cannot be made leaves ``error`` set and the run alone."""
 
     def __init__(self, plan, where: Destination):
-        from ..integrators.ladder import ladder_of
 
         super().__init__(where)
         self.plan = plan
-        self.verified = ladder_of(plan.scene.integration).verified
+        self.verified = plan.scene.integration.verify
         self.sent: set[int] = set()  # values of a continuation sent
         self.values_done = 0
         self.grid = len(plan.parameters) > 1

@@ -20,7 +20,7 @@ from ..defaults import IC_NAMES
 from ..enums import Certainty, Engine, Status
 from ..grid import Axis, Grid
 from ..integrators import NO_LABEL
-from ..integrators.ladder import ladder_of
+from ..integrators.ladder import scene_ladder
 from ..params import (
     ParameterError,
     Scene,
@@ -136,7 +136,7 @@ def cell_scene(attrs: dict, cell: tuple[int, int]) -> Scene:
 def ladder_matches(attrs: dict, scene: Scene) -> bool:
     """Whether this version climbs the ladder the store records (a store of another version
     may record another one: its replay may then differ)."""
-    ours = json.loads(json.dumps(ladder_of(scene.integration).to_dict()))
+    ours = json.loads(json.dumps(scene_ladder(scene).to_dict()))
     return ours == attrs["method"].get("verification")
 
 
