@@ -10,12 +10,12 @@ one was made by an older minor version than the package's, naming the command th
     python benchmarks/docs_pictures.py --make          # remakes every picture
     python benchmarks/docs_pictures.py --make basin.png simulate-fig2.png    # only these
 
-Run it with the project's environment (`make docs` runs `--make`; `coin`, `rerun` and `python`
-below are that environment's). The stores and recordings the pictures are drawn from go to out/
-(`--out`); a store is made again for each run (`--overwrite`), so that no picture is drawn from
-the labels of an older version. All of them take about two hours on 2 cores, most of it the
-thickness-damping grid (an hour) and the accuracy charts; the screenshots of Rerun's viewer need
-a display or xvfb-run (Debian: xvfb and mesa-vulkan-drivers).
+Run it with the project's environment (`make docs` runs `--make`; `coin`, `rerun` and `python` below
+are that environment's). The stores and recordings the pictures are drawn from go to out/ (`--out`);
+a store is made again for each run (`--overwrite`), so that no picture is drawn from the labels of
+an older version. All of them take about three hours on 2 cores, most of it the thickness-damping
+grid (an hour), the friction study's maps and curves and the accuracy charts; the screenshots of
+Rerun's viewer need a display or xvfb-run (Debian: xvfb and mesa-vulkan-drivers).
 """
 
 from __future__ import annotations
@@ -121,6 +121,9 @@ PICTURES = (
     Picture("thickness-damping-crossing.png", (
         "python benchmarks/thickness_damping.py {out}/thickness-damping.zarr --landing 2000",),
         needs=("the thickness-damping grid",)),
+    Picture("friction-maps.png", ("python benchmarks/friction.py --maps --out {out}/friction",)),
+    Picture("friction-pstanding.png", ("python benchmarks/friction.py --curves --out "
+                                       "{out}/friction",)),
     Picture("accuracy.png", ("coin accuracy --res 32 -o docs/accuracy.png "
                              "--table docs/accuracy.json",)),
     Picture("accuracy-thick.png", ("coin accuracy --preset thick --res 24 -o "

@@ -25,6 +25,7 @@ from .grid import Grid, make_grid
 from .integrators import METHODS
 from .integrators.batch import new_control
 from .labeller import Labeller
+from .models import model_of
 from .params import Scene, state_array
 from .stats import wilson
 
@@ -65,6 +66,22 @@ class Setting:
 
 REFERENCE_A = Setting(Method.EVENT, 1e-6, 1e-12)
 REFERENCE_B = Setting(Method.RK4, 2.5e-7, 0.0)
+# With friction (a stiff model: coincli.models.Model.stiff) the event reference is the event
+# method's switching pair, event_rodas (Rodas5P where a corner sticks: the explicit pair alone
+# would crawl through every stick at its stability limit), and RK4's step is halved: without
+# events its error comes from the contact onsets and the kinks of the friction law (max(0, N),
+# the stick), a low order, and at mu = 1 its labels still move between h = 2e-7 and 5e-8 on
+# long rolling throws (tests/test_friction.py).
+REFERENCE_A_STIFF = Setting(Method.EVENT_RODAS, 1e-6, 1e-12)
+REFERENCE_B_STIFF = Setting(Method.RK4, 1.25e-7, 0.0)
+
+
+def references_of(scene: Scene) -> tuple[Setting, Setting]:
+    """The two references (A: the event method, B: fixed-step RK4) for ``scene``'s model."""
+    if model_of(scene).stiff:
+        return REFERENCE_A_STIFF, REFERENCE_B_STIFF
+    return REFERENCE_A, REFERENCE_B
+
 
 LADDERS: dict[Method, list[float]] = {
     Method.SYMPLECTIC_EULER: [1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7],
@@ -73,13 +90,24 @@ LADDERS: dict[Method, list[float]] = {
     Method.DOPRI5: [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
     Method.EVENT: [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
     Method.EVENT_DOP853: [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
+    Method.EVENT_RODAS: [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
+    Method.EVENT_DOP853_RODAS: [1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10],
 }
 PAPER_SETTING = Setting(Method.SYMPLECTIC_EULER, 1e-6, 1e-7)
 
 
 def ladder_settings(methods: list[Method] | None = None) -> list[Setting]:
+    """Every setting of the methods' ladders. A switching pair (the registry's
+    ``stiff_variant``: event_rodas, event_dop853_rodas) runs exactly as its explicit method on
+    every scene (the explicit pair where the law is not stiff; and a friction scene runs its
+    explicit methods on their switching pairs), so it is left out where that method is in the
+    list too: the same points twice."""
+    methods = [Method.parse(m) for m in (methods or list(LADDERS))]
+    same = {METHODS[m].stiff_variant for m in methods}
     out = []
-    for method in methods or list(LADDERS):
+    for method in methods:
+        if method in same:
+            continue
         for knob in LADDERS[method]:
             if METHODS[method].adaptive:
                 out.append(Setting(method, 1e-6, knob))
@@ -271,10 +299,11 @@ class References:
 
 def run_references(scene: Scene, grid: Grid, threads: int = 2, progress=None) -> References:
     say = progress or (lambda text: None)
-    say(f"reference A: {REFERENCE_A.label}")
-    ref_a = run_grid(scene, REFERENCE_A, grid, threads)
-    say(f"reference B: {REFERENCE_B.label}")
-    return References(ref_a, run_grid(scene, REFERENCE_B, grid, threads))
+    reference_a, reference_b = references_of(scene)
+    say(f"reference A: {reference_a.label}")
+    ref_a = run_grid(scene, reference_a, grid, threads)
+    say(f"reference B: {reference_b.label}")
+    return References(ref_a, run_grid(scene, reference_b, grid, threads))
 
 
 def run_study(scene: Scene, grid: Grid, settings: list[Setting], threads: int = 2,
@@ -286,8 +315,10 @@ def run_study(scene: Scene, grid: Grid, settings: list[Setting], threads: int = 
     say = progress or (lambda text: None)
     refs = run_references(scene, grid, threads, say)
     ref_a, ref_b, robust = refs.a, refs.b, refs.robust
-    traj_ref = reference_states(scene, REFERENCE_A)
-    traj_check = reference_states(scene, replace(REFERENCE_A, method=Method.DOPRI5))
+    reference_a = ref_a.setting
+    traj_ref = reference_states(scene, reference_a)
+    # the same tolerance by the flight integrated (dopri5: with friction, its switching pair)
+    traj_check = reference_states(scene, replace(reference_a, method=Method.DOPRI5))
     gap = float(np.median([state_error(scene, a, b) for a, b in zip(traj_ref, traj_check,
                                                                      strict=True)]))
     study = Study(grid, ref_a, ref_b, robust, refs.agreement, gap)
@@ -328,15 +359,27 @@ def sample_grid(grid: Grid, per_axis: int) -> Grid:
 # corners stay in contact), run for STABILITY_TIME. That excites exactly the stiffest mode, whose
 # damping should make the energy decay; growth means the step is unstable. (A chaotic throw is a
 # poor test: at a given step it may happen to end standing, where the rocking is much softer.)
+# With friction the resting coin's corners stick: the kick slips them by STABILITY_KICK r_t
+# (1e-5 m/s), inside the regularized law's linear part, where friction is a stiff damper on the
+# slip (rate about mu N / v_s (1/m + r_t^2 / I)), coupled to the rocking; an explicit step
+# beyond its limit there chatters (the slip overshoots, friction saturates at mu N): the energy
+# grows, or where the saturation bounds the chatter below the kick's energy, the coin never
+# comes to rest (:func:`fails`).
 STABILITY_KICK = 0.01  # rad/s
 STABILITY_TIME = 0.5  # s
+STABILITY_DECAY = 1e-2  # of the kick's energy: what a stable damped step leaves of it, at most
+LINEAR_PERTURBATION = 1e-7  # of the natural units, the central differences of a step
+LINEAR_SLIP = 1e-4  # of the slip velocity: what those differences slip a corner by, at most
+SPECTRAL_SLACK = 1e-6  # a spectral radius this far above 1 is the differences' rounding
 
 
 @dataclass
 class StabilityLimit:
     method: Method
-    predicted: float
+    predicted: float  # the registry's: the damped rocking mode alone (what simulate checks)
     measured: float  # smallest step seen to fail (bisection)
+    at_rest: float = math.nan  # the step linearized at the resting coin under the scene's law
+    # (friction included): the largest step whose spectral radius is at most 1
 
 
 def resting_scene(scene: Scene) -> Scene:
@@ -347,28 +390,96 @@ def resting_scene(scene: Scene) -> Scene:
 
 
 def fails(scene: Scene, method: Method | str, dt: float) -> bool:
-    """A step fails if the kicked resting coin goes non-finite or gains energy."""
+    """A step fails if the kicked resting coin goes non-finite or gains energy, or, on a
+    damped foundation (c > 0), keeps more than STABILITY_DECAY of the kick's energy: a step
+    beyond its limit where friction sticks need not gain energy, its chatter bounded where the
+    slip saturates friction (at mu N), but the coin never comes to rest. (Without damping the
+    rocking never dies out, even with friction: the corners stick, the coin rocks on them.)"""
     run_scene = resting_scene(scene).with_overrides(method=method, dt=dt)
     labeller = Labeller.of(run_scene)
     p = labeller.params
     state0 = state_array(run_scene)
     final, status = labeller.final_state(state0)
     energy = labeller.python.total_energy
-    return status == Status.NONFINITE or not energy(p, final) < energy(p, state0)
+    if status == Status.NONFINITE or not energy(p, final) < energy(p, state0):
+        return True
+    if scene.foundation.c <= 0:
+        return False
+    rest = state0.copy()
+    rest[5] = 0.0
+    return energy(p, final) - energy(p, rest) > STABILITY_DECAY * (energy(p, state0)
+                                                                   - energy(p, rest))
+
+
+def step_map(scene: Scene, method: Method | str, dt: float) -> np.ndarray:
+    """The one-step map of a fixed-step method linearized at the coin resting flat (not
+    kicked), under the scene's own law: its Jacobian over (y, phi, vx, vy, vphi) (x enters no
+    force), in natural units (r, 1 rad, sqrt(g r), sqrt(g r) / r), by central differences of the
+    model's step (its kernels as plain Python). The perturbations move no corner across the
+    surface and slip none by more than LINEAR_SLIP of a friction law's slip velocity."""
+    from .integrators.fixed import fixed_step
+
+    run_scene = resting_scene(scene).with_overrides(method=method, dt=dt)
+    labeller = Labeller.of(run_scene)
+    p = labeller.params
+    step = labeller.python[fixed_step]
+    rest = state_array(run_scene)
+    rest[5] = 0.0
+    r = scene.coin.r
+    speed = math.sqrt(scene.g * r)
+    units = np.array([r, 1.0, speed, speed, speed / r])
+    delta = LINEAR_PERTURBATION * units
+    slip = LINEAR_SLIP * getattr(p, "v_s", math.inf)  # a friction law's slip velocity
+    delta[2] = min(delta[2], slip)
+    delta[4] = min(delta[4], slip / scene.coin.r_t)  # vphi slips a lying coin's corner by r_t
+    method_id = int(Method.parse(method))
+    jacobian = np.empty((5, 5))
+    for col in range(5):
+        up, down = rest.copy(), rest.copy()
+        up[col + 1] += delta[col]
+        down[col + 1] -= delta[col]
+        moved = (np.array(step(method_id, p, dt, tuple(up)))
+                 - np.array(step(method_id, p, dt, tuple(down))))[1:]
+        jacobian[:, col] = moved / units / (2 * delta[col] / units[col])
+    return jacobian
+
+
+def linear_limit(scene: Scene, method: Method | str) -> float:
+    """The largest step whose map linearized at the resting coin (:func:`step_map`) has
+    spectral radius at most 1: the first instability, scanned upwards from a thousandth of the
+    registry's prediction in steps of 5 %, then bisected."""
+    method = Method.parse(method)
+
+    def stable(h: float) -> bool:
+        return max(abs(np.linalg.eigvals(step_map(scene, method, h)))) <= 1.0 + SPECTRAL_SLACK
+
+    top = 10.0 * METHODS[method].stable_step(scene)
+    lo, h = 0.0, 1e-3 * METHODS[method].stable_step(scene)
+    while h < top and stable(h):
+        lo, h = h, h * 1.05
+    if h >= top:
+        return math.inf
+    hi = h
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if stable(mid) else (lo, mid)
+    return lo
 
 
 def measured_limit(scene: Scene, method: Method | str, iterations: int = 12) -> StabilityLimit:
-    """Bisect, between 0.25x and 4x the predicted stable step, for the step where runs start
-    to fail."""
+    """Bisect, between 0.25x and 4x the stable step the resting coin's linearized step predicts
+    (:func:`linear_limit`: the registry's, :attr:`MethodInfo.stable_step`, where the law is the
+    paper's; friction lowers it), for the step where runs start to fail."""
     method = Method.parse(method)
     predicted = METHODS[method].stable_step(scene)
-    lo, hi = 0.25 * predicted, 4.0 * predicted
+    at_rest = linear_limit(scene, method)
+    centre = at_rest if math.isfinite(at_rest) else predicted
+    lo, hi = 0.25 * centre, 4.0 * centre
     if fails(scene, method, lo):
-        return StabilityLimit(method, predicted, lo)
+        return StabilityLimit(method, predicted, lo, at_rest)
     if not fails(scene, method, hi):
-        return StabilityLimit(method, predicted, math.inf)
+        return StabilityLimit(method, predicted, math.inf, at_rest)
     for _ in range(iterations):
         mid = math.sqrt(lo * hi)
         lo, hi = (lo, mid) if fails(scene, method, mid) else (mid, hi)
-    return StabilityLimit(method, predicted, hi)
-
+    return StabilityLimit(method, predicted, hi, at_rest)

@@ -43,7 +43,7 @@ DEFAULT_PRECISION = 0.002  # +- 0.2 percentage points
 DEFAULT_MAX_SAMPLES = 1 << 24
 # The physical parameters a continuation (--over) can follow, and their units.
 PARAMETER_UNITS = {"thickness": "m", "diameter": "m", "k": "N/m", "c": "N s/m", "mass": "kg",
-                   "inertia": "kg m^2", "g": "m/s^2"}
+                   "inertia": "kg m^2", "g": "m/s^2", "mu": "1", "slip_velocity": "m/s"}
 
 __all__ = ["AXIS_INFO", "DEFAULT_BATCH", "DEFAULT_CHUNK", "DEFAULT_FPS", "DEFAULT_LOG_EVERY",
            "DEFAULT_MAX_SAMPLES", "DEFAULT_PRECISION", "DEFAULT_PRESET", "DEFAULT_RANGES",

@@ -33,7 +33,7 @@ from .integrators.batch import (
 )
 from .integrators.common import RunResult
 from .integrators.ladder import Ladder, ladder_of
-from .integrators.pairs import integrate_adaptive_dop853
+from .integrators.pairs import integrate_adaptive_dop853, integrate_adaptive_dop853_rodas
 from .integrators.registry import run_settings
 from .models import MODELS, model_of
 from .params import RunSettings, Scene
@@ -152,13 +152,15 @@ class Labeller:
 
     def compile_all(self, state=None) -> None:
         """Compile (or load) every kernel of the model this labeller's calls run, and mark
-        them compiled: the DOP853 driver first, the largest, while the process holds the least
-        (the lowest peak memory: docs/performance.md, "First compile")."""
+        them compiled: the DOP853 driver the model runs first (the largest: its switching
+        pair's with friction), while the process holds the least (the lowest peak memory:
+        docs/performance.md, "First compile")."""
         state = np.array([0.0, self.params.r, 0.0, 0.0, 1.0, 3.0]) if state is None else state
         state = np.ascontiguousarray(state, dtype=np.float64)
         short = self.settings._replace(t_end=self.settings.dt * 4, sample_dt=0.0)
-        self._run_short(integrate_adaptive_dop853,
-                        short._replace(method=int(Method.EVENT_DOP853)), state)
+        largest = (integrate_adaptive_dop853_rodas if self.kernels.FRICTION
+                   else integrate_adaptive_dop853)
+        self._run_short(largest, short._replace(method=int(Method.EVENT_DOP853)), state)
         self._run_short(integrate, short._replace(stop_on_settle=False), state)
         one_rung = Ladder((self.ladder.methods[0],) * 2, (self.settings.rtol,) * 2,
                           (self.settings.dt,) * 2, True)

@@ -260,6 +260,27 @@ def check_number(name: str, value, positive: bool = False, nonnegative: bool = F
         raise ParameterError(f"{name} must not be negative, got {value}")
 
 
+MU_MAX = 10.0  # the largest friction coefficient taken (rubber on dry concrete: about 1)
+
+
+def check_friction(mu, slip_velocity) -> None:
+    """ParameterError (one line, naming the parameter) unless ``mu`` is a friction coefficient
+    from 0 (none: the paper's model) to MU_MAX and ``slip_velocity`` a speed above 0 (m/s)."""
+    for name, value in (("mu", mu), ("slip_velocity", slip_velocity)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise ParameterError(f"{name} must be a number, got {shown(value)}",
+                                 parameters=(name,))
+        if not math.isfinite(value):
+            raise ParameterError(f"{name} must be finite, got {value}", parameters=(name,))
+    if not 0 <= mu <= MU_MAX:
+        raise ParameterError(f"mu must be a friction coefficient from 0 (none: the paper's "
+                             f"model) to {MU_MAX:g}, got {mu:g}", parameters=("mu",))
+    if slip_velocity <= 0:
+        raise ParameterError(f"slip_velocity must be a speed above 0 m/s (the regularization "
+                             f"of Coulomb friction, default 1e-3), got {slip_velocity:g}",
+                             parameters=("slip_velocity",))
+
+
 DEEPEST_FORCE = 100.0  # a start deeper than where the spring force is this many weights is refused
 
 
@@ -299,6 +320,30 @@ def require_scene(scene) -> Scene:
     return scene
 
 
+def check_computable(scene: Scene) -> None:
+    """Refuse, in one line, a coin whose numbers the model cannot form in floating point: a
+    thickness whose (t/2)^2 is below the smallest float (eqs. 11 and 13 divide by it), or
+    sizes, masses or a stiffness so large that the stiffest contact mode 2 k (d/2)^2 / I, the
+    weight's moment m g r, the stiffness m g r / (t/2)^2 or I + m r^2 overflows."""
+    c, k = scene.coin, scene.foundation.k
+    r_d, r_t = c.diameter / 2, c.thickness / 2
+    if r_t * r_t == 0:
+        raise ParameterError(f"thickness {c.thickness:g} m is too thin to compute with: "
+                             "(t/2)^2 is below the smallest float", parameters=("thickness",))
+    r = math.hypot(r_d, r_t)
+    for what, value in (("stiffest contact mode", 2 * k * r_d * r_d / c.inertia),
+                        ("weight's moment", c.mass * scene.g * r),
+                        ("stiffness of eq. (11)", c.mass * scene.g * r / (r_t * r_t)),
+                        ("inertia about a corner", c.inertia + c.mass * r * r)):
+        if not math.isfinite(value):  # the message names the values in the command's words
+            raise ParameterError(
+                f"this coin's {what} overflows (diameter {c.diameter:g} m, thickness "
+                f"{c.thickness:g} m, mass {c.mass:g} kg, inertia {c.inertia:g} kg m^2, k "
+                f"{k:g} N/m, g {scene.g:g} m/s^2): past what the model computes with; give "
+                "values nearer a real coin's",
+                parameters=("diameter", "thickness", "mass", "inertia", "k", "g"))
+
+
 def validate(scene: Scene) -> Scene:
     """Raise ParameterError with a one-line message if a value is unusable; return the scene."""
     require_scene(scene)
@@ -312,9 +357,9 @@ def validate(scene: Scene) -> Scene:
                              f"({c.diameter:g} m), or equal to it (a square section)")
     check_number("k", f.k, positive=True)
     check_number("c", f.c, nonnegative=True)
-    check_number("mu", f.mu, nonnegative=True)
-    check_number("slip_velocity", f.slip_velocity, positive=True)
+    check_friction(f.mu, f.slip_velocity)
     check_number("g", scene.g, positive=True)  # without gravity no coin ever comes to rest
+    check_computable(scene)
     for name in ("x0", "phi0", "vx", "vy", "vphi"):
         check_number(name, getattr(s, name))
     if s.y0 is not None:

@@ -24,9 +24,11 @@ ANGLES = frozenset({"phi0", "vphi"})  # pi and its multiples mean radians (per s
 HEIGHTS = frozenset({"y0"})  # r and its multiples mean the coin's half diagonal
 RANGE_HELP = "LO:HI, e.g. 0.05:2"
 
+# A number's digits split one way only (no `\d+\.?\d*`, whose digits split n ways: a
+# 100,000-digit value without a unit then took minutes to refuse)
 _WITH_UNIT = re.compile(
-    r"^(?P<sign>[+-]?)(?P<num>(\d+\.?\d*|\.\d+)(e[+-]?\d+)?)?\*?(?P<unit>pi|r)"
-    r"(/(?P<div>(\d+\.?\d*|\.\d+)(e[+-]?\d+)?))?$")
+    r"^(?P<sign>[+-]?)(?P<num>(\d+(\.\d*)?|\.\d+)(e[+-]?\d+)?)?\*?(?P<unit>pi|r)"
+    r"(/(?P<div>(\d+(\.\d*)?|\.\d+)(e[+-]?\d+)?))?$")
 
 
 @dataclass(frozen=True)
@@ -97,7 +99,10 @@ def parse_quantity(name: str, value, *, finite: bool = True) -> Quantity:
     if unit == "pi":
         number *= math.pi
     if match.group("div"):
-        number /= float(match.group("div"))
+        divisor = float(match.group("div"))
+        if divisor == 0:  # '/0', or a divisor below the smallest float ('/1e-400')
+            raise ParameterError(f"{name}: '{shown(text)}' divides by zero", parameters=(name,))
+        number /= divisor
     if match.group("sign") == "-":
         number = -number
     if not math.isfinite(number):

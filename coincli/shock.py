@@ -17,6 +17,7 @@ ends its sign's search there: it is reported, never bisected through.
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from dataclasses import asdict, dataclass, field
 from enum import StrEnum
@@ -30,6 +31,7 @@ from .jsonable import jsonable
 from .labeller import Labeller
 from .params import ParameterError, Scene, validate
 from .statics import POSES, Rest, rest
+from .values import shown
 
 PRECISION = 1e-4  # the bisection stops when the bracket is this narrow, relative to its top
 # Each kick of the scan is this many times the one before. Where the damping is weak the outcome
@@ -148,26 +150,34 @@ class MinimalShock:
 
 def minimal_shock(scene: Scene, state: str = "standing", kick: str = "vphi", *,
                   precision: float = PRECISION, energy_limit: float = ENERGY_LIMIT,
-                  scan_step: float = SCAN_STEP) -> MinimalShock:
+                  scan_step: float = SCAN_STEP, **overrides) -> MinimalShock:
     """The smallest instantaneous change of ``kick`` ("vphi" about the centroid, "vx" or "vy"
     of the centroid) that takes a coin at rest in ``state`` ("standing" or "lying", on the
     scene's foundation) to another well, both signs searched with the scene's integration
     (verified labels by default): a scan from the static kick up in steps of ``scan_step``
     to the kick of ``energy_limit`` times the well's depth, then a bisection to ``precision``
-    (relative). The scene's initial state is not used."""
+    (relative). The scene's initial state is not used. ``overrides`` change the scene's
+    values by the flat names of :meth:`Scene.with_overrides` (``mu=0.3``: with friction at
+    the corners), as :func:`coincli.simulate` takes them."""
+    from .throw import with_keywords
+
+    scene = with_keywords(scene, overrides, "minimal_shock")
     validate(scene)
     check_step(scene)
-    if state not in POSES:
-        raise ParameterError(f"state must be one of {', '.join(POSES)}, got {state!r}")
+    if not isinstance(state, str) or state not in POSES:  # a list is unhashable: no `in`
+        raise _not_one_of("state", state, POSES)
     try:
-        kind = Kick(kick)
+        kind = Kick(kick) if isinstance(kick, str) else None
     except ValueError:
-        raise ParameterError(f"kick must be one of {', '.join(Kick)}, got {kick!r}") from None
+        kind = None
+    if kind is None:
+        raise _not_one_of("kick", kick, Kick)
     for name, value, low in (("precision", precision, 0.0), ("scan_step", scan_step, 1.0),
                              ("energy_limit", energy_limit, 1.0)):
-        if isinstance(value, bool) or not isinstance(value, int | float) \
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) \
                 or not math.isfinite(value) or value <= low:
-            raise ParameterError(f"{name} must be a number above {low:g}, got {value!r}")
+            raise ParameterError(f"{name} must be a number above {low:g}, got "
+                                 f"{_given(value)}")
     start = time.perf_counter()
     at_rest = rest(scene, state)
     mass = scene.coin.inertia if kind is Kick.VPHI else scene.coin.mass
@@ -213,6 +223,25 @@ def minimal_shock(scene: Scene, state: str = "standing", kick: str = "vphi", *,
                         signs_agree=agree, limit=limit, note=note, reason=reason,
                         searches=searches, throws=runner.throws, steps=runner.steps,
                         seconds=time.perf_counter() - start)
+
+
+def _given(value) -> str:
+    """A value as a refusal quotes it: text in quotes, None or a number as itself, anything
+    else with its type (a list ['standing'])."""
+    if isinstance(value, str):
+        return repr(shown(value))
+    if value is None or isinstance(value, numbers.Number):
+        return shown(value)
+    return f"{type(value).__name__} {shown(value)}"
+
+
+def _not_one_of(name: str, value, choices) -> ParameterError:
+    """The refusal of ``value`` for ``name``, none of ``choices`` (their names); several of
+    them in a list or tuple are one call each."""
+    several = ("; one a call: call minimal_shock once for each"
+               if isinstance(value, list | tuple | set | frozenset) else "")
+    return ParameterError(f"{name} must be one of {', '.join(choices)}, got "
+                          f"{_given(value)}{several}")
 
 
 class _Runner:

@@ -12,6 +12,7 @@ import math
 from dataclasses import asdict, dataclass
 
 from .params import Scene
+from .version import documentation
 
 
 @dataclass(frozen=True)
@@ -93,11 +94,12 @@ class StabilityReport:
         return out
 
 
+K_CR_SECTION = f"{documentation('model', 'The model')}, section 9"  # where k_cr / 2 is derived
 K_CR_NOTE = ("k_cr and k_cr_paper are the paper's eq. (13) as printed (with standing_static, "
              "its criterion k > k_cr): it compares centroid heights only and is twice too "
              "high. k_cr_model = k_cr / 2 is the threshold this model uses: above it a "
              "standing coin at rest has energy below E_crit, springs counted "
-             "(standing_static_model; docs/model.md, section 9)")
+             f"(standing_static_model; {K_CR_SECTION})")
 
 
 MJ = 1e3  # joules -> millijoules, the unit the report is read in
@@ -133,7 +135,7 @@ def critical_rows(report: StabilityReport) -> list[tuple[str, str, str]]:
          "the paper's threshold for a standing coin at rest: twice too high (it counts "
          "centroid heights only)"),
         ("k_cr / 2 (model)", f"{report.k_cr_model:.2f} N/m",
-         "the model's: above it a standing coin rests below E_crit (docs/model.md, section 9)"),
+         f"the model's: above it a standing coin rests below E_crit ({K_CR_SECTION})"),
         ("E_crit", f"{report.e_crit * MJ:.6g} mJ",
          "m g (r - m g / 2k): below it the count of quarter turns is final"),
         ("standing well", f"{report.standing_well_depth * MJ:.4g} mJ",
@@ -189,7 +191,10 @@ def analyse(scene: Scene) -> StabilityReport:
     elastic = EnergyLevels(v_max=weight * (r - weight / k),  # eq. 10: centroid height only
                            v_min1=weight * (r_t - sink), v_min2=weight * (r_d - sink))
     k_min = weight * r / (2 * r_t**2)  # eq. 11
-    k_cr = weight / (2 * (r - r_d))  # eq. 13 with the denominator's sign fixed
+    # r - r_d written as r_t^2 / (r + r_d): the difference of two near-equal lengths of a thin
+    # coin cancels to a few digits (t/d = 1e-7) or to zero (t/d = 1e-10: a division by zero)
+    above = r_t**2 / (r + r_d)
+    k_cr = weight / (2 * above)  # eq. 13 with the denominator's sign fixed
     # Exact: a standing coin rests on two corners (stiffness 2k), energy m g r_d - (m g)^2 / 4k
     # with the springs' energy counted. It is a well only while that is below E_crit.
     standing_rest = rest(scene, "standing").energy
@@ -197,4 +202,4 @@ def analyse(scene: Scene) -> StabilityReport:
         phi_cr=coin.phi_cr, rigid=rigid, elastic=elastic, k=k, k_min=k_min, k_cr=k_cr,
         e_crit=scene.e_crit, lying_static=True, standing_static=k > k_cr,
         single_corner_contact=k >= k_min, standing_well_depth=scene.e_crit - standing_rest,
-        k_stand_exact=weight / (4 * (r - r_d)), k_rock=weight * r_d / (2 * r_t**2))
+        k_stand_exact=weight / (4 * above), k_rock=weight * r_d / (2 * r_t**2))

@@ -29,7 +29,7 @@ from .integrators.common import (
     ONSET,
     SAMPLE_COLUMNS,
 )
-from .jit import NUMBA, PYTHON, is_built
+from .jit import NUMBA, PYTHON, is_built, kernels_cached
 from .labeller import Labeller
 from .models import MODELS, horizon_text, scene_horizon
 from .params import (
@@ -72,6 +72,9 @@ CAPPED_SAMPLES = 1_000_000  # ... where the cap is infinite (56 MB; see _sample_
 # saved) when the run is adaptive and stops once settled; a typical throw takes under a hundred
 # steps (about 5 ms in Python). One that needs more than PYTHON_STEPS is run again compiled.
 PYTHON_STEPS = 3000
+# the interval between kept states of a run that keeps none: only its first and last are
+# kept, and it is a recorded run, which integrates the friction and the sliding work
+WORK_ONLY = math.inf
 
 
 class State(NamedTuple):
@@ -127,6 +130,12 @@ class Throw:
     certainty: Certainty = Certainty.UNVERIFIED
     rungs: list[Rung] = field(default_factory=list)
     sample_dt: float | None = None  # s between samples (None: none kept)
+    # J friction took from the coin over the throw (0 without friction), and J per unit
+    # friction coefficient: the integral of max(0, N_i) |v_xi| over the corners in contact,
+    # what a friction coefficient mu would take of it, about mu times it to first order (the
+    # last rung's run; None: not integrated)
+    friction_work: float | None = None
+    sliding_work: float | None = None
 
     @property
     def settled(self) -> bool:
@@ -157,6 +166,10 @@ class Throw:
     def pose(self) -> str:
         return pose_of(self.quarter_turns)
 
+    def to_dict(self) -> dict:
+        """The same as :meth:`summary` (as every result of the API names it)."""
+        return self.summary()
+
     def summary(self) -> dict:
         """Everything a user or a script needs, as plain JSON-able values."""
         integ = self.scene.integration
@@ -176,6 +189,10 @@ class Throw:
             "energy_initial": self.energy_initial,
             "energy_final": self.energy_final,
             "energy_dissipated": self.energy_initial - self.energy_final,
+            "mu": self.scene.foundation.mu,
+            "slip_velocity": self.scene.foundation.slip_velocity,
+            "friction_work": self.friction_work,
+            "sliding_work": self.sliding_work,
             "e_crit": self.e_crit,
             "method": integ.method.label,
             "dt": integ.dt,
@@ -226,8 +243,13 @@ def with_keywords(scene: Scene, overrides: dict, function: str) -> Scene:
 
 def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: bool = False,
              force: bool = False, engine: Engine = Engine.AUTO, control=None,
-             **overrides) -> Throw:
-    """One throw, as :func:`coincli.simulate` describes (which gives it with its views)."""
+             before_compile=None, **overrides) -> Throw:
+    """One throw, as :func:`coincli.simulate` describes (which gives it with its views).
+    ``before_compile`` (no arguments) is called before the compiled kernels of the scene's
+    model are first compiled on this machine (not when they only load), for a front end to
+    say so (it may compile them itself: :func:`coincli.api.throws.compile_kernels`). A run
+    that keeps no samples still integrates the friction and sliding work: it records its
+    first and last state only (WORK_ONLY)."""
     scene = with_keywords(scene, overrides, "simulate")
     validate(scene)
     method = check_step(scene, force=force)
@@ -239,13 +261,14 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     except ValueError:
         raise ParameterError(f"engine must be one of {', '.join(e.label for e in Engine)}, "
                              f"got {engine!r}") from None
-    labeller = Labeller.of(scene, sample_dt=float(sample_dt or 0.0))
+    labeller = Labeller.of(scene, sample_dt=float(sample_dt) if sample_dt else WORK_ONLY)
+    before_compile = _once(before_compile)
     ladder = labeller.ladder
     state0 = state_array(scene)
     if sample_dt:
         samples = np.empty((_sample_rows(horizon, sample_dt), SAMPLE_COLUMNS))
-    else:
-        samples = np.empty((0, SAMPLE_COLUMNS))
+    else:  # the first and the last state: a recorded run, which integrates the work
+        samples = np.empty((2, SAMPLE_COLUMNS))
     events = np.empty((MAX_EVENTS if record_events else 0, EVENT_COLUMNS))
     final = np.empty(6)
     control = new_control() if control is None else control
@@ -262,7 +285,7 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     for k in range(len(ladder)):
         settings = labeller.rung_settings(k)
         result, seconds, engine = _run(labeller, settings, state0, samples, events, final,
-                                       control, engine)
+                                       control, engine, before_compile)
         wall += seconds
         label = rules.outcome_label(result.status, result.n_well, final[2])
         rungs.append(Rung(ladder.rung_text(k), None if label == NO_LABEL else int(label),
@@ -283,6 +306,20 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
         certainty = Certainty.UNDECIDED
     return _trajectory(scene, labeller, state0, final, result, samples, events, sample_dt,
                        record_events, wall, certainty, rungs, settings.max_steps)
+
+
+def _once(hook):
+    """``hook`` called once at most (None: None)."""
+    if hook is None:
+        return None
+    called = []
+
+    def once():
+        if not called:
+            called.append(True)
+            hook()
+
+    return once
 
 
 def _sample_rows(horizon: float, sample_dt: float) -> int:
@@ -309,7 +346,7 @@ def _check_sample_dt(sample_dt, horizon: float) -> None:
 
 
 def _run(labeller: Labeller, settings, state0, samples, events, final, control,
-         engine: Engine):
+         engine: Engine, before_compile=None):
     """One kernel run: (result, wall seconds, the engine for the next rung). A Python run that
     outgrows PYTHON_STEPS is run again compiled, from the start, and so is every rung after."""
     if engine == Engine.PYTHON:
@@ -319,6 +356,8 @@ def _run(labeller: Labeller, settings, state0, samples, events, final, control,
                                                    control)
         if not (result.status == Status.BUDGET and capped.max_steps < settings.max_steps):
             return result, time.perf_counter() - start, engine
+    if before_compile is not None and not kernels_cached(labeller.model):
+        before_compile()
     labeller.load(state0, trajectory=True)  # before the clock
     start = time.perf_counter()
     result = labeller.run(settings, state0, samples, events, final, control)
@@ -379,7 +418,8 @@ def _trajectory(scene, labeller, state0, final, result, samples, events, sample_
         energy_final=float(e1), e_crit=scene.e_crit, wall_time=wall,
         samples=samples[:result.n_samples].copy() if sample_dt else None,
         events=events[:result.n_events].copy() if record_events else None, notes=notes,
-        certainty=certainty, rungs=rungs, sample_dt=float(sample_dt) if sample_dt else None)
+        certainty=certainty, rungs=rungs, sample_dt=float(sample_dt) if sample_dt else None,
+        friction_work=float(result.friction_work), sliding_work=float(result.sliding_work))
 
 
 def classify(scene: Scene, *, force: bool = False, **overrides) -> Outcome:

@@ -22,9 +22,9 @@ from coincli.presets import load
 
 
 def pytest_configure(config):
-    """Compile the kernels once, here, before pytest-xdist starts its workers, which on a cold
-    cache would each compile all of them at the same time (each about a minute of one core and
-    half a gigabyte of memory).
+    """Compile the kernels of every model once, here, before pytest-xdist starts its workers,
+    which on a cold cache would each compile all of them at the same time (each a minute or
+    more of one core and half a gigabyte of memory).
 
     And first, before any test module imports it, the command line: its consoles
     (coincli.cli.common) are created then, as they would be with the output piped (no
@@ -36,14 +36,17 @@ def pytest_configure(config):
         os.environ.pop(name, None)
     with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
         import coincli.cli  # noqa: F401
-    from coincli.jit import kernels_cached
-
-    if hasattr(config, "workerinput") or kernels_cached():
+    if hasattr(config, "workerinput"):
         return  # a worker: the controller has compiled them
+    from coincli.jit import kernels_cached
     from coincli.labeller import Labeller
+    from coincli.models import MODELS
 
-    scene = load("paper").scene
-    Labeller.of(scene).compile_all(np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
+    paper = load("paper").scene
+    for model in MODELS.values():
+        if not kernels_cached(model.name):
+            scene = paper.with_overrides(**dict(model.example))
+            Labeller.of(scene).compile_all(np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
 
 
 TEST_COLUMNS = "80"  # the width every command prints at in the tests, as CI has it

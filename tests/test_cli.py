@@ -348,9 +348,9 @@ def uncompiled(monkeypatch):
         out = io.StringIO()
         monkeypatch.setattr(common, "err_console",
                             Console(file=out, force_terminal=terminal, width=80))
-        monkeypatch.setattr(jit, "kernels_cached", lambda: False)
+        monkeypatch.setattr(jit, "kernels_cached", lambda *model: False)
         monkeypatch.setattr(api, "compile_kernels",
-                            lambda: (calls.append(1), compile_kernels())[1])
+                            lambda **model: (calls.append(1), compile_kernels())[1])
         return out
 
     setup.calls = calls
@@ -421,8 +421,8 @@ def test_compiled_kernels_are_not_compiled_again(monkeypatch):
     import coincli.jit as jit
     from coincli.cli.common import compile_first
 
-    monkeypatch.setattr(jit, "kernels_cached", lambda: True)
-    monkeypatch.setattr(api, "compile_kernels", lambda: pytest.fail("compiled again"))
+    monkeypatch.setattr(jit, "kernels_cached", lambda *model: True)
+    monkeypatch.setattr(api, "compile_kernels", lambda **model: pytest.fail("compiled again"))
     compile_first()
     result = run("compile")
     assert result.exit_code == 0, result.stderr
@@ -436,17 +436,30 @@ def outcome_rows(stdout: str) -> list[int]:
     return [int(m) for m in re.findall(r"^│\s+(-?\d+) │", stdout, re.MULTILINE)]
 
 
+def listed_by_count(every: list, shown: list[int]) -> list:
+    """The rows of ``every`` left out of a table that lists ``shown``, checked to be those of
+    the lowest counts: every n listed has more than every n left out (ties go together), and
+    about ten are listed."""
+    counts = {row["n"]: row["count"] for row in every}
+    hidden = [row for row in every if row["n"] not in shown]
+    assert 5 <= len(shown) <= 15, shown
+    assert min(counts[n] for n in shown) > max(row["count"] for row in hidden), (shown, every)
+    return hidden
+
+
 def test_basin_stats_lists_the_ten_most_frequent_n_unless_all(in_tmp):
+    """By count, never one n of a tie without the other: the default map is mirrored (n and -n
+    have as many cells), so the n listed are symmetric (issue 48: -10..8 and not +10)."""
     assert run("basin", "s.zarr", "--res", "48", "-q").exit_code == 0
     every = json.loads(run("basin", "stats", "s.zarr", "--json").stdout)["outcomes"]
     assert len(every) > 10  # the JSON lists every n
     top = run("basin", "stats", "s.zarr", env={"COLUMNS": "100"})
     shown = outcome_rows(top.stdout)
-    ranked = sorted(every, key=lambda row: -row["count"])
-    assert sorted(shown) == shown and len(shown) == 10, shown  # by n, as --all
-    assert {row["n"] for row in ranked[:10]} == set(shown)
-    rest = sum(row["fraction"] for row in ranked[10:])
-    assert f"... {len(every) - 10} more n, " in top.stdout and \
+    assert sorted(shown) == shown, shown  # by n, as --all
+    hidden = listed_by_count(every, shown)
+    assert {-n for n in shown} == set(shown), shown
+    rest = sum(row["fraction"] for row in hidden)
+    assert f"... {len(hidden)} more n, " in top.stdout and \
         "of the labelled cells together (--all lists every n)" in top.stdout, top.stdout
     assert f"{100 * rest:.3g} %" in top.stdout, (rest, top.stdout)
     full = run("basin", "stats", "s.zarr", "--all", env={"COLUMNS": "100"})
@@ -459,12 +472,87 @@ def test_fractions_lists_the_ten_most_frequent_n_unless_all(in_tmp):
     every = json.loads(run(*args, "--json").stdout)["outcomes"]
     assert len(every) > 10
     top = run(*args, env={"COLUMNS": "100"})
-    ranked = sorted(every, key=lambda row: -row["count"])
-    assert set(outcome_rows(top.stdout)) == {row["n"] for row in ranked[:10]}, top.stdout
-    assert f"... {len(every) - 10} more n, " in top.stdout and "of the certain labels" in \
+    hidden = listed_by_count(every, outcome_rows(top.stdout))
+    assert f"... {len(hidden)} more n, " in top.stdout and "of the certain labels" in \
         top.stdout, top.stdout
     full = run(*args, "--all", env={"COLUMNS": "100"})
     assert outcome_rows(full.stdout) == [row["n"] for row in every], full.stdout
+
+
+def test_an_outcome_table_keeps_a_tie_together():
+    """Rows of one count are listed or left out together; past half as many again, left
+    out; all of one count: the earliest ten."""
+    from coincli.cli.text import most_frequent
+
+    def rows(*counts):
+        return [{"n": n, "count": c} for n, c in enumerate(counts)]
+
+    def listed(table):
+        return [row["n"] for row in most_frequent(table)[0]]
+
+    # a mirrored map: counts n = -5..5 symmetric, the 10th and 11th largest tied
+    mirrored = [{"n": n, "count": 100 - 10 * abs(n)} for n in range(-6, 7)]
+    assert listed(mirrored) == list(range(-5, 6))  # 11 rows: the tie at +-5 kept together
+    assert listed(rows(*range(20, 0, -1))) == list(range(10))  # no tie: the ten largest
+    many = rows(9, 8, 7, 6, 5, 4, 3, 2, 1, *[0] * 20)  # a tie of 20 at the cut: left out
+    shown, hidden = most_frequent(many)
+    assert [row["n"] for row in shown] == list(range(9)) and len(hidden) == 20
+    assert listed(rows(*[3] * 30)) == list(range(10))  # every row tied: the earliest ten
+    assert listed(rows(5, 4)) == [0, 1] and most_frequent(rows(5, 4))[1] == []
+
+
+def test_an_option_of_another_basin_command_is_named(in_tmp, capsys, monkeypatch):
+    """`coin basin x.zarr -o out.png` (issue 48): the answer names the command that takes -o,
+    one that `coin basin --help` lists, and which command ran; nothing is created."""
+    from coincli.cli import run as coin
+
+    monkeypatch.setattr(sys, "argv", ["coin"])  # the program's name, as the script has it
+    listed = run("basin", "--help").stdout
+    for args, words, see in (
+            (["basin", "x.zarr", "-o", "out.png"],
+             "No such option: -o: coin basin STORE runs coin basin sweep STORE, which has none; "
+             "-o is an option of coin basin render and coin basin analyze", "render"),
+            (["basin", "x.zarr", "--bogus"], "coin basin STORE runs coin basin sweep STORE",
+             "sweep"),
+            (["basin", "stats", "x.zarr", "--res", "8"],
+             "No such option: --res: --res is an option of coin basin sweep, not of coin basin "
+             "stats", "sweep")):
+        assert coin(args) == 2
+        out, err = capsys.readouterr()
+        lines = err.strip().splitlines()
+        assert out == "" and len(lines) == 1 and "Traceback" not in err, err
+        assert lines[0].startswith("error: ") and words in lines[0], lines[0]
+        assert lines[0].endswith(f"(see 'coin basin {see} --help')"), lines[0]
+        assert re.search(rf"^│ {see} ", listed, re.MULTILINE), listed  # in `coin basin --help`
+    assert coin(["fractions", "-o", "x"]) == 2  # `coin`'s commands are tools apart
+    assert capsys.readouterr().err.strip() == "error: No such option: -o (see 'coin fractions " \
+                                              "--help')"
+    assert not (in_tmp / "x.zarr").exists()
+
+
+def test_the_next_step_of_a_sweep_writes_beside_the_store(in_tmp):
+    """`make demo` sweeps into out/: the hint's picture goes there too, not into the current
+    folder (issue 48)."""
+    result = run("basin", "out/s.zarr", "--res", "16", "-q")
+    assert result.exit_code == 0, (result.stdout, result.stderr)
+    said = result.stdout.replace("\u00a0", " ")
+    assert "Next: coin basin render out/s.zarr -o out/s.png; coin basin stats out/s.zarr" in \
+        said, said
+    assert run("basin", "render", "out/s.zarr", "-o", "out/s.png").exit_code == 0
+    assert (in_tmp / "out" / "s.png").exists()
+
+
+def test_a_store_of_other_samples_is_one_line(in_tmp):
+    """Off a terminal the note on mass and inertia comes first; not before the refusal of a
+    store of other samples, which is one line alone (issue 48)."""
+    args = ["fractions", "--samples", "256", "--batch", "256", "--store", "o.zarr"]
+    first = run(*args, "--over", "thickness=0.002,0.004")
+    assert first.exit_code == 0, (first.stdout, first.stderr)
+    assert "note: mass and inertia follow" in first.stderr, first.stderr
+    for other in (["--over", "thickness=0.002,0.006"],
+                  ["--over", "thickness=0.002,0.004", "--vx", "0.1"]):
+        assert_one_line_error(run(*args, *other), "o.zarr holds other samples",
+                              "or --overwrite to replace it")
 
 
 @pytest.mark.skipif(shutil.which("make") is None, reason="no make")

@@ -207,6 +207,17 @@ def test_the_map_draws_p_and_its_line_at_one_third(tmp_path):
         assert p[i, j, 0] < 1 / 3 <= p[i + 1, j, 0]
     with pytest.raises(ParameterError, match="panel"):
         coincli.render_fractions(result, panels=["outcomes"])
+    # issue 48: where labels are uncertain (here 40-70 % at c = 0.5), the maps say so: those
+    # cells hatched on both maps of P, the share written in each
+    share = np.array([r.uncertain["probability"] for r in result.results]).reshape(3, 2)
+    marked = share >= 0.05
+    assert marked[:, 0].all() and not marked[:, 1].any(), share
+    for panel in fig.axes[:2]:
+        hatched = [c for c in panel.collections if c.get_hatch()]
+        assert len(hatched) == 1 and len(hatched[0].get_paths()) == 3
+        written = sorted(t.get_text() for t in panel.texts if "uncertain" in t.get_text())
+        assert written == sorted(f"{100 * s:.0f} %\nuncertain" for s in share[:, 0])
+    assert "5 % or more uncertain" in {t.get_text() for t in first.get_legend().get_texts()}
 
 
 def test_no_cell_of_a_positive_parameter_is_drawn_below_zero(grid):

@@ -362,3 +362,57 @@ def test_a_parameter_named_in_a_preset_file_stays_a_parameter(tmp_path, monkeypa
     # simulate has --t-end and --dt, but the file said t_end and dt
     assert result.stderr.startswith("error: preset file"), result.stderr
     assert "t_end / dt is" in result.stderr and "--" not in result.stderr, result.stderr
+
+
+# -- issue 48: tracebacks of 0.10.0 -------------------------------------------------------------
+@pytest.mark.parametrize("args, words", [
+    (["fractions", "--phi0", "pi/2:pi/0", "--samples", "100"], "--phi0: 'pi/0' divides by zero"),
+    (["fractions", "--phi0", "-pi/0:pi", "--samples", "100"], "--phi0: '-pi/0' divides by zero"),
+    (["basin", "S.zarr", "--vphi", "-pi/0:pi"], "--vphi: '-pi/0' divides by zero"),
+    (["simulate", "--y0", "r/0", "--no-rrd"], "'r/0' divides by zero"),
+    (["simulate", "--y0", "r/1e-400", "--no-rrd"], "'r/1e-400' divides by zero"),
+    (["fractions", "--vphi", "normal(pi/0,1)", "--samples", "100"], "divides by zero"),
+])
+def test_a_division_by_zero_in_a_value_is_one_line(args, words, in_tmp, capsys):
+    line = one_error_line(capsys, *args)
+    assert words in line, line
+    assert not (in_tmp / "S.zarr").exists()
+
+
+def test_parse_quantity_refuses_a_division_by_zero():
+    from coincli.quantities import parse_quantity, parse_span
+
+    for text in ("pi/0", "-pi/0", "2pi/0.0", "pi/1e-400"):
+        with pytest.raises(ParameterError, match="divides by zero"):
+            parse_quantity("phi0", text)
+    with pytest.raises(ParameterError, match="divides by zero"):
+        parse_span("y0", "r:r/0")
+    assert parse_quantity("phi0", "pi/2").value == pytest.approx(math.pi / 2)
+
+
+@pytest.mark.parametrize("args, words", [
+    (["stability", "--shock", "--diameter", "1e300"], "stiffest contact mode overflows"),
+    (["stability", "--diameter", "1e160"], "--diameter 1e+160 m"),
+    (["stability", "--shock", "--thickness", "1e-200"], "--thickness 1e-200 m is too thin"),
+    (["simulate", "--diameter", "1e300", "--no-rrd"], "past what the model computes with"),
+    (["fractions", "--thickness", "1e-170", "--samples", "100"], "too thin"),
+])
+def test_a_coin_past_floating_point_is_one_line(args, words, capsys):
+    """Sizes whose squares overflow or vanish (a ZeroDivisionError or an OverflowError in
+    0.10.0) are refused by the scene's checks, naming the options."""
+    line = one_error_line(capsys, *args)
+    assert words in line, line
+
+
+def test_a_thin_coin_gets_its_stability_without_cancellation():
+    """r - r_d of a coin with t/d = 5e-11 cancels to zero (0.10.0: a ZeroDivisionError): as
+    r_t^2 / (r + r_d) it keeps its digits, k_cr = m g (r + r_d) / (2 r_t^2)."""
+    import coincli
+
+    for thickness in (1e-12, 1e-9, 1e-6):
+        scene = coincli.load_preset("paper").with_overrides(thickness=thickness)
+        report = coincli.stability(scene)
+        coin = scene.coin
+        exact = coin.mass * scene.g * (coin.r + coin.r_d) / (2 * coin.r_t ** 2)
+        assert report.k_cr == pytest.approx(exact, rel=1e-12)
+        assert report.k_stand_exact == pytest.approx(exact / 2, rel=1e-12)

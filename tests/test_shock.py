@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -185,6 +186,33 @@ def test_options_are_checked(paper):
         minimal_shock("paper")
 
 
+@pytest.mark.parametrize("options, words", [
+    # issue 48: a list of states was `TypeError: unhashable type: 'list'`
+    ({"state": ["standing"]}, "state must be one of lying, standing, got list ['standing']; "
+                              "one a call"),
+    ({"state": ("standing", "lying")}, "got tuple ('standing', 'lying'); one a call"),
+    ({"state": {"standing": 1}}, "state must be one of lying, standing, got dict"),
+    ({"state": None}, "state must be one of lying, standing, got None"),
+    ({"state": 1}, "state must be one of lying, standing, got 1"),
+    ({"kick": ["vphi", "vx"]}, "kick must be one of vphi, vx, vy, got list ['vphi', 'vx']; "
+                               "one a call"),
+    ({"kick": {"vphi"}}, "kick must be one of vphi, vx, vy, got set"),
+    ({"kick": 2}, "kick must be one of vphi, vx, vy, got 2"),
+    ({"precision": "0.01"}, "precision must be a number above 0, got '0.01'"),
+    ({"scan_step": [2]}, "scan_step must be a number above 1, got list [2]"),
+    ({"energy_limit": None}, "energy_limit must be a number above 1, got None"),
+])
+def test_options_of_a_wrong_type_are_a_parameter_error_in_api_words(paper, options, words):
+    with pytest.raises(ParameterError) as caught:
+        coincli.minimal_shock(paper, **options)
+    assert words in str(caught.value) and "--" not in str(caught.value), str(caught.value)
+
+
+def test_a_numpy_number_is_a_number(paper):
+    found = minimal_shock(paper, "standing", "vx", precision=np.float32(0.01))
+    assert found.value is not None and found.precision == pytest.approx(0.01)
+
+
 def test_public_api_and_plain_result(shocks):
     found = shocks["standing", "vphi"]
     assert coincli.minimal_shock is minimal_shock and isinstance(found, coincli.MinimalShock)
@@ -225,3 +253,8 @@ def test_cli_table_fits_80_columns():
     for phrase in ("14.336 rad/s", "6.5477 rad/s", "2.189", "3.3476 m/s", "none (1)",
                    "mirror symmetry"):
         assert phrase in out, phrase
+    # issue 48: the documentation site, not a path under docs/ that an installed package lacks
+    from coincli.version import documentation
+
+    assert "docs/" not in out and ".md" not in out, out
+    assert f"The table explained: {documentation('stability', 'coin stability')}." in out

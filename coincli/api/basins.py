@@ -69,8 +69,12 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
           progress: Callable[[SweepProgress], None] | None = None, stop=None,
           mirror: bool = True, x0=None, y0=None, phi0=None, vx=None, vy=None, vphi=None,
           rrd: str | os.PathLike | None = None, spawn: bool = False, connect: str | None = None,
-          notebook=False, max_seconds: float | None = MAX_SECONDS):
+          notebook=False, max_seconds: float | None = MAX_SECONDS, **overrides):
     """The basin map of two initial conditions as an xarray Dataset.
+
+    ``overrides`` change the scene for this map, by the flat names of
+    :meth:`Scene.with_overrides` (``mu=0.3``: with friction at the corners; ``k=5000``,
+    ``rtol=1e-8``), as :func:`simulate` takes them.
 
     Swept axes are given as ``name=(lo, hi)`` or ``'LO:HI'`` (``phi0='-pi:pi'``,
     ``y0='r:5r'``: :mod:`coincli.quantities`; vy and vphi sweep (0.05, 2) m/s and (-20, 20)
@@ -93,6 +97,9 @@ def basin(scene: Scene, *, res=DEFAULT_RES, chunk=DEFAULT_CHUNK, store: str | os
     cell that shows the map once the cell has run. The recording reads the tiles back from the
     store, so it needs ``store``. A recording that fails (a full disk, a viewer gone) does not
     fail the sweep: it is said in a RuntimeWarning."""
+    from ..throw import with_keywords
+
+    scene = with_keywords(scene, overrides, "basin")
     check_progress(progress)
     check_max_seconds(max_seconds)
     plan = plan_sweep(scene, res=res, chunk=chunk, force=force, mirror=mirror, x0=x0, y0=y0,
@@ -202,6 +209,15 @@ def basin_attrs(basin) -> dict:
             return decoded_attrs(open_export(basin))
         return dict(BasinStore.open(basin).attrs)
     return decoded_attrs(basin)
+
+
+def basin_scene(basin) -> Scene:
+    """The Scene a basin (Dataset, store path or NetCDF export) was swept with: its
+    parameters (friction's too: a basin swept before friction reads as mu = 0), the
+    initial state the scene's, not a cell's (:func:`cell_scene` gives a cell's)."""
+    from ..params import scene_from_dict
+
+    return scene_from_dict(basin_attrs(basin)["parameters"])
 
 
 def cell_scene(basin, *, cell=None, **values) -> Scene:

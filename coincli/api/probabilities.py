@@ -30,8 +30,10 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
               progress: Callable[[FractionsProgress], None] | None = None,
               stop=None, rrd: str | os.PathLike | None = None, spawn: bool = False,
               connect: str | None = None, notebook=False,
-              max_seconds: float | None = MAX_SECONDS) -> Fractions:
+              max_seconds: float | None = MAX_SECONDS, **overrides) -> Fractions:
     """The outcome probabilities of throws whose initial conditions are drawn at random.
+    ``overrides`` change the scene's physical parameters and settings, by the flat names of
+    :meth:`Scene.with_overrides` (``mu=0.3``, ``k=5000``), as :func:`simulate` takes them.
 
     Each of ``y0, phi0, vx, vy, vphi`` is a fixed value, a uniform range ``(lo, hi)`` or
     ``'LO:HI'``, a ``'normal(MEAN,SD)'`` (truncated: ``'normal(MEAN,SD,LO,HI)'``), or a
@@ -53,6 +55,9 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
     ``max_seconds`` (12 hours unless given) is refused before any work, as `coin fractions`
     refuses it without --yes (see :func:`run_fractions`). Returns a
     :class:`coincli.montecarlo.Fractions`."""
+    from ..throw import with_keywords
+
+    scene = with_keywords(scene, overrides, "fractions")
     plan = plan_fractions(scene, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi, samples=samples,
                           precision=precision, of=of, max_samples=max_samples, seed=seed,
                           sampler=sampler, batch=batch, force=force)
@@ -61,6 +66,11 @@ def fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=None,
                       workers=workers, scheduler=scheduler, progress=progress, stop=stop,
                       rrd=rrd, spawn=spawn, connect=connect, notebook=notebook,
                       max_seconds=max_seconds), stop)
+
+
+# the options of plan_fractions that fractions_over passes on (its other keywords: a scene's)
+FRACTIONS_OPTIONS = ("y0", "phi0", "vx", "vy", "vphi", "samples", "precision", "of",
+                     "max_samples", "seed", "sampler", "batch", "force")
 
 
 def _raise_if_interrupted(result, stop):
@@ -76,14 +86,18 @@ def _raise_if_interrupted(result, stop):
 def fractions_over(scene: Scene, parameter: str | None = None, values=None, *, over=None,
                    keep=(), **options) -> FractionsOver:
     """The outcome probabilities at each of ``values`` of one physical ``parameter``
-    (thickness, diameter, k, c, mass, inertia, g), or at every point of a grid of two
+    (thickness, diameter, k, c, mass, inertia, g, mu, slip_velocity), or at every point of a
+    grid of two
     (``over={"thickness": values, "c": values}``, or a list of (name, values) pairs, the first
     outermost), the same sample points at every value (common random numbers). For thickness
     and diameter the mass and inertia follow a uniform solid disc of the scene's density,
     except those named in ``keep`` (the result's ``note`` says which). Options are those of
     :func:`fractions` (Ctrl-C and ``stop`` as there); each value is resumable on its own in the
     store. Returns a :class:`coincli.FractionsOver` (``to_dataset()``: an xarray
-    Dataset, one dimension a parameter)."""
+    Dataset, one dimension a parameter). Keywords that are none of these options are the
+    scene's values, as :func:`fractions` takes them (``mu=0.3`` over thickness)."""
+    from ..throw import with_keywords
+
     if (over is None) == (parameter is None):
         raise ParameterError("give a parameter and its values, or over={name: values, ...}",
                              parameters=("over",))
@@ -93,7 +107,9 @@ def fractions_over(scene: Scene, parameter: str | None = None, values=None, *, o
                                                "scheduler", "progress", "stop", "rrd",
                                                "spawn", "connect", "notebook", "max_seconds")
                    if k in options}
-    plan = plan_fractions(scene, over=over, keep=keep, **options)
+    plan_options = {k: options.pop(k) for k in list(options) if k in FRACTIONS_OPTIONS}
+    scene = with_keywords(scene, options, "fractions_over")
+    plan = plan_fractions(scene, over=over, keep=keep, **plan_options)
     return _raise_if_interrupted(run_fractions(plan, **run_options), run_options.get("stop"))
 
 

@@ -124,11 +124,15 @@ def write_accuracy_table(study, path: str | os.PathLike, scene: Scene) -> Path:
 class StepLimits:
     """Where each fixed-step method fails (:func:`step_limits`): a coin resting on two corners
     kicked by ``kick`` rad/s and run ``seconds`` s; a step fails if the run goes non-finite
-    or gains energy."""
+    or gains energy, or, on a damped foundation, does not come to rest
+    (:func:`coincli.accuracy.fails`)."""
 
     kick: float
     seconds: float
-    methods: tuple[dict, ...]  # method, predicted_stable_step, measured_failure_step, ratio
+    # method, predicted_stable_step (the frictionless rocking mode's), at_rest_stable_step
+    # (the step linearized at the resting coin under the scene's own law, friction included),
+    # measured_failure_step, ratio (measured / predicted)
+    methods: tuple[dict, ...]
 
     def to_dict(self) -> dict:
         """What `coin accuracy --stability --json` prints."""
@@ -138,8 +142,10 @@ class StepLimits:
 
 def step_limits(scene: Scene) -> StepLimits:
     """For each fixed-step method, the step predicted stable for ``scene`` (the spectral radius
-    of its step on the damped rocking mode) beside the step measured to fail (bisection between
-    a quarter and four times the prediction; inf if even that does not fail)."""
+    of its step on the damped rocking mode), the largest step stable linearized at the resting
+    coin under the scene's own law (with friction: where a stick is a stiff damper on the
+    slip), and the step measured to fail (bisection between a quarter and four times the
+    linearized one; inf if even that does not fail)."""
     from .. import accuracy as acc
     from ..integrators import METHODS
 
@@ -150,6 +156,7 @@ def step_limits(scene: Scene) -> StepLimits:
             continue
         limit = acc.measured_limit(scene, method.method)
         rows.append({"method": method.name, "predicted_stable_step": limit.predicted,
+                     "at_rest_stable_step": limit.at_rest,
                      "measured_failure_step": limit.measured,
                      "ratio": limit.measured / limit.predicted})
     return StepLimits(acc.STABILITY_KICK, acc.STABILITY_TIME, tuple(rows))

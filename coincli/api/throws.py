@@ -29,7 +29,7 @@ def load_preset(name_or_path: str = "paper") -> Scene:
 
 def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: bool = False,
              force: bool = False, engine: Engine = Engine.AUTO, control=None,
-             **overrides) -> Trajectory:
+             before_compile=None, **overrides) -> Trajectory:
     """Integrate one throw (a :class:`Trajectory`), verified on the ladder of settings unless
     ``verify=False``.
 
@@ -41,13 +41,19 @@ def simulate(scene: Scene, *, sample_dt: float | None = None, record_events: boo
     kept with its state. ``force`` allows a fixed step beyond the method's stable step.
     ``engine`` chooses what runs the kernel (the same result to rounding: compiled code fuses
     multiplies and adds, :mod:`coincli.jit`); ``control`` (from
-    :func:`coincli.integrators.new_control`) lets another thread stop it."""
+    :func:`coincli.integrators.new_control`) lets another thread stop it; ``before_compile``
+    (a function of no arguments) is called before the kernels of the scene's model are first
+    compiled on this machine (a minute or more, once: :func:`compile_kernels`).
+
+    Friction: a scene with a friction coefficient (``mu=0.3``) runs the friction model; every
+    throw says how much energy friction took (``friction_work``, J) and, without friction,
+    what a coefficient mu would take, about mu times ``sliding_work`` (J)."""
     from ..recordings.trajectory import Trajectory
     from ..throw import simulate as simulate_throw
 
     return Trajectory.of(simulate_throw(scene, sample_dt=sample_dt, record_events=record_events,
                                         force=force, engine=engine, control=control,
-                                        **overrides))
+                                        before_compile=before_compile, **overrides))
 
 
 def stability(scene: Scene) -> StabilityReport:
@@ -127,25 +133,67 @@ def step_bound(scene: Scene) -> StepBound:
     return StepBound(False, int(steps), tuple(ladder.dts))
 
 
-def compile_kernels() -> bool:
-    """Compile every kernel for this machine now, unless this version is compiled here already
-    (:func:`kernels_cached`): what the first run of any of them would do, in about
-    ``FIRST_COMPILE_SECONDS``. Whatever the scene, the kernels take the same argument types, so
-    the default scene's compile serves every later one. True if it compiled. Silent: a caller
-    that wants to show the wait does (``coin compile``)."""
+def compile_kernels(scene: Scene | None = None, *, model: str | None = None) -> bool:
+    """Compile the kernels of ``scene``'s model (:func:`coincli.models.model_of`: the
+    paper's unless its foundation has friction, mu > 0) for this machine now, unless this
+    version has compiled them here already (:func:`kernels_cached`): what the first run of any
+    of them would do, in about :func:`compile_seconds`. ``model`` names a model instead
+    ("paper", "friction"; :func:`model_names`); neither: the paper's. Whatever the scene, a
+    model's kernels take the same argument types, so one scene's compile serves every later
+    scene of its model. True if it compiled. Silent: a caller that wants to show the wait
+    does (``coin compile``)."""
     from ..labeller import Labeller
 
-    if jit.kernels_cached():
+    found, scene = _model_and_scene(scene, model)
+    if jit.kernels_cached(found.name):
         return False
-    Labeller.of(Scene()).compile_all()
+    Labeller.of(scene).compile_all()
     return True
 
 
-def kernels_cached() -> bool:
-    """Whether this version's kernels are compiled on this machine already (then they load in
-    a second; else the first call that integrates compiles them, in about
-    FIRST_COMPILE_SECONDS)."""
-    return jit.kernels_cached()
+def kernels_cached(scene: Scene | None = None, *, model: str | None = None) -> bool:
+    """Whether this version's kernels of ``scene``'s model (or of ``model``; neither: the
+    paper's) are compiled on this machine already (then they load in a second; else the first
+    call that integrates a scene of that model compiles them, in about
+    :func:`compile_seconds`)."""
+    return jit.kernels_cached(_model_and_scene(scene, model)[0].name)
+
+
+def kernel_model(scene: Scene | None = None) -> str:
+    """The name of the model whose kernels ``scene`` runs ("paper", or "friction" where its
+    foundation has a friction coefficient); None: the paper's."""
+    return _model_and_scene(scene, None)[0].name
+
+
+def model_names() -> tuple[str, ...]:
+    """Every model's name, the paper's first (what ``model=`` takes)."""
+    from ..models import MODELS
+
+    return tuple(MODELS)
+
+
+def compile_seconds(scene: Scene | None = None, *, model: str | None = None) -> float:
+    """About how long compiling the kernels of ``scene``'s model (or ``model``'s) takes on a
+    machine like the one of docs/performance.md (FIRST_COMPILE_SECONDS for the paper's)."""
+    return float(_model_and_scene(scene, model)[0].compile_seconds)
+
+
+def _model_and_scene(scene, model):
+    """(the Model, a scene of it): ``scene``'s, or ``model``'s by name with the default scene
+    given its example values; neither: the paper's."""
+    from ..models import MODELS, model_of
+    from ..params import ParameterError, require_scene
+
+    if model is None:
+        scene = Scene() if scene is None else require_scene(scene)
+        return model_of(scene), scene
+    if scene is not None:
+        raise ParameterError("give a scene or a model, not both", parameters=("model",))
+    if model not in MODELS:
+        raise ParameterError(f"model must be one of {', '.join(MODELS)}, got {model!r}",
+                             parameters=("model",))
+    found = MODELS[model]
+    return found, Scene().with_overrides(**dict(found.example))
 
 
 def cache_dir() -> Path:
@@ -166,5 +214,6 @@ def viewer(*, width: int | None = None, height: int | None = None):
 
 
 __all__ = ["FIRST_COMPILE_SECONDS", "MethodTable", "StepBound", "cache_dir", "compile_kernels",
-           "kernels_cached", "load_preset", "method_table", "simulate",
+           "compile_seconds", "kernel_model", "kernels_cached", "load_preset", "method_table",
+           "model_names", "simulate",
            "stability", "step_bound", "viewer"]

@@ -214,8 +214,11 @@ def render_map(basin: Basin, out: str | os.PathLike | None = None, title: str | 
                  + (f", {len(basin.damaged)} damaged" if basin.damaged else "")
                  + (")" if done < total else ""))
     params = attrs["parameters"]
+    mu = params["foundation"].get("mu") or 0.0  # a store without friction records no mu
     setting_text = (f"{_fixed_text(basin)}; k = {params['foundation']['k']:g} N/m, "
-                    f"c = {params['foundation']['c']:g} N s/m; {method['name']} {setting}, "
+                    f"c = {params['foundation']['c']:g} N s/m"
+                    + (f", $\\mu$ = {mu:g}" if mu else "")
+                    + f"; {method['name']} {setting}, "
                     + (f"$t_{{end}}$ = {method['t_end']:g} s" if method["t_end"] is not None
                        else "until decided"))
     if own:

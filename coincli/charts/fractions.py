@@ -122,6 +122,11 @@ def _plot_outcomes(bottom, result: Continuation, x: np.ndarray) -> None:
 
 MAP_TOP = 0.5  # P(standing) at the top of a map's colour scale (above: its colour)
 FEW_TICKS = 6  # a log axis of this many values or fewer is ticked at its values
+# a cell of a map of P(standing) this much uncertain is hatched; the share is written in it on
+# a map of at most WRITTEN_CELLS cells
+UNCERTAIN_MARK = 0.05
+UNCERTAIN_HATCH = "#ff6e6e"  # seen on viridis's dark and light ends alike
+WRITTEN_CELLS = 64
 GRID_PANELS = ("certain", "decided", "uncertain")  # P(standing) over each basis; uncertain
 GRID_TITLES = {"certain": "P(standing), certain labels",
                "decided": "P(standing), all decided labels",
@@ -139,8 +144,9 @@ def plot_grid(result: Continuation, out=None, *, level: float = 1 / 3,
     drawn at a negative value. On P(standing): the line P = ``level`` and
     the lines where the 95 % intervals' low and high ends cross it (its 95 % band); across t/d,
     where the no-bounce geometric limit (2/pi) arctan(t/d) and Pender and Uhrin's planar die
-    reach the level. Drawn in a new Figure or into ``ax`` (one Axes a panel), returned;
-    written to ``out`` (.png, .svg, .pdf) unless None."""
+    reach the level; the cells where UNCERTAIN_MARK of the samples or more are uncertain
+    hatched (on a small map, with the share written in). Drawn in a new Figure or into
+    ``ax`` (one Axes a panel), returned; written to ``out`` (.png, .svg, .pdf) unless None."""
     if out is not None:
         out = check_figure_path(Path(out), "plot")
     if len(result.parameters) != 2:
@@ -163,8 +169,7 @@ def plot_grid(result: Continuation, out=None, *, level: float = 1 / 3,
     x_edges, y_edges = _edges(x, log_x), _edges(y, log_y)
     for name, one in zip(panels, axes, strict=True):
         if name == "uncertain":
-            share = np.array([r.uncertain["probability"] for r in result.results])
-            mesh = one.pcolormesh(x_edges, y_edges, ordered(share).T,
+            mesh = one.pcolormesh(x_edges, y_edges, ordered(uncertain_share(result)).T,
                                   cmap="Greys", vmin=0, vmax=1, shading="flat")
             fig.colorbar(mesh, ax=one, label="uncertain share")
         else:
@@ -173,6 +178,8 @@ def plot_grid(result: Continuation, out=None, *, level: float = 1 / 3,
                                   vmax=MAP_TOP, shading="flat")
             fig.colorbar(mesh, ax=one, label="P(standing)", extend="max")
             handles = _level_lines(one, x, y, p, low, high, level, ratio)
+            handles += _uncertain_marks(one, x, y, x_edges, y_edges,
+                                        ordered(uncertain_share(result)))
             if handles and name == next(n for n in panels if n != "uncertain"):
                 one.legend(handles=handles, fontsize=7, loc="upper left",
                            bbox_to_anchor=(0, -0.14), ncol=2, frameon=False)
@@ -238,6 +245,38 @@ def _edges(centres: np.ndarray, log: bool) -> np.ndarray:
         mid = (c[1:] + c[:-1]) / 2
         edges = np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
     return np.exp(edges) if log else edges
+
+
+def uncertain_share(result: Continuation) -> np.ndarray:
+    """The uncertain share of each point's samples (chaotic or undecided: no two rungs
+    agreed), flat as the points are counted."""
+    return np.array([r.uncertain["probability"] for r in result.results], dtype=float)
+
+
+def _uncertain_marks(ax, x, y, x_edges, y_edges, share: np.ndarray) -> list:
+    """Hatch the cells of a map of P(standing) (values ``x`` across, ``y`` up, sorted) whose
+    uncertain share (``share``, [across, up]) is UNCERTAIN_MARK or more: P there stands on
+    fewer labels (certain) or on labels the ladder did not agree on (decided). On a map of at
+    most WRITTEN_CELLS cells, the share is written in each hatched cell. Their legend's
+    handle, if any cell is hatched."""
+    from matplotlib import patheffects
+    from matplotlib.collections import PatchCollection
+    from matplotlib.patches import Patch, Rectangle
+
+    cells = [(i, j) for i, j in zip(*np.nonzero(share >= UNCERTAIN_MARK), strict=True)]
+    if not cells:
+        return []
+    ax.add_collection(PatchCollection(
+        [Rectangle((x_edges[i], y_edges[j]), x_edges[i + 1] - x_edges[i],
+                   y_edges[j + 1] - y_edges[j]) for i, j in cells],
+        facecolor="none", edgecolor=UNCERTAIN_HATCH, hatch="///", linewidth=0))
+    if share.size <= WRITTEN_CELLS:
+        outline = [patheffects.withStroke(linewidth=2, foreground="black")]
+        for i, j in cells:  # at the cell's value: its centre on either scale
+            ax.text(x[i], y[j], f"{100 * share[i, j]:.0f} %\nuncertain", ha="center",
+                    va="center", fontsize=7, color="white", path_effects=outline)
+    return [Patch(facecolor="none", edgecolor="0.35", hatch="///",
+                  label=f"{100 * UNCERTAIN_MARK:.0f} % or more uncertain")]
 
 
 def _level_lines(ax, x, y, p, low, high, level: float, ratio: bool) -> list:

@@ -32,12 +32,43 @@ def run(args: list[str] | None = None) -> int:
             return exc.exit_code
         from .common import fail
 
-        ctx = getattr(exc, "ctx", None)  # the command a usage error is about, when known
-        command = ctx.command_path if ctx is not None else "coin"
-        return fail(f"{exc.format_message().rstrip('.')} (see '{command} --help')").exit_code
+        return fail(usage_error(exc)).exit_code
     except typer.Abort:
         return 1
     return code if isinstance(code, int) else 0
+
+
+def usage_error(exc) -> str:
+    """A usage error's line: click's words and the command whose --help to see; for a command
+    the user did not name (`coin basin STORE` runs `coin basin sweep`), which it was; for an
+    option the command lacks, the commands beside it that take it (`coin basin x.zarr -o
+    out.png`: -o is `coin basin render`'s)."""
+    from .app import SHORT_FOR
+
+    message = exc.format_message().rstrip(".")
+    ctx = getattr(exc, "ctx", None)  # the command a usage error is about, when known
+    if ctx is None:
+        return f"{message} (see 'coin --help')"
+    see = ctx.command_path
+    ran = ctx.meta.get(SHORT_FOR) if ctx.parent is not None else None
+    option = getattr(exc, "option_name", None)
+    # the commands of a group (`coin basin ...`) work on one thing, so another's option may be
+    # what was meant; `coin`'s commands are tools apart, and are not searched
+    group = ctx.parent.command if ctx.parent is not None and ctx.parent.parent is not None \
+        else None
+    siblings = [(name, group.get_command(ctx.parent, name))
+                for name in group.list_commands(ctx.parent)] if group and option else []
+    takers = [f"{ctx.parent.command_path} {name}" for name, sibling in siblings
+              if sibling is not None and sibling is not ctx.command
+              and not getattr(sibling, "hidden", False)
+              and any(option in param.opts for param in sibling.params)]
+    if takers:  # click's guesses at a near name (--out: --dt, --quiet) would lead astray
+        message, see = f"No such option: {option}", takers[0]
+        takes = (f"{option} is an option of {' and '.join(takers)}"
+                 + (f", not of {ctx.command_path}" if not ran else ""))
+        return f"{message}: {ran + ', which has none; ' if ran else ''}{takes} (see " \
+               f"'{see} --help')"
+    return f"{message}{f': {ran}' if ran else ''} (see '{see} --help')"
 
 
 def main() -> None:

@@ -17,7 +17,9 @@ from .common import (
     JsonOpt,
     KOpt,
     MassOpt,
+    MuOpt,
     PresetOpt,
+    SlipVelocityOpt,
     ThicknessOpt,
     build_scene,
     compile_first,
@@ -56,7 +58,8 @@ def accuracy_command(
                                             "fixed-step method fails (bisection).")] = False,
     preset: PresetOpt = "paper", diameter: DiameterOpt = None, thickness: ThicknessOpt = None,
     mass: MassOpt = None, inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None,
-    g: GOpt = None, json_out: JsonOpt = False,
+    mu: MuOpt = None, slip_velocity: SlipVelocityOpt = None, g: GOpt = None,
+    json_out: JsonOpt = False,
 ) -> None:
     """Chart accuracy against cost for every method, or (--stability) find where they fail.
 
@@ -68,7 +71,8 @@ def accuracy_command(
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
-                            inertia=inertia, k=k, c=c, g=g)
+                            inertia=inertia, k=k, c=c, mu=mu, slip_velocity=slip_velocity,
+                            g=g)
         if stability:
             run_stability(scene, json_out)
             return
@@ -81,7 +85,7 @@ def accuracy_command(
         # both outputs writable before minutes of computing
         check_writable(out, what="chart", create_parents=True)
         check_writable(table, what="table", create_parents=True)
-    compile_first()
+    compile_first(scene=scene)
     with console.status("") as status:
         study = studies.accuracy_study(
             plan, progress=lambda text: status.update(f"accuracy: {text}"))
@@ -147,22 +151,32 @@ def print_study(study) -> None:
 def run_stability(scene, json_out: bool) -> None:
     from ..api.studies import step_limits
 
-    compile_first()  # the bisection runs the compiled kernels
+    compile_first(scene=scene)  # the bisection runs the compiled kernels
     with console.status("bisecting the failing step of each fixed-step method"):
         limits = step_limits(scene)
     if json_out:
         print_json(limits.to_dict())
         return
+    friction = scene.foundation.mu > 0
+    damped = scene.foundation.c > 0
     table = Table(title="Where the fixed-step methods fail: a coin resting on two corners, "
                         f"kicked by {limits.kick} rad/s, run {limits.seconds} s; a "
-                        "step fails if it goes non-finite or gains energy", title_justify="left")
-    for col in ("method", "predicted stable step", "measured failure step", "measured / "
-                "predicted"):
+                        "step fails if it goes non-finite or gains energy"
+                        + (", or does not come to rest" if damped else ""),
+                  title_justify="left")
+    columns = ["method", "predicted stable step",
+               *(["linearized at rest, with friction"] if friction else []),
+               "measured failure step", "measured / predicted"]
+    for col in columns:
         table.add_column(col, justify="right" if col != "method" else "left")
     for r in limits.methods:
-        table.add_row(r["method"], f"{r['predicted_stable_step']:.3g} s",
+        at_rest = [f"{r['at_rest_stable_step']:.3g} s"] if friction else []
+        table.add_row(r["method"], f"{r['predicted_stable_step']:.3g} s", *at_rest,
                       f"{r['measured_failure_step']:.3g} s", f"{r['ratio']:.2f}")
     console.print(table)
     say(err_console, "predicted: spectral radius of the method's step on the damped rocking "
                      "mode (coin methods); simulate and basin refuse a larger --dt without "
-                     "--force.")
+                     "--force."
+        + (" Linearized at rest: the largest step whose map, linearized at the resting coin "
+           "under the friction law (a stick is a stiff damper on the slip), has spectral "
+           "radius at most 1." if friction else ""))

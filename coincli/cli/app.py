@@ -18,6 +18,9 @@ MAIN_COMMANDS = {
     "fractions": "coin fractions --phi0 -pi:pi --vx -0.5:0.5 --samples 64k",
     "stability": "coin stability --k 250",
 }
+# The key of a click context's meta under which a group that runs a command the user did not
+# name says so ("coin basin STORE runs coin basin sweep STORE"), for its usage errors.
+SHORT_FOR = "coincli.short_for"
 
 
 class CommandList(TyperGroup):

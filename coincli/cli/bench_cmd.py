@@ -56,7 +56,7 @@ def bench_command(
         if basin_res != 0 and basin_res < 2:
             raise ParameterError(f"--basin-res must be 0 (skip) or at least 2, got {basin_res}")
         scene = build_scene(preset)
-        compile_first()
+        compile_first(scene=scene)
         with console.status("") as status:
             def report(text):
                 status.update(f"bench: {text}")

@@ -78,7 +78,9 @@ def _paper_defaults() -> dict:
     integ = scene.integration
     return {"diameter": scene.coin.diameter, "thickness": scene.coin.thickness,
             "mass": scene.coin.mass, "inertia": scene.coin.inertia, "k": scene.foundation.k,
-            "c": scene.foundation.c, "g": scene.g, "method": integ.method.label, "dt": integ.dt,
+            "c": scene.foundation.c, "mu": scene.foundation.mu,
+            "slip_velocity": scene.foundation.slip_velocity, "g": scene.g,
+            "method": integ.method.label, "dt": integ.dt,
             "rtol": integ.rtol}
 
 
@@ -114,6 +116,12 @@ InertiaOpt = Annotated[float | None, _opt("--inertia", "Moment of inertia I abou
 KOpt = Annotated[float | None, _opt("--k", "Foundation stiffness per corner.", "N/m", PHYS)]
 COpt = Annotated[float | None, _opt("--c", "Viscous damping per corner.", "N*s/m", PHYS)]
 GOpt = Annotated[float | None, _opt("--g", "Gravity.", "m/s^2", PHYS)]
+MuOpt = Annotated[float | None, _opt("--mu", "Coulomb friction coefficient at the corners, "
+                                     "0 to 10 (0: none, the paper's model; docs/friction.md).",
+                                     "MU", PHYS)]
+SlipVelocityOpt = Annotated[float | None, _opt(
+    "--slip-velocity", "Slip velocity of the regularized friction: a corner slipping slower "
+    "feels a friction force falling linearly to zero.", "m/s", PHYS)]
 
 X0Opt = Annotated[float | None, _opt("--x0", "Initial x [dim]\\[0][/dim]", "m", INIT)]
 Y0Opt = Annotated[float | None, _opt("--y0", "Initial height of the centroid, in m or in "
@@ -238,38 +246,44 @@ def build_scene(preset: str, **overrides) -> Scene:
 STILL_COMPILING_EVERY = 30.0  # s between the lines of a compile whose stderr is no terminal
 
 
-def compile_first(quiet: bool = False) -> None:
-    """Before a command first runs the kernels on this machine (once after installing or
-    updating), compile them, saying so (the library compiles in silence): on a terminal a live
-    line counts the minutes against the expected FIRST_COMPILE_SECONDS; when stderr is no
-    terminal (a log, `make install`), a line every STILL_COMPILING_EVERY seconds, so that no
-    minute passes in silence; with ``quiet``, one line before and one after. Ctrl-C stops it:
-    exit 130."""
+def compile_first(quiet: bool = False, scene: Scene | None = None, *,
+                  model: str | None = None) -> None:
+    """Before a command first runs the kernels of ``scene``'s model on this machine (``model``
+    names one instead; neither: the paper's), compile them, saying so (once after installing
+    or updating; the library compiles in silence): on a terminal a live line counts the
+    minutes against the expected time (:func:`coincli.api.throws.compile_seconds`); when
+    stderr is no terminal (a log, `make install`), a line every STILL_COMPILING_EVERY seconds,
+    so that no minute passes in silence; with ``quiet``, one line before and one after. Ctrl-C
+    stops it: exit 130."""
     import threading
     import time
 
-    from ..api.throws import FIRST_COMPILE_SECONDS, kernels_cached
+    from ..api.throws import compile_seconds, kernel_model, kernels_cached
 
-    if kernels_cached():
+    name = model or kernel_model(scene)
+    if kernels_cached(model=name):
         return
     from .. import api
+    seconds = compile_seconds(model=name)
+    what = "the numerical kernels" if name == "paper" else f"the {name} model's numerical kernels"
+    why = " (a scene with --mu > 0)" if name == "friction" else ""
     start = time.monotonic()
     try:
         if quiet or not err_console.is_terminal:
-            say(err_console, f"[yellow]compiling[/] the numerical kernels for this machine: once "
+            say(err_console, f"[yellow]compiling[/] {what} for this machine{why}: once "
                              f"after installing or updating, about "
-                             f"{FIRST_COMPILE_SECONDS / 60:.0f} min")
+                             f"{max(1, round(seconds / 60)):.0f} min")
             done = threading.Event()
 
             def still() -> None:
                 while not done.wait(STILL_COMPILING_EVERY):
                     say(err_console, f"still compiling: {time.monotonic() - start:.0f} s of "
-                                     f"about {FIRST_COMPILE_SECONDS:.0f} s")
+                                     f"about {seconds:.0f} s")
 
             if not quiet:
                 threading.Thread(target=still, name="coin-compile-clock", daemon=True).start()
             try:
-                api.compile_kernels()
+                api.compile_kernels(model=name)
             finally:
                 done.set()
         else:
@@ -277,17 +291,24 @@ def compile_first(quiet: bool = False) -> None:
 
             from .progress import Bars, CompileClock
 
-            with Bars(SpinnerColumn(), TextColumn("[yellow]compiling[/] the numerical kernels"),
-                      CompileClock(FIRST_COMPILE_SECONDS), console=err_console,
-                      transient=True) as bars:
+            with Bars(SpinnerColumn(), TextColumn(f"[yellow]compiling[/] {what}"),
+                      CompileClock(seconds), console=err_console, transient=True) as bars:
                 bars.add_task("compile", total=None)
-                api.compile_kernels()
+                api.compile_kernels(model=name)
     except KeyboardInterrupt:
-        say(err_console, "[yellow]interrupted:[/] while compiling the numerical kernels; "
-                         "nothing was done")
+        say(err_console, f"[yellow]interrupted:[/] while compiling {what}; nothing was done")
         raise typer.Exit(code=130) from None
-    say(err_console, f"compiled the numerical kernels in {time.monotonic() - start:.0f} s; "
-                     "later runs load them in a second")
+    say(err_console, f"compiled {what} in {time.monotonic() - start:.0f} s; later runs load "
+                     "them in a second")
+
+
+def compile_first_for(scenes, quiet: bool = False) -> None:
+    """:func:`compile_first` for every model the ``scenes`` run (a continuation over mu runs
+    the paper's at mu = 0 and the friction model's beside it), each once."""
+    from ..api.throws import kernel_model
+
+    for name in dict.fromkeys(kernel_model(scene) for scene in scenes):
+        compile_first(quiet, model=name)
 
 
 def print_json(data) -> None:

@@ -35,10 +35,12 @@ from .common import (
     MassOpt,
     MaxStepsOpt,
     MethodOpt,
+    MuOpt,
     PresetOpt,
     QuietOpt,
     RtolOpt,
     SinglePassOpt,
+    SlipVelocityOpt,
     StopOpt,
     TEndOpt,
     ThicknessOpt,
@@ -46,7 +48,7 @@ from .common import (
     WorkersOpt,
     WorkerTimeoutOpt,
     build_scene,
-    compile_first,
+    compile_first_for,
     console,
     err_console,
     fail,
@@ -124,7 +126,8 @@ def fractions_command(
                                        parser=whole_option)] = DEFAULT_BATCH,
     over: Annotated[list[str] | None, typer.Option(
         "--over", metavar="NAME=LO:HI:STEPS", help="Repeat at STEPS values of a physical "
-        "parameter (thickness, diameter, k, c, mass, inertia, g), or at the values listed "
+        "parameter (thickness, diameter, k, c, mass, inertia, g, mu, slip_velocity), or at "
+        "the values listed "
         "(NAME=V1,V2,...), the same samples at every value; given twice, at every point of "
         "the grid of both. For thickness and diameter, mass and inertia follow a uniform solid "
         "disc unless --mass or --inertia is given.", rich_help_panel=OVER)] = None,
@@ -156,8 +159,9 @@ def fractions_command(
     rrd: LiveRrdOpt = None, spawn: LiveSpawnOpt = False, connect: LiveConnectOpt = None,
     preset: PresetOpt = "paper",
     diameter: DiameterOpt = None, thickness: ThicknessOpt = None, mass: MassOpt = None,
-    inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, g: GOpt = None,
-    method: MethodOpt = None, dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
+    inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, mu: MuOpt = None,
+    slip_velocity: SlipVelocityOpt = None, g: GOpt = None, method: MethodOpt = None,
+    dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
     stop_on_settle: StopOpt = None, force: ForceOpt = False, single_pass: SinglePassOpt = False,
     max_steps: MaxStepsOpt = None,
 ) -> None:
@@ -174,7 +178,8 @@ def fractions_command(
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
-                            inertia=inertia, k=k, c=c, g=g, method=method, dt=dt, rtol=rtol,
+                            inertia=inertia, k=k, c=c, mu=mu, slip_velocity=slip_velocity,
+                            g=g, method=method, dt=dt, rtol=rtol,
                             t_end=t_end, stop_on_settle=stop_on_settle, max_steps=max_steps,
                             verify=False if single_pass else None)
         if plot is not None and not over:
@@ -190,12 +195,13 @@ def fractions_command(
             sampler=sampler, batch=batch, over=over or None, keep=keep, force=force)
         check_where(threads, workers, scheduler, worker_timeout)
     where_to, no_viewer = recording.destination(rrd, spawn, connect)
-    if plan.note and not json_out and not console.is_terminal:  # else the result shows it
-        say(err_console, f"[cyan]note:[/] {plan.note}")
-    compile_first(quiet)
-    result, recorder = _run(plan, where_to, quiet, yes, store=store, overwrite=overwrite,
-                            threads=threads, workers=workers, scheduler=scheduler,
-                            worker_timeout=worker_timeout)
+    # on no terminal the note also comes first (on one, the result shows it), said once the
+    # run has passed its checks: a store of other samples is refused in one line alone
+    note = plan.note if not json_out and not console.is_terminal else None
+    compile_first_for(plan.scenes, quiet)
+    result, recorder = _run(plan, where_to, quiet, yes, note=note, store=store,
+                            overwrite=overwrite, threads=threads, workers=workers,
+                            scheduler=scheduler, worker_timeout=worker_timeout)
     _report(plan, result, store=store, plot=plot, json_out=json_out, every_n=every_n,
             recorder=recorder, where_to=where_to, no_viewer=no_viewer)
 
@@ -333,6 +339,9 @@ def _print_result(plan, r, every_n: bool = False) -> None:
     from ..api.words import horizon_text
 
     summary.append(("method", describe(scene)))
+    if scene.foundation.mu > 0:
+        summary.append(("friction", f"mu = {scene.foundation.mu:g} at the corners, slip "
+                                    f"velocity {scene.foundation.slip_velocity:g} m/s"))
     summary.append(("horizon", horizon_text(scene)))
     cost = r.cost
     if cost.get("computed"):
@@ -373,7 +382,11 @@ def _print_over(plan, res) -> None:
     say(console, f"drawn: {plan.sampling.describe()}")
     from ..api.words import describe_method as describe
 
-    say(console, f"method: {describe(plan.scene)}")
+    methods = list(dict.fromkeys(describe(scene) for scene in plan.scenes))  # mu: two ladders
+    say(console, f"method: {methods[0]}" + (
+        f" (with friction: {methods[1]})" if len(methods) == 2
+        and plan.scenes[0].foundation.mu == 0 else
+        "".join(f"; {m}" for m in methods[1:])))
     if res.note:
         say(console, f"note: {res.note}")
     basis = "certain labels" if first.verified else "settled runs"
@@ -462,11 +475,13 @@ def _bars(plan, quiet: bool):
     return progress, show
 
 
-def _run(plan, where_to, quiet: bool, yes: bool, *, store, scheduler, **options):
+def _run(plan, where_to, quiet: bool, yes: bool, *, note: str | None, store, scheduler,
+         **options):
     """The run with its progress bars, its live recording and two-step Ctrl-C: (its result,
     the recorder or None). Refused in one line before any work, unless --yes, if its pilot
     estimates it at over MAX_SECONDS (the API refuses it) or to spend its budget before
-    --precision; a store that cannot be written, a lost scheduler: one line."""
+    --precision; a store that cannot be written, a lost scheduler: one line. ``note`` is said
+    once the run has passed these checks."""
     from .. import api
     from ..api.errors import SchedulerLost, StoreIncomplete, WorkTooLong
     from ..api.recording import fractions_recorder
@@ -484,6 +499,8 @@ def _run(plan, where_to, quiet: bool, yes: bool, *, store, scheduler, **options)
     def started(est) -> None:  # the run passed its checks and its estimate: the work begins
         nonlocal recorder
         _check_estimate(est, plan, scheduler, yes, quiet)
+        if note:
+            say(err_console, f"[cyan]note:[/] {note}")
         recorder = fractions_recorder(plan, where_to)  # Rerun's code only when asked for
         if recorder is not None:
             recording_stack.enter_context(recorder)

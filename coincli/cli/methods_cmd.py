@@ -12,7 +12,9 @@ from .common import (
     JsonOpt,
     KOpt,
     MassOpt,
+    MuOpt,
     PresetOpt,
+    SlipVelocityOpt,
     ThicknessOpt,
     build_scene,
     console,
@@ -26,12 +28,14 @@ from .text import say
 def methods_command(
     preset: PresetOpt = "paper", diameter: DiameterOpt = None, thickness: ThicknessOpt = None,
     mass: MassOpt = None, inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None,
-    g: GOpt = None, json_out: JsonOpt = False,
+    mu: MuOpt = None, slip_velocity: SlipVelocityOpt = None, g: GOpt = None,
+    json_out: JsonOpt = False,
 ) -> None:
     """List the integration methods: order, adaptive, symplectic, and stable step."""
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
-                            inertia=inertia, k=k, c=c, g=g)
+                            inertia=inertia, k=k, c=c, mu=mu, slip_velocity=slip_velocity,
+                            g=g)
     from ..api.throws import method_table
 
     found = method_table(scene)

@@ -22,10 +22,12 @@ from .common import (
     MassOpt,
     MaxStepsOpt,
     MethodOpt,
+    MuOpt,
     Phi0Opt,
     PresetOpt,
     RtolOpt,
     SinglePassOpt,
+    SlipVelocityOpt,
     StopOpt,
     TEndOpt,
     ThicknessOpt,
@@ -52,7 +54,7 @@ from .recording import (
     print_recording,
     record_throw,
 )
-from .text import LABEL_WIDTH, NBSP, print_rows, say
+from .text import LABEL_WIDTH, NBSP, percent, print_rows, say
 
 RrdOpt = Annotated[Path, typer.Option("--rrd", metavar="PATH", help="Write the recording of the "
                                       "throw to this .rrd file (open it with `rerun PATH`).",
@@ -78,8 +80,9 @@ def simulate_command(
     x0: X0Opt = None, y0: Y0Opt = None, phi0: Phi0Opt = None,
     vx: VxOpt = None, vy: VyOpt = None, vphi: VphiOpt = None,
     diameter: DiameterOpt = None, thickness: ThicknessOpt = None, mass: MassOpt = None,
-    inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, g: GOpt = None,
-    method: MethodOpt = None, dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
+    inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, mu: MuOpt = None,
+    slip_velocity: SlipVelocityOpt = None, g: GOpt = None, method: MethodOpt = None,
+    dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
     stop_on_settle: StopOpt = None, force: ForceOpt = False, single_pass: SinglePassOpt = False,
     max_steps: MaxStepsOpt = None, json_out: JsonOpt = False,
     rrd: RrdOpt = Path("coin.rrd"), no_rrd: NoRrdOpt = False, spawn: SpawnOpt = False,
@@ -105,7 +108,8 @@ def simulate_command(
     with user_errors():
         scene = build_scene(preset, x0=x0, y0=y0, phi0=phi0, vx=vx, vy=vy, vphi=vphi,
                             diameter=diameter, thickness=thickness, mass=mass, inertia=inertia,
-                            k=k, c=c, g=g, method=method, dt=dt, rtol=rtol, t_end=t_end,
+                            k=k, c=c, mu=mu, slip_velocity=slip_velocity, g=g, method=method,
+                            dt=dt, rtol=rtol, t_end=t_end,
                             stop_on_settle=stop_on_settle, max_steps=max_steps,
                             verify=False if single_pass else None)
         if sampled:  # --no-rrd is the way out when the recording's file alone asks for frames
@@ -115,7 +119,8 @@ def simulate_command(
         _announce(scene)
         try:
             trajectory = simulate(scene, sample_dt=log_every if sampled else None,
-                                  record_events=recording or gif is not None, force=force)
+                                  record_events=recording or gif is not None, force=force,
+                                  before_compile=lambda: compile_first(scene=scene))
         except KeyboardInterrupt:
             err_console.print("[yellow]interrupted[/]: no outcome, nothing written")
             raise typer.Exit(code=130) from None
@@ -163,7 +168,7 @@ def _announce(scene) -> None:
 
     bound = step_bound(scene)  # every rung's budget, or the steps to the throw's cap
     if not (bound.adaptive and scene.integration.stop_on_settle):
-        compile_first()  # not a short run: the compiled kernels do it
+        compile_first(scene=scene)  # not a short run: the compiled kernels do it
     if bound.adaptive:
         return
     steps, dts = bound.steps, bound.dts
@@ -248,6 +253,34 @@ def outcome_text(tr) -> str:
     return f"[red]none[/]: the run went non-finite near t = {tr.t_final:.4g} s"
 
 
+SUGGESTED_MU = 0.3  # the coefficient a frictionless throw's line names (a coin on wood, about)
+FRICTION_MATTERS = 0.01  # friction of SUGGESTED_MU taking this share of the energy is worth a try
+
+
+def friction_text(tr) -> str | None:
+    """Whether friction did any work on the throw: with friction, the energy it took and its
+    share of the initial energy; without, what a coefficient mu would take (mu times the
+    sliding work, to first order), and whether that is worth a try. None: not integrated."""
+    work, sliding = tr.friction_work, tr.sliding_work
+    if work is None or sliding is None or not tr.energy_initial > 0:
+        return None
+    start = tr.energy_initial
+    foundation = tr.scene.foundation
+    if foundation.mu > 0:
+        return (f"took {work * 1e3:.4g} mJ, {percent(work / start)} of the throw's "
+                f"{start * 1e3:.5g} mJ (mu = {foundation.mu:g}, slip velocity "
+                f"{foundation.slip_velocity:g} m/s)")
+    if sliding <= 1e-9 * start:
+        return ("none (mu = 0, the paper's model), and none would act: no corner slid along "
+                "the foundation while pressed on it")
+    share = SUGGESTED_MU * sliding / start
+    advice = (f" ({percent(share, 2)} at mu = {SUGGESTED_MU:g}): try --mu {SUGGESTED_MU:g}"
+              if share >= FRICTION_MATTERS else f" (only {percent(share, 2)} at mu = "
+              f"{SUGGESTED_MU:g}): friction hardly matters here")
+    return (f"none (mu = 0, the paper's model); friction of coefficient mu would take about "
+            f"mu x {sliding * 1e3:.4g} mJ of the throw's {start * 1e3:.5g} mJ{advice}")
+
+
 def print_summary(tr) -> None:
     from ..api.words import describe_method as describe
     from ..api.words import horizon_text, scene_horizon
@@ -276,6 +309,9 @@ def print_summary(tr) -> None:
         lost = 0.0
     rows.append(("energy", f"{tr.energy_initial * 1e3:.5g} mJ -> {tr.energy_final * 1e3:.5g} "
                            f"mJ ({lost * 1e3:.5g} mJ dissipated)"))
+    friction = friction_text(tr)
+    if friction:
+        rows.append(("friction", friction))
     horizon = scene_horizon(tr.scene)
     run_to = "stop when decided" if integ.stop_on_settle else f"full {horizon:g} s"
     rows.append(("method", f"{describe(tr.scene)}, {run_to}"))

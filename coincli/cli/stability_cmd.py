@@ -16,7 +16,9 @@ from .common import (
     JsonOpt,
     KOpt,
     MassOpt,
+    MuOpt,
     PresetOpt,
+    SlipVelocityOpt,
     ThicknessOpt,
     build_scene,
     compile_first,
@@ -31,7 +33,7 @@ from .text import say
 def stability_command(
     preset: PresetOpt = "paper", diameter: DiameterOpt = None, thickness: ThicknessOpt = None,
     mass: MassOpt = None, inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None,
-    g: GOpt = None,
+    mu: MuOpt = None, slip_velocity: SlipVelocityOpt = None, g: GOpt = None,
     shock: Annotated[bool, typer.Option(
         "--shock", metavar="", help="Also find the minimal shocks: the smallest kick (vphi, vx "
         "or vy) that takes a coin at rest, lying or standing, to another well, beside the kick "
@@ -44,13 +46,14 @@ def stability_command(
     """  # noqa: E501 (typer keeps a docstring's line breaks)
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
-                            inertia=inertia, k=k, c=c, g=g)
+                            inertia=inertia, k=k, c=c, mu=mu, slip_velocity=slip_velocity,
+                            g=g)
     from .. import api
 
     report = api.stability(scene)
     shocks = None
     if shock:
-        compile_first(quiet=json_out)
+        compile_first(quiet=json_out, scene=scene)
         with user_errors():
             shocks = {state: {kind: api.minimal_shock(scene, state, kind) for kind in KICKS}
                       for state in STATES}
@@ -125,6 +128,7 @@ KICKS = ("vphi", "vx", "vy")  # coincli.shock.Kick, named here without loading t
 def print_shocks(shocks: dict) -> None:
     """The minimal shocks as a table, with what each value means below it."""
     from ..api.words import MJ as mj
+    from ..api.words import documentation
 
     table = Table(title="Minimal shocks: the smallest kick to another well",
                   title_justify="left")
@@ -161,4 +165,5 @@ def print_shocks(shocks: dict) -> None:
                  + ", ".join(f"{dv * mj:.5g} mJ {state}" for state, dv in depth.items()) + ".")
     for i, text in enumerate(notes, 1):
         say(console, f"({i}) {text}.", indent=4)
-    say(console, f"[dim]{throws:,} throws in {seconds:.1f} s (docs/stability.md).[/]")
+    say(console, f"[dim]{throws:,} throws in {seconds:.1f} s. The table explained: "
+                 f"{documentation('stability', 'coin stability')}.[/]")

@@ -123,10 +123,23 @@ TOP_OUTCOMES = 10  # the outcomes an outcome table lists without --all
 
 
 def most_frequent(rows: list, most: int = TOP_OUTCOMES) -> tuple[list, list]:
-    """The ``most`` rows of the highest ``count`` (ties: the earlier row) in their own order
-    (by n), and the rows left out."""
-    ranked = sorted(range(len(rows)), key=lambda i: (-rows[i]["count"], i))
-    kept = set(ranked[:most])
+    """The rows of the ``most`` highest ``count`` in their own order (by n), and the rows left
+    out. Rows of one count are kept or left out together (a mirrored map's n and -n have as
+    many cells: both are listed, or neither): the rows tied at the cut are kept when they
+    overrun ``most`` by at most half as many again, else left out; only when every row kept
+    would be one of them are the earliest ``most`` kept."""
+    if len(rows) <= most:
+        return list(rows), []
+    counts = sorted((row["count"] for row in rows), reverse=True)
+    cut = counts[most - 1]
+    above = sum(count > cut for count in counts)
+    tied = counts.count(cut)
+    if above + tied <= most + most // 2:
+        kept = {i for i, row in enumerate(rows) if row["count"] >= cut}
+    elif above:
+        kept = {i for i, row in enumerate(rows) if row["count"] > cut}
+    else:  # a tie too many to list: the earliest
+        kept = set(sorted(range(len(rows)), key=lambda i: (-rows[i]["count"], i))[:most])
     return ([row for i, row in enumerate(rows) if i in kept],
             [row for i, row in enumerate(rows) if i not in kept])
 

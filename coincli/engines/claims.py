@@ -2,7 +2,8 @@
 machine or several sharing the store's file system) can run the same work together without
 computing a piece twice.
 
-A claim is a file ``out.zarr.cost/claims/tile_I_J`` holding its owner: host, pid, the pid's
+A claim is a file ``out.zarr/.coin/claims/tile_I_J`` (the store's records folder,
+:func:`coincli.stores.basin_layout.records_dir`) holding its owner: host, pid, the pid's
 start time and a random token; it is written to a draft and hard-linked into place, which fails
 if the claim exists (exactly one process can create it), so a claim is never seen empty. While
 the owner computes the tile a heartbeat thread touches the file every :data:`HEARTBEAT`

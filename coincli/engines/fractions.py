@@ -114,6 +114,8 @@ def run_fractions(plan: FractionsPlan, *, target=None, overwrite: bool = False,
     much as the run). ``on_start`` receives the estimate (a FractionsEstimate, None if there
     was none) before any work."""
     check_max_seconds(max_seconds)
+    if target is not None and not overwrite:
+        target.check_run(plan)  # a store of other samples: refused before the pilot runs
     executor = executor_for(threads, workers, scheduler, worker_timeout)
     found = None
     if estimate or (max_seconds is not None and not _smaller_than_pilot(plan)):

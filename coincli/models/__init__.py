@@ -17,7 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
 
-from ..jit import NUMBA, Placeholder, kernels
+from ..jit import FIRST_COMPILE_SECONDS, NUMBA, Placeholder, kernels
 from . import friction, interface, paper, rectangle
 
 
@@ -38,6 +38,11 @@ class Model:
     stiff: bool = False
     stiffest_frequency: Callable = paper.stiffest_frequency
     horizon_rule: Callable = paper.horizon_rule
+    # about how long its kernels take to compile the first time (s, docs/performance.md)
+    compile_seconds: float = FIRST_COMPILE_SECONDS
+    # the (name, value) overrides that make the default scene one of this model (what
+    # compiles its kernels)
+    example: tuple = ()
 
     def kernels(self, backend=NUMBA):
         """This model's kernel set for ``backend`` (:func:`coincli.jit.kernels`)."""
@@ -62,11 +67,18 @@ class Model:
         return found
 
 
+# the friction model's first compile, s (its set: the paper's law with friction's, and the
+# Rodas5P and switching drivers): `Labeller.of(scene with mu > 0).compile_all()` took 56 s
+# where the paper's kernels were compiled already (numba's cache shares what the two sets
+# have in common) and 158 s (101 s of CPU) on a cold cache, on 2 busy cores
+FRICTION_COMPILE_SECONDS = 120
+
 PAPER = Model("paper", "the paper's: a Winkler spring and a viscous damper at each corner of a "
                        "rectangle (eqs. 1-2)", (paper, rectangle), paper.params)
 FRICTION_MODEL = Model("friction", "the paper's with regularized Coulomb friction at the corners "
                                    "(mu, slip_velocity)", (friction, paper, rectangle),
-                       friction.params, ("mu", "slip_velocity"), stiff=True)
+                       friction.params, ("mu", "slip_velocity"), stiff=True,
+                       compile_seconds=FRICTION_COMPILE_SECONDS, example=(("mu", 0.3),))
 
 MODELS: dict[str, Model] = {m.name: m for m in (PAPER, FRICTION_MODEL)}
 

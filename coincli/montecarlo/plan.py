@@ -23,6 +23,7 @@ STORE_FORMAT = 3  # of a fractions store (coincli.stores.fractions_store): 2, a 
 
 
 MAX_PARAMETERS = 2  # a continuation varies one parameter, or a grid of two
+FOUNDATION = ("k", "c", "mu", "slip_velocity")  # the parameters of a scene's foundation
 
 # What a value (a point of a grid) takes from its plan to its result: its scene, the engine's
 # spec and progression (about 3 kB), its result and its row of the Dataset (20 to 30 kB,
@@ -169,6 +170,10 @@ def plan_fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=N
     names = tuple(name for name, _ in grid)
     axes = tuple(values for _, values in grid)
     check_grid_memory(axes)
+    if "slip_velocity" in names and "mu" not in names and not scene.foundation.mu:
+        raise ParameterError("over slip_velocity: the scene has no friction (mu = 0), where "
+                             "a slip velocity changes nothing; give mu > 0, or vary mu too",
+                             parameters=("over", "mu"))
     note = continuation_note(scene, names, keep) if grid else None
     scenes = tuple(point_scene(scene, dict(zip(names, point, strict=True)), keep)
                    for point in itertools.product(*axes)) if grid else (scene,)
@@ -182,8 +187,11 @@ def plan_fractions(scene: Scene, *, y0=None, phi0=None, vx=None, vy=None, vphi=N
         if name == "g":
             parameters["g"] = None
         else:
-            section = "foundation" if name in ("k", "c") else "coin"
+            section = "foundation" if name in FOUNDATION else "coin"
             parameters[section][name] = None
+    if "mu" in names and "slip_velocity" not in names:  # the values with friction have it,
+        # though a frictionless base scene records none
+        parameters["foundation"]["slip_velocity"] = float(scene.foundation.slip_velocity)
     if len(names) == 1:  # as 0.9.0 wrote it (its stores resume)
         described = {"parameter": names[0], "values": list(axes[0]), "keep": list(keep),
                      "note": note}

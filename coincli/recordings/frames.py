@@ -167,5 +167,23 @@ def force_arrows(frames: Frames, weight: float, diameter: float) -> np.ndarray:
     return unit * length[..., None]
 
 
+def friction_arrows(frames: Frames, weight: float, diameter: float) -> np.ndarray:
+    """(N, 4, 2) arrows (m) for the friction forces, along the foundation, on the scale of
+    :func:`force_arrows` (the same log1p(|F| / (m g)) law, the largest contact force of the run
+    ``ARROW_PEAK_DIAMETERS`` diameters long), so that a friction arrow beside its corner's
+    contact force shows their ratio; zero without friction."""
+    arrows = np.zeros_like(frames.forces)
+    if frames.tangential is None:
+        return arrows
+    peak = float(np.max(np.hypot(frames.forces[..., 0], frames.forces[..., 1]), initial=0.0))
+    if peak <= 0.0 or weight <= 0.0:
+        return arrows
+    tangential = frames.tangential
+    arrows[..., 0] = np.sign(tangential) * ARROW_PEAK_DIAMETERS * diameter * np.log1p(
+        np.abs(tangential) / weight) / np.log1p(peak / weight)
+    return arrows
+
+
 __all__ = ["ARROW_PEAK_DIAMETERS", "Frames", "REST_DELAY", "build_frames", "force_arrows",
+           "friction_arrows",
            "resting_state"]

@@ -31,7 +31,7 @@ from ..integrators.registry import setting_text
 from ..models import horizon_text
 from ..params import ParameterError, check_number
 from ..version import __version__
-from .frames import ARROW_PEAK_DIAMETERS, Frames, build_frames, force_arrows
+from .frames import ARROW_PEAK_DIAMETERS, Frames, build_frames, force_arrows, friction_arrows
 from .stream import APPLICATION_ID, open_stream, require_notebook, viewer_class
 
 TIMELINE = "sim_time"
@@ -46,12 +46,14 @@ COIN_FILL = "scene/world/coin/fill"
 COIN_FACE = "scene/world/coin/face"
 CORNERS = "scene/world/corners"
 FORCES = "scene/world/forces"
+FRICTION = "scene/world/friction"  # a scene with friction: each corner's friction force
 PATH = "scene/world/path"
 GROUND = "scene/world/ground"
 ENERGY = "plots/energy"
 HEIGHT = "plots/height"
 ANGLE = "plots/angle"
 PENETRATION = "plots/penetration"
+CONTACT_FORCES = "plots/forces"  # a scene with friction: each corner's normal and friction force
 EVENTS = "events"
 INFO = "info"
 
@@ -66,6 +68,7 @@ COIN_COLOUR = (205, 165, 40, 255)
 COIN_FILL_COLOUR = (205, 165, 40, 110)
 FACE_COLOUR = (150, 40, 160, 255)
 FORCE_COLOUR = (255, 140, 0, 255)
+FRICTION_COLOUR = (0, 175, 160, 255)
 PATH_COLOUR = (150, 150, 150, 255)
 GROUND_COLOUR = (120, 90, 60, 255)
 CORNER_SERIES_COLOURS = ((31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40))
@@ -108,6 +111,7 @@ def blueprint(frames: Frames | None = None, scene=None):
         view2d["visual_bounds"] = _visual_bounds(frames, scene)
     trail = rrb.VisibleTimeRanges(timeline=TIMELINE, start=rrb.TimeRangeBoundary.infinite(),
                                   end=rrb.TimeRangeBoundary.cursor_relative())
+    friction = scene is not None and scene.foundation.mu > 0
     close = {}
     if scene is not None:
         d = scene.coin.diameter * MM
@@ -146,6 +150,10 @@ def blueprint(frames: Frames | None = None, scene=None):
                                    plot_legend=rrb.PlotLegend(visible=False)),
                 rrb.TimeSeriesView(name="penetration of corners 0-3 [µm]", origin=PENETRATION,
                                    plot_legend=rrb.PlotLegend(rrb.Corner2D.RightTop)),
+                *([rrb.TimeSeriesView(name="contact forces of corners 0-3 [N]: normal N (thick) "
+                                           "and friction F_t (thin)", origin=CONTACT_FORCES,
+                                      plot_legend=rrb.PlotLegend(rrb.Corner2D.RightTop))]
+                  if friction else []),
             ),
             column_shares=[1, 1],
         ),
@@ -304,6 +312,11 @@ def _log_static(rec, rr, trajectory, frames: Frames, log_every: float | None) ->
                                              radii=0.6, draw_order=30.0), static=True)
     rec.log(FORCES, rr.Arrows2D.from_fields(colors=[FORCE_COLOUR], radii=0.25, draw_order=25.0,
                                             show_labels=False), static=True)  # |F| on hover
+    friction = scene.foundation.mu > 0
+    if friction:
+        rec.log(FRICTION, rr.Arrows2D.from_fields(colors=[FRICTION_COLOUR], radii=0.3,
+                                                  draw_order=26.0, show_labels=False),
+                static=True)
     rec.log(PATH, rr.LineStrips2D.from_fields(colors=[PATH_COLOUR], radii=0.12,
                                               draw_order=5.0), static=True)
     for name, label, colour in ENERGY_SERIES:
@@ -323,6 +336,13 @@ def _log_static(rec, rr, trajectory, frames: Frames, log_every: float | None) ->
                 rr.SeriesLines(colors=[colour], names=[f"corner {i}"], widths=[2.0],
                                aggregation_policy="MinMax"),  # zoomed out, keep the peaks
                 static=True)
+        if friction:
+            rec.log(f"{CONTACT_FORCES}/normal{i}",
+                    rr.SeriesLines(colors=[colour], names=[f"N corner {i}"], widths=[2.5],
+                                   aggregation_policy="MinMax"), static=True)
+            rec.log(f"{CONTACT_FORCES}/tangential{i}",
+                    rr.SeriesLines(colors=[colour], names=[f"F_t corner {i}"], widths=[1.0],
+                                   aggregation_policy="MinMax"), static=True)
 
     params = _flat_parameters(trajectory, log_every)
     rec.log(INFO, rr.TextDocument(_info_markdown(trajectory, frames, log_every),
@@ -375,6 +395,7 @@ def _info_markdown(trajectory, frames: Frames, log_every: float | None) -> str:
         else:
             lines.append(f"| {section} | {values} |")
     lines.append(f"| E_crit | {trajectory.e_crit * MJ:.6g} mJ |")
+    lines += ["", _friction_markdown(trajectory)]
     lines += ["", f"**Recording:** {len(frames)} frames (one every "
               + (f"{log_every:g} s" if log_every else "sample")
               + f" of simulated time, plus the exact state at each of the {len(frames.events)} "
@@ -385,9 +406,34 @@ def _info_markdown(trajectory, frames: Frames, log_every: float | None) -> str:
               "log(1 + |F|/mg), the largest force of the run "
               f"{ARROW_PEAK_DIAMETERS:g} diameter(s) long) and the path "
               "of the centroid up to the current time (grey)."]
+    if scene.foundation.mu > 0:
+        lines[-1] += (" Friction forces: teal arrows along the ground into the corners they "
+                      "act on, on the contact forces' scale; the plot of contact forces shows "
+                      "each corner's normal force N (thick) and friction force F_t (thin).")
     if trajectory.notes:
         lines += [""] + [f"*Note:* {note}" for note in trajectory.notes]
     return "\n".join(lines)
+
+
+def _friction_markdown(trajectory) -> str:
+    """The recording's words on friction: its coefficient and slip velocity and the energy it
+    took, or, without it, what a coefficient mu would take (about mu times the sliding work)."""
+    foundation = trajectory.scene.foundation
+    work, sliding, start = (trajectory.friction_work, trajectory.sliding_work,
+                            trajectory.energy_initial)
+    if foundation.mu > 0:
+        text = (f"**Friction:** mu = {foundation.mu:g}, slip velocity "
+                f"{foundation.slip_velocity:g} m/s (regularized Coulomb friction at each "
+                "corner in contact, beside the paper's damper)")
+        if work is not None and start > 0:
+            text += (f"; it took {work * MJ:.4g} mJ, {100 * work / start:.3g} % of the throw's "
+                     f"{start * MJ:.5g} mJ")
+        return text + "."
+    text = "**Friction:** none (mu = 0, the paper's model)"
+    if sliding is not None and start > 0:
+        text += (f"; a friction coefficient mu would take about mu x {sliding * MJ:.4g} mJ of "
+                 f"the throw's {start * MJ:.5g} mJ")
+    return text + "."
 
 
 def _durations(seconds) -> np.ndarray:
@@ -433,12 +479,27 @@ def _send_scene(rec, rr, trajectory, frames: Frames) -> None:
     labels = np.char.mod("%.3g N", magnitude).tolist()
     rec.send_columns(FORCES, indexes=index, columns=rr.Arrows2D.columns(
         vectors=vectors, origins=origins, labels=labels).partition(frames.contact.sum(axis=1)))
+    if scene.foundation.mu > 0 and frames.tangential is not None:
+        _send_friction(rec, rr, index, frames, scene)
 
     centre = np.column_stack([x, y])
     previous = np.vstack([centre[:1], centre[:-1]])
     segments = np.stack([previous, centre], axis=1)  # (N, 2, 2): one segment per frame
     rec.send_columns(PATH, indexes=index, columns=rr.LineStrips2D.columns(
         strips=segments).partition(np.ones(n, dtype=np.int64)))
+
+
+def _send_friction(rec, rr, index, frames: Frames, scene) -> None:
+    """The friction arrows: along the foundation, the tip on the corner it acts on (as the
+    contact forces), on their scale, |F_t| in the label."""
+    pushed = frames.contact & (frames.tangential != 0.0)
+    mask = pushed.reshape(-1)
+    arrows = friction_arrows(frames, scene.coin.mass * scene.g, scene.coin.diameter)
+    vectors = arrows.reshape(-1, 2)[mask] * MM
+    origins = frames.corners.reshape(-1, 2)[mask] * MM - vectors
+    labels = np.char.mod("friction %.3g N", np.abs(frames.tangential.reshape(-1)[mask])).tolist()
+    rec.send_columns(FRICTION, indexes=index, columns=rr.Arrows2D.columns(
+        vectors=vectors, origins=origins, labels=labels).partition(pushed.sum(axis=1)))
 
 
 def _send_plots(rec, rr, trajectory, frames: Frames) -> None:
@@ -464,6 +525,12 @@ def _send_plots(rec, rr, trajectory, frames: Frames) -> None:
     for i in range(4):
         rec.send_columns(f"{PENETRATION}/corner{i}", indexes=index,
                          columns=rr.Scalars.columns(scalars=penetration[:, i]))
+    if trajectory.scene.foundation.mu > 0 and frames.normal is not None:
+        for i in range(4):
+            rec.send_columns(f"{CONTACT_FORCES}/normal{i}", indexes=index,
+                             columns=rr.Scalars.columns(scalars=frames.normal[:, i]))
+            rec.send_columns(f"{CONTACT_FORCES}/tangential{i}", indexes=index,
+                             columns=rr.Scalars.columns(scalars=frames.tangential[:, i]))
 
 
 def _send_text_log(rec, rr, trajectory, frames: Frames) -> None:

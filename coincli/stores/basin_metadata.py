@@ -75,17 +75,70 @@ def differences(stored: dict, wanted: dict, where: tuple[str, str] = ("in the st
                 compared=COMPARED_ATTRS) -> list[str]:
     """One phrase per differing parameter: 'k = 10000 in the store, 5000 here' (``where``
     names the two sides; ``compared``: the top-level attributes compared)."""
-    a = flatten_attrs({k: stored.get(k) for k in compared})
-    b = flatten_attrs({k: wanted.get(k) for k in compared})
+    a = with_friction(flatten_attrs({k: stored.get(k) for k in compared}))
+    b = with_friction(flatten_attrs({k: wanted.get(k) for k in compared}))
+    said = FrictionWords(a, b, where)
     out = []
     # the sweep first, then in the attributes' own order (the axes as swept: vy, then vphi)
     for key in sorted(dict.fromkeys([*a, *b]), key=lambda k: k.split(".")[0] != "sweep"):
         if key.startswith("sweep.axes.") and key.endswith((".units", ".long_name")):
             continue  # they follow from the axis's name, which differs too
+        if said.skips(key):
+            continue
         if a.get(key, "absent") != b.get(key, "absent"):
             out.append(f"{display_name(key)} = {show_value(a.get(key))} {where[0]}, "
-                       f"{show_value(b.get(key))} {where[1]}")
+                       f"{show_value(b.get(key))} {where[1]}{said.after(key)}")
     return out
+
+
+MU = "parameters.foundation.mu"
+SLIP_VELOCITY = "parameters.foundation.slip_velocity"
+MODEL = "method.model"
+
+
+def model_words(name) -> str:
+    """A model's name as a sentence says it: "the paper's model", "the friction model"."""
+    return "the paper's model" if name == "paper" else f"the {name} model"
+
+
+class FrictionWords:
+    """How a difference of two flattened sets of attributes (``a``: the store's, ``b``: this
+    run's; :func:`with_friction` applied) is said where friction differs: the model follows
+    from mu (the friction model where mu > 0), and its verification ladder from the model, so
+    both are said once, after mu, not as values of their own; a slip velocity without friction
+    means nothing and is not said. ``where`` names the two sides."""
+
+    def __init__(self, a: dict, b: dict, where: tuple[str, str]):
+        self.a, self.b, self.where = a, b, where
+        self.model_follows = (a.get(MODEL, "absent") != b.get(MODEL, "absent")
+                              and a.get(MU, 0.0) != b.get(MU, 0.0))
+
+    def skips(self, key: str) -> bool:
+        """Whether the difference of ``key`` goes unsaid."""
+        if self.model_follows and (key == MODEL or key.startswith("method.verification.")):
+            return True
+        return key == SLIP_VELOCITY and 0 in (self.a.get(MU), self.b.get(MU))
+
+    def after(self, key: str) -> str:
+        """What follows the phrase of ``key``'s difference: after mu, the models."""
+        if not (self.model_follows and key == MU):
+            return ""
+        return (f" ({model_words(self.a.get(MODEL))} {self.where[0]}, "
+                f"{model_words(self.b.get(MODEL))} {self.where[1]}, each with its verification "
+                "ladder)")
+
+
+def with_friction(flat: dict) -> dict:
+    """Flattened attributes with friction said as a scene means it: a sweep's parameters that
+    record no mu (the paper's model, and every store written before friction) have mu = 0,
+    and a slip velocity only matters, and is only compared, where mu > 0."""
+    if not any(key.startswith("parameters.foundation.") for key in flat):
+        return flat
+    flat = dict(flat)
+    flat.setdefault(MU, 0.0)
+    if flat[MU] == 0:  # None: mu is varied (a continuation), friction at some values
+        flat.pop(SLIP_VELOCITY, None)
+    return flat
 
 
 # -- the three copies of the sweep's attributes -----------------------------------------------
@@ -224,6 +277,6 @@ def repaired(file: Path, data: bytes) -> bytes:
     return data if result == json.loads(data) else json_bytes(result)
 
 
-__all__ = ["PROOF", "Copy", "agrees", "differences", "differs", "disagreement",
-           "display_name", "flatten_attrs", "merged", "problems_of", "read_copies", "repaired",
-           "show_value", "unique"]
+__all__ = ["PROOF", "Copy", "FrictionWords", "agrees", "differences", "differs", "disagreement",
+           "display_name", "flatten_attrs", "merged", "model_words", "problems_of", "read_copies",
+           "repaired", "show_value", "unique", "with_friction"]

@@ -62,7 +62,7 @@ from .basin_layout import (
     check_store_writable,
     legacy_records_dir,
 )
-from .basin_metadata import flatten_attrs, show_value
+from .basin_metadata import FrictionWords, flatten_attrs, show_value, with_friction
 from .basin_schema import VARIABLES, resumable_as
 from .zarr_v3 import (
     ArraySpec,
@@ -133,6 +133,12 @@ class Layout:
         return specs
 
 
+def _layout(plan) -> Layout:
+    """The layout of a run of ``plan`` (a FractionsPlan)."""
+    return Layout(plan.sampling.batch, plan.goal.batches(plan.sampling.batch), plan.shape,
+                  plan.parameters)
+
+
 def differences(stored: dict, wanted: dict) -> list[str]:
     """'parameters.foundation.k = 10000 in the store, 5000 here', one per difference."""
     a = flatten_attrs({k: stored.get(k) for k in COMPARED})
@@ -140,12 +146,16 @@ def differences(stored: dict, wanted: dict) -> list[str]:
     for flat in (a, b):  # explanations, not what was computed
         for key in [k for k in flat if k.endswith((".note", ".sample_i"))]:
             del flat[key]
+    a, b = with_friction(a), with_friction(b)  # no mu recorded: mu = 0 (basin_metadata)
+    said = FrictionWords(a, b, ("in the store", "here"))
     out = []
     for key in sorted(set(a) | set(b)):
+        if said.skips(key):
+            continue
         if a.get(key, "absent") != b.get(key, "absent"):
             name = key.split(".", 1)[1] if key.startswith(("parameters.", "sampling.")) else key
             out.append(f"{name} = {show_value(a.get(key, 'absent'))} in the store, "
-                       f"{show_value(b.get(key, 'absent'))} here")
+                       f"{show_value(b.get(key, 'absent'))} here{said.after(key)}")
     return out
 
 
@@ -173,10 +183,17 @@ class FractionsStore(StoreRecords):
     def prepare_run(self, plan, overwrite: bool = False) -> np.ndarray:
         """:meth:`prepare` for a run of ``plan`` (a FractionsPlan): its layout, attributes and
         parameter values."""
-        layout = Layout(plan.sampling.batch, plan.goal.batches(plan.sampling.batch), plan.shape,
-                        plan.parameters)
-        return self.prepare(plan.attrs, layout, [np.asarray(a) for a in plan.axes] or None,
+        return self.prepare(plan.attrs, _layout(plan), [np.asarray(a) for a in plan.axes] or None,
                             overwrite=overwrite)
+
+    def check_run(self, plan) -> None:
+        """Refuse now, in one line, what :meth:`prepare_run` would refuse without
+        ``overwrite`` (a store of other samples, of another format, damaged, or a path that is
+        no store), before a run's work (its pilot) begins; nothing is created or changed."""
+        self._check_path()
+        if is_store(self.path):
+            with creation_lock(self.path):  # as prepare reads it: not while another grows it
+                self._check_stored(plan.attrs, _layout(plan))
 
     def exists(self) -> bool:
         return is_store(self.path)
@@ -231,10 +248,7 @@ class FractionsStore(StoreRecords):
         ``overwrite``. Several processes may call this at once on one path: one creates the
         store (under the creation lock), the others open it."""
         path = self.path
-        if path.exists() and not path.is_dir():
-            raise ParameterError(f"{path} exists and is not a directory")
-        if path.is_dir() and not is_store(path) and any(path.iterdir()):
-            raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
+        self._check_path()
         path.parent.mkdir(parents=True, exist_ok=True)
         specs = layout.specs()
         if overwrite or not is_store(path):
@@ -247,6 +261,14 @@ class FractionsStore(StoreRecords):
         self.layout, self.specs = layout, specs
         self.records_dir.mkdir(exist_ok=True)
         return self.read_filled()
+
+    def _check_path(self) -> None:
+        """Refuse a path that is a file, or a folder with files that is no Zarr store."""
+        path = self.path
+        if path.exists() and not path.is_dir():
+            raise ParameterError(f"{path} exists and is not a directory")
+        if path.is_dir() and not is_store(path) and any(path.iterdir()):
+            raise ParameterError(f"{path} exists and is not a Zarr store: refusing to touch it")
 
     @staticmethod
     def _template(attrs: dict, layout: Layout, values) -> dict[str, bytes]:

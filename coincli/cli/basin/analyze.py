@@ -111,7 +111,11 @@ def analyze_command(
     metadata_note(store)
     where_to, no_viewer = recording.destination(rrd, spawn, connect)
     if points != 0:  # the perturbation method runs the simulator (by default too)
-        compile_first(quiet)
+        from ...api.basins import basin_scene
+
+        with user_errors():
+            scene = basin_scene(path)
+        compile_first(quiet, scene)  # the store's model: friction's if it has friction
     result, recorder = _run(basin, where_to, quiet, box=box, bands=bands, points=points,
                             eps=eps_list, seed=seed, threads=threads, radius=radius,
                             balls=balls, max_dilation=max_dilation)

@@ -5,7 +5,7 @@ several of them say the same way lives here."""
 import typer
 from typer.core import TyperGroup
 
-from ..app import app, help_only
+from ..app import SHORT_FOR, app, help_only
 from ..common import err_console, warn
 from ..text import counted, say
 
@@ -16,6 +16,8 @@ class BasinGroup(TyperGroup):
     def parse_args(self, ctx, args):
         if args and args[0] not in self.commands and args[0] not in ctx.help_option_names:
             args = ["sweep", *args]
+            # a usage error says what ran (cli.usage_error)
+            ctx.meta[SHORT_FOR] = f"{ctx.command_path} STORE runs {ctx.command_path} sweep STORE"
         return super().parse_args(ctx, args)
 
 

@@ -46,14 +46,18 @@ InspectRrdOpt = Annotated[Path | None, typer.Option("--rrd", metavar="PATH", hel
                                                     "`rerun PATH`).", rich_help_panel=REC)]
 
 # `coin simulate` options for the scene's values, in the order the command prints them
-PHYSICAL = ("diameter", "thickness", "mass", "inertia", "k", "c", "g")
+PHYSICAL = ("diameter", "thickness", "mass", "inertia", "k", "c", "mu", "slip_velocity", "g")
 INTEGRATION = ("method", "dt", "rtol", "t_end")
 
 
 def _flat(scene) -> dict:
-    """The scene's values by their option names (y0 resolved, the method by name)."""
+    """The scene's values by their option names (y0 resolved, the method by name; mu and
+    slip_velocity, which a frictionless scene does not record, as the scene has them)."""
     d = scene.to_dict()
-    flat = {"g": d["g"], **d["coin"], **d["foundation"], **d["initial"], **d["integration"]}
+    foundation = scene.foundation
+    friction = {"mu": float(foundation.mu), "slip_velocity": float(foundation.slip_velocity)}
+    flat = {"g": d["g"], **d["coin"], **friction, **d["foundation"], **d["initial"],
+            **d["integration"]}
     return flat
 
 
@@ -169,7 +173,7 @@ def inspect_command(
         if recording:
             check_log_every(scene, log_every)
         words = simulate_words(scene, swept=found.dims)
-        compile_first()
+        compile_first(scene=scene)
         try:
             run = replay_cell(found, sample_dt=log_every if recording else None,
                               record_events=recording)

@@ -70,7 +70,9 @@ def stats_command(
     console.print(f"[bold]coin basin stats[/] {path}", highlight=False)
     console.print(f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
                   f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells, "
-                  f"{attrs['method']['name']}", highlight=False)
+                  f"{attrs['method']['name']}"
+                  + (f", friction mu = {attrs['parameters']['foundation']['mu']:g}"
+                     if attrs["parameters"]["foundation"].get("mu") else ""), highlight=False)
     if attrs["method"].get("horizon"):
         console.print(f"horizon: {attrs['method']['horizon']}", highlight=False)
     _print_outcomes(stats, every_n)

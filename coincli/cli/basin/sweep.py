@@ -24,10 +24,12 @@ from ..common import (
     MassOpt,
     MaxStepsOpt,
     MethodOpt,
+    MuOpt,
     PresetOpt,
     QuietOpt,
     RtolOpt,
     SinglePassOpt,
+    SlipVelocityOpt,
     StopOpt,
     TEndOpt,
     ThicknessOpt,
@@ -124,8 +126,9 @@ def sweep_command(
     rrd: LiveRrdOpt = None, spawn: LiveSpawnOpt = False, connect: LiveConnectOpt = None,
     preset: PresetOpt = "paper",
     diameter: DiameterOpt = None, thickness: ThicknessOpt = None, mass: MassOpt = None,
-    inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, g: GOpt = None,
-    method: MethodOpt = None, dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
+    inertia: InertiaOpt = None, k: KOpt = None, c: COpt = None, mu: MuOpt = None,
+    slip_velocity: SlipVelocityOpt = None, g: GOpt = None, method: MethodOpt = None,
+    dt: DtOpt = None, rtol: RtolOpt = None, t_end: TEndOpt = None,
     stop_on_settle: StopOpt = None, force: ForceOpt = False, single_pass: SinglePassOpt = False,
     max_steps: MaxStepsOpt = None,
 ) -> None:
@@ -142,7 +145,8 @@ def sweep_command(
 
     with user_errors():
         scene = build_scene(preset, diameter=diameter, thickness=thickness, mass=mass,
-                            inertia=inertia, k=k, c=c, g=g, method=method, dt=dt,
+                            inertia=inertia, k=k, c=c, mu=mu, slip_velocity=slip_velocity,
+                            g=g, method=method, dt=dt,
                             rtol=rtol, t_end=t_end, stop_on_settle=stop_on_settle,
                             max_steps=max_steps, verify=False if single_pass else None)
         plan = api.plan_sweep(scene, res=res, chunk=chunk, force=force,
@@ -152,7 +156,7 @@ def sweep_command(
     where_to, no_viewer = recording.destination(rrd, spawn, connect)
     # before the sweep: its pilot estimate is the first run of the kernels (a store that
     # is already complete on a fresh install is the one case compiled for without need)
-    compile_first(quiet)
+    compile_first(quiet, scene)
     report, recorder = _run(plan, path, where_to, overwrite=overwrite, threads=threads,
                             workers=workers, scheduler=scheduler, quiet=quiet, yes=yes,
                             worker_timeout=worker_timeout)
@@ -284,7 +288,8 @@ def _report(path: Path, plan, report, scheduler) -> None:
                          f"{counted(total - report.tiles_done, 'tile')} left; run the same "
                          "command again to resume.")
         return
-    say(console, f"Next: {command('coin', 'basin', 'render', path, '-o', 'basin.png')}; "
+    picture = path.with_suffix(".png")  # beside the store (out/basin.zarr: out/basin.png)
+    say(console, f"Next: {command('coin', 'basin', 'render', path, '-o', picture)}; "
                  f"{command('coin', 'basin', 'stats', path)}")
 
 
