@@ -473,3 +473,28 @@ def test_ladder_converges_with_friction(shipped):
     judged = certain & (single.status == Status.SETTLED)
     assert judged.sum() >= 0.85 * len(states)
     np.testing.assert_array_equal(verified.quarter_turns[judged], single.quarter_turns[judged])
+
+
+@pytest.mark.parametrize("method", ["symplectic_euler", "verlet", "rk4"])
+def test_the_stable_step_sees_the_stick(shipped, method):
+    """A fixed step takes friction explicitly: at rest a stick is a decay of the slip at rate
+    mu g / v_s (1 + m d_y^2 / I), which bounds the step where it is faster than the rocking.
+    The bound for a lying coin is the step linearized at rest under the friction law, and a
+    step beyond the standing coin's (the stiffer) is refused in one line, naming the stick."""
+    from coincli import accuracy as acc
+    from coincli.integrators import METHODS
+    from coincli.models import stick_rate
+    from coincli.params import ParameterError
+
+    info = METHODS[coincli.Method.parse(method)]
+    paper = shipped.with_overrides(method=method)
+    assert stick_rate(paper) == 0.0
+    scene = paper.with_overrides(mu=1.0, slip_velocity=1e-4)
+    coin = scene.coin
+    lying = 1.0 * scene.g / 1e-4 * (1 + coin.mass * coin.r_t ** 2 / coin.inertia)
+    standing = 1.0 * scene.g / 1e-4 * (1 + coin.mass * coin.r_d ** 2 / coin.inertia)
+    assert stick_rate(scene) == pytest.approx(standing, rel=1e-12)
+    assert info.stable_step(scene) == pytest.approx(info.decay_limit / standing, rel=1e-12)
+    assert acc.linear_limit(scene, method) == pytest.approx(info.decay_limit / lying, rel=0.02)
+    with pytest.raises(ParameterError, match="friction's stick at rest"):
+        coincli.simulate(scene.with_overrides(dt=1.01 * info.stable_step(scene)))

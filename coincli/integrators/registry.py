@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..enums import Method
-from ..models import stiffest_frequency
+from ..models import stick_rate, stiffest_frequency
 from ..params import Integration, ParameterError, RunSettings, Scene
 
 
@@ -49,6 +49,10 @@ def _map_rk4(h: float, omega: float, zeta: float) -> np.ndarray:
         term = term @ a / n
         total = total + term
     return total
+
+
+# where |1 + z + z^2/2 + z^3/6 + z^4/24| = 1 on the negative real axis
+RK4_DECAY_LIMIT = 2.785293563405282
 
 
 def _stable_limit(step_map, omega: float, zeta: float) -> float:
@@ -89,17 +93,26 @@ class MethodInfo:
     # explicit pair where the law is not stiff, Rodas5P where it is)
     stiff_variant: Method | None = None
     step_map: object = None  # one-step map of the damped oscillator, fixed-step methods only
+    # h rate at which the step stops being stable on a decay v' = -rate v taken explicitly (as
+    # every fixed-step method takes friction): the end of its stability interval on the
+    # negative real axis (2 for Euler's kick; Verlet's two explicit half kicks, (1 - h rate /
+    # 2)^2, 4; RK4's polynomial, 2.785)
+    decay_limit: float = math.inf
 
     @property
     def name(self) -> str:
         return self.method.label
 
     def stable_step(self, scene: Scene) -> float | None:
-        """Predicted largest stable step (s), or None for an adaptive method."""
+        """Predicted largest stable step (s), or None for an adaptive method: on the damped
+        rocking mode, and on the model's decay mode at rest where it has one (friction's
+        stick, :func:`coincli.models.stick_rate`)."""
         if self.step_map is None:
             return None
         omega, zeta = stiffest_frequency(scene)
-        return _stable_limit(self.step_map, omega, zeta)
+        limit = _stable_limit(self.step_map, omega, zeta)
+        rate = stick_rate(scene)
+        return min(limit, self.decay_limit / rate) if rate > 0 else limit
 
 
 METHODS: dict[Method, MethodInfo] = {
@@ -107,13 +120,13 @@ METHODS: dict[Method, MethodInfo] = {
     for m in (
         MethodInfo(Method.SYMPLECTIC_EULER, 1, False, True,
                    "the paper's scheme: kick with the old force, then drift", "#d62728",
-                   step_map=_map_symplectic_euler),
+                   step_map=_map_symplectic_euler, decay_limit=2.0),
         MethodInfo(Method.VERLET, 2, False, True,
                    "Stormer-Verlet (Lobatto IIIA-IIIB): first half kick implicit in the damping",
-                   "#ff7f0e", step_map=_map_verlet),
+                   "#ff7f0e", step_map=_map_verlet, decay_limit=4.0),
         MethodInfo(Method.RK4, 4, False, False,
                    "classical Runge-Kutta, 4 force evaluations a step", "#2ca02c",
-                   step_map=_map_rk4),
+                   step_map=_map_rk4, decay_limit=RK4_DECAY_LIMIT),
         MethodInfo(Method.DOPRI5, 5, True, False,
                    "Dormand-Prince 5(4) with error control; lands on the contact onsets and "
                    "lift-offs it sees (flight integrated: a dip under ~3 um can hide in a step)",
@@ -179,6 +192,14 @@ def setting_text(method: Method, dt: float, rtol: float) -> str:
     return f"rtol = {rtol:g}" if METHODS[method].adaptive else f"dt = {dt:g} s"
 
 
+def _binding_mode(scene: Scene, method: MethodInfo, limit: float) -> str:
+    """The mode that sets a fixed step's limit, as a refusal says it."""
+    rate = stick_rate(scene)
+    if rate > 0 and limit < _stable_limit(method.step_map, *stiffest_frequency(scene)):
+        return f"friction's stick at rest, rate {rate:.4g} /s"
+    return f"the rocking frequency {stiffest_frequency(scene)[0]:.4g} rad/s"
+
+
 def check_step(scene: Scene, force: bool = False) -> MethodInfo:
     """Return the scene's method; refuse a fixed step beyond its stable step unless forced."""
     method = info(scene.integration.method)
@@ -186,9 +207,8 @@ def check_step(scene: Scene, force: bool = False) -> MethodInfo:
     if limit is not None and scene.integration.dt > limit and not force:
         raise ParameterError(
             f"--dt {scene.integration.dt:g} s is beyond the stable step of {method.name} for "
-            f"these parameters ({limit:.3g} s, from the rocking frequency "
-            f"{stiffest_frequency(scene)[0]:.4g} rad/s); use a smaller --dt "
-            "or --force")
+            f"these parameters ({limit:.3g} s, from {_binding_mode(scene, method, limit)}); "
+            "use a smaller --dt or --force")
     if (method.adaptive and scene.fixed_horizon
             and scene.integration.dt >= scene.integration.t_end):
         raise ParameterError(f"--t-end {scene.integration.t_end:g} s is not longer than the "

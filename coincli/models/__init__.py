@@ -37,6 +37,7 @@ class Model:
     # switching pairs (coincli.integrators.switching) where a method has them
     stiff: bool = False
     stiffest_frequency: Callable = paper.stiffest_frequency
+    stick_rate: Callable = paper.stick_rate  # a decay mode at rest beside the rocking (1/s)
     horizon_rule: Callable = paper.horizon_rule
     # about how long its kernels take to compile the first time (s, docs/performance.md)
     compile_seconds: float = FIRST_COMPILE_SECONDS
@@ -78,6 +79,7 @@ PAPER = Model("paper", "the paper's: a Winkler spring and a viscous damper at ea
 FRICTION_MODEL = Model("friction", "the paper's with regularized Coulomb friction at the corners "
                                    "(mu, slip_velocity)", (friction, paper, rectangle),
                        friction.params, ("mu", "slip_velocity"), stiff=True,
+                       stick_rate=friction.stick_rate,
                        compile_seconds=FRICTION_COMPILE_SECONDS, example=(("mu", 0.3),))
 
 MODELS: dict[str, Model] = {m.name: m for m in (PAPER, FRICTION_MODEL)}
@@ -121,5 +123,12 @@ def stiffest_frequency(scene) -> tuple[float, float]:
     return model.stiffest_frequency(model.params(scene))
 
 
+def stick_rate(scene) -> float:
+    """The rate (1/s) of the stiffest decay mode of ``scene``'s coin at rest beside its
+    rocking mode under its model (0: none; friction's stick)."""
+    model = model_of(scene)
+    return model.stick_rate(model.params(scene))
+
+
 __all__ = ["FRICTION_MODEL", "MODELS", "Model", "PAPER", "horizon_text", "model_of", "model_params",
-           "scene_horizon", "stiffest_frequency"]
+           "scene_horizon", "stick_rate", "stiffest_frequency"]

@@ -80,6 +80,16 @@ def params(scene) -> FrictionParams:
                           v_s=float(foundation.slip_velocity))
 
 
+def stick_rate(p) -> float:
+    """The rate (1/s) at which friction brakes the slip of a coin at rest on two corners, the
+    larger of lying and standing: its corners push with m g in all, and each one's friction
+    falls to zero over a slip of v_s, so the slip relaxes at mu g / v_s (1 + m d_y^2 / I)
+    (d_y: r_t lying, r_d standing), the stiff decay mode a fixed step must resolve (a step
+    beyond it chatters: `coin accuracy --stability --mu 1 --slip-velocity 1e-4`)."""
+    lever = max(p.r_d, p.r_t)
+    return p.mu * p.g / p.v_s * (1.0 + p.mass * lever * lever * p.inv_inertia)
+
+
 @kernel(inline=True)
 def friction_force(p, normal, slip):
     """F_t on a corner whose spring and damper push with ``normal`` (-k y_i - c v_yi, of either
@@ -227,4 +237,4 @@ def verlet_half_kick(p, h2, state):
 
 __all__ = ["BETA", "FRICTION", "FrictionParams", "LAND", "SHORTEST", "contact_forces",
            "corner_force", "corner_force_gradient", "friction_force", "params",
-           "sliding", "step_limit", "stiffness", "verlet_half_kick"]
+           "sliding", "step_limit", "stick_rate", "stiffness", "verlet_half_kick"]

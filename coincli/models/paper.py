@@ -90,6 +90,13 @@ def stiffest_frequency(p) -> tuple[float, float]:
     return omega, zeta
 
 
+def stick_rate(p) -> float:
+    """The rate (1/s) of the stiffest decay mode a law adds at rest beside the rocking mode
+    (:func:`stiffest_frequency`): none under the paper's law, whose only horizontal force is
+    the damper, slower than the rocking (coincli.models.friction has one)."""
+    return 0.0
+
+
 # -- forces -------------------------------------------------------------------------------------
 @kernel(inline=True)
 def corner_force(p, y, dx, dy, vx, vy, vphi):
@@ -343,5 +350,5 @@ __all__ = ["CAP_FACTOR", "FRICTION", "PaperParams", "accelerations_auto", "const
            "contact_accelerations", "contact_forces", "contact_jacobian", "corner_force",
            "corner_force_gradient", "damping_split", "decision_time", "elastic_energy",
            "energies", "energy_with_heights", "horizon_rule", "params", "run_horizon",
-           "sliding", "solve_damped_velocity", "step_limit", "stiffest_frequency",
+           "sliding", "solve_damped_velocity", "step_limit", "stick_rate", "stiffest_frequency",
            "stiffness", "total_energy", "verlet_half_kick"]
