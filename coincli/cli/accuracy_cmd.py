@@ -175,8 +175,10 @@ def run_stability(scene, json_out: bool) -> None:
                       f"{r['measured_failure_step']:.3g} s", f"{r['ratio']:.2f}")
     console.print(table)
     say(err_console, "predicted: spectral radius of the method's step on the damped rocking "
-                     "mode (coin methods); simulate and basin refuse a larger --dt without "
-                     "--force."
-        + (" Linearized at rest: the largest step whose map, linearized at the resting coin "
-           "under the friction law (a stick is a stiff damper on the slip), has spectral "
-           "radius at most 1." if friction else ""))
+                     "mode"
+        + (" and on friction's stick at rest, a decay of the slip, on a standing coin (its "
+           "stick is stiffer than the lying coin's of the test)" if friction else "")
+        + " (coin methods); simulate and basin refuse a larger --dt without --force."
+        + (" Linearized at rest: the largest step whose map, linearized at the resting "
+           "lying coin under the friction law, has spectral radius at most 1." if friction
+           else ""))
