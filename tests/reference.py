@@ -131,19 +131,21 @@ def step_symplectic_euler(P: Params, h: float, state):
     return (x + h * vx, y + h * vy, phi + h * vphi, vx, vy, vphi)
 
 
-def step_rk4(P: Params, h: float, state):
+def rk4_step(P, h: float, state, accelerations_of):
+    """One classical RK4 step of the equations of motion whose accelerations (ax, ay, aphi) at a
+    state are ``accelerations_of(P, state)`` (this module's laws, in CPython or compiled)."""
     x, y, phi, vx, vy, vphi = state
     h2 = 0.5 * h
-    a1 = accelerations(P, state)
+    a1 = accelerations_of(P, state)
     s2 = (x + h2 * vx, y + h2 * vy, phi + h2 * vphi,
           vx + h2 * a1[0], vy + h2 * a1[1], vphi + h2 * a1[2])
-    a2 = accelerations(P, s2)
+    a2 = accelerations_of(P, s2)
     s3 = (x + h2 * s2[3], y + h2 * s2[4], phi + h2 * s2[5],
           vx + h2 * a2[0], vy + h2 * a2[1], vphi + h2 * a2[2])
-    a3 = accelerations(P, s3)
+    a3 = accelerations_of(P, s3)
     s4 = (x + h * s3[3], y + h * s3[4], phi + h * s3[5],
           vx + h * a3[0], vy + h * a3[1], vphi + h * a3[2])
-    a4 = accelerations(P, s4)
+    a4 = accelerations_of(P, s4)
     h6 = h / 6.0
     return (x + h6 * (vx + 2.0 * s2[3] + 2.0 * s3[3] + s4[3]),
             y + h6 * (vy + 2.0 * s2[4] + 2.0 * s3[4] + s4[4]),
@@ -151,6 +153,10 @@ def step_rk4(P: Params, h: float, state):
             vx + h6 * (a1[0] + 2.0 * a2[0] + 2.0 * a3[0] + a4[0]),
             vy + h6 * (a1[1] + 2.0 * a2[1] + 2.0 * a3[1] + a4[1]),
             vphi + h6 * (a1[2] + 2.0 * a2[2] + 2.0 * a3[2] + a4[2]))
+
+
+def step_rk4(P: Params, h: float, state):
+    return rk4_step(P, h, state, accelerations)
 
 
 STEPPERS = {"symplectic_euler": step_symplectic_euler, "rk4": step_rk4}
@@ -356,27 +362,9 @@ def friction_well(P, phi):
 
 
 def step_rk4_friction(P, h, state):
-    """Classical RK4 (the update order of :func:`step_rk4`), the contact set of each stage the
-    corners below the surface at that stage: no events."""
-    x, y, phi, vx, vy, vphi = state
-    h2 = 0.5 * h
-    a1 = friction_accelerations(P, state)
-    s2 = (x + h2 * vx, y + h2 * vy, phi + h2 * vphi,
-          vx + h2 * a1[0], vy + h2 * a1[1], vphi + h2 * a1[2])
-    a2 = friction_accelerations(P, s2)
-    s3 = (x + h2 * s2[3], y + h2 * s2[4], phi + h2 * s2[5],
-          vx + h2 * a2[0], vy + h2 * a2[1], vphi + h2 * a2[2])
-    a3 = friction_accelerations(P, s3)
-    s4 = (x + h * s3[3], y + h * s3[4], phi + h * s3[5],
-          vx + h * a3[0], vy + h * a3[1], vphi + h * a3[2])
-    a4 = friction_accelerations(P, s4)
-    h6 = h / 6.0
-    return (x + h6 * (vx + 2.0 * s2[3] + 2.0 * s3[3] + s4[3]),
-            y + h6 * (vy + 2.0 * s2[4] + 2.0 * s3[4] + s4[4]),
-            phi + h6 * (vphi + 2.0 * s2[5] + 2.0 * s3[5] + s4[5]),
-            vx + h6 * (a1[0] + 2.0 * a2[0] + 2.0 * a3[0] + a4[0]),
-            vy + h6 * (a1[1] + 2.0 * a2[1] + 2.0 * a3[1] + a4[1]),
-            vphi + h6 * (a1[2] + 2.0 * a2[2] + 2.0 * a3[2] + a4[2]))
+    """Classical RK4 (:func:`rk4_step`), the contact set of each stage the corners below the
+    surface at that stage: no events."""
+    return rk4_step(P, h, state, friction_accelerations)
 
 
 def integrate_friction(P, state, h, n_steps):
@@ -411,7 +399,8 @@ def rk4_friction_throw(P, state, h, t_max):
 FRICTION_FUNCTIONS = ("friction_tangential_force", "friction_corner_force", "friction_forces",
                       "friction_accelerations", "friction_tangential", "friction_energy",
                       "friction_well",
-                      "step_rk4_friction", "integrate_friction", "rk4_friction_throw")
+                      "rk4_step", "step_rk4_friction", "integrate_friction",
+                      "rk4_friction_throw")
 
 
 def compiled_friction():
