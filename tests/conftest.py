@@ -7,6 +7,7 @@ import contextlib
 import io
 import os
 import signal
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -43,7 +44,12 @@ def pytest_configure(config):
     from coincli.models import MODELS
 
     paper = load("paper").scene
-    for model in MODELS.values():
+    # a run of chosen files compiles the other models' kernels only for their tests (the files
+    # named after them: test_friction*.py), a run of a folder (the suite) every model's
+    models = [m for m in MODELS.values() if m is MODELS["paper"] or not config.args
+              or any(Path(arg.split("::")[0]).is_dir() or m.name in Path(arg).name
+                     for arg in config.args)]
+    for model in models:
         if not kernels_cached(model.name):
             scene = paper.with_overrides(**dict(model.example))
             Labeller.of(scene).compile_all(np.array([0.0, scene.y0, 0.0, 0.0, 1.0, 3.0]))
