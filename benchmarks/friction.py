@@ -276,7 +276,7 @@ def curves(out: Path, quick: bool = False) -> dict:
 
 
 # -- the crossings ---------------------------------------------------------------------------------
-CROSSING_MUS = (0.0, 0.3, 1.0)
+CROSSING_MUS = (0.0, 0.3, 0.6)
 CROSSING_RATIOS = (0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
 BASES = ("certain", "decided")  # P(standing) over the certain labels, over all decided ones
 
