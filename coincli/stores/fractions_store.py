@@ -139,6 +139,9 @@ def _layout(plan) -> Layout:
                   plan.parameters)
 
 
+ASKED = ("parameters.", "sampling.")  # what a run's options set, said first
+
+
 def differences(stored: dict, wanted: dict) -> list[str]:
     """'parameters.foundation.k = 10000 in the store, 5000 here', one per difference."""
     a = flatten_attrs({k: stored.get(k) for k in COMPARED})
@@ -148,9 +151,14 @@ def differences(stored: dict, wanted: dict) -> list[str]:
             del flat[key]
     a, b = with_friction(a), with_friction(b)  # no mu recorded: mu = 0 (basin_metadata)
     said = FrictionWords(a, b, ("in the store", "here"))
+    # what was asked first (the parameters, the sampling), then what follows from it; the
+    # horizon is the scene's, said by the parameters when one of them differs
+    keys = sorted(set(a) | set(b), key=lambda k: (not k.startswith(ASKED), k))
+    parameters_differ = any(a.get(k, "absent") != b.get(k, "absent") for k in keys
+                            if k.startswith("parameters."))
     out = []
-    for key in sorted(set(a) | set(b)):
-        if said.skips(key):
+    for key in keys:
+        if said.skips(key) or (parameters_differ and key == "method.horizon"):
             continue
         if a.get(key, "absent") != b.get(key, "absent"):
             name = key.split(".", 1)[1] if key.startswith(("parameters.", "sampling.")) else key
