@@ -117,7 +117,7 @@ KOpt = Annotated[float | None, _opt("--k", "Foundation stiffness per corner.", "
 COpt = Annotated[float | None, _opt("--c", "Viscous damping per corner.", "N*s/m", PHYS)]
 GOpt = Annotated[float | None, _opt("--g", "Gravity.", "m/s^2", PHYS)]
 MuOpt = Annotated[float | None, _opt("--mu", "Coulomb friction coefficient at the corners, "
-                                     "0 to 10 (0: none, the paper's model; docs/friction.md).",
+                                     "0 to 10 (0: none, the paper's model).",
                                      "MU", PHYS)]
 SlipVelocityOpt = Annotated[float | None, _opt(
     "--slip-velocity", "Slip velocity of the regularized friction: a corner slipping slower "
