@@ -71,7 +71,7 @@ _LAZY = {
     # a notebook's viewer asked for without the extra coincli[notebook] (an ImportError)
     "NotebookMissing": (_stream, "NotebookMissing"),
 }
-__getattr__ = lazy_names(__name__, _LAZY)
+__getattr__ = lazy_names(globals(), _LAZY)
 
 
 __all__ = ["ParameterError", *_LAZY]

@@ -13,18 +13,18 @@ from __future__ import annotations
 from collections.abc import Callable
 
 
-def lazy_names(module: str, table: dict[str, tuple[Callable, str]]):
-    """The ``__getattr__`` of ``module`` (its ``__name__``): ``table`` maps each lazy name to
-    (a function that imports and returns the module defining it, the name there)."""
-    import sys
+def lazy_names(namespace: dict, table: dict[str, tuple[Callable, str]]):
+    """The ``__getattr__`` of the module whose ``globals()`` is ``namespace``: ``table`` maps
+    each lazy name to (a function that imports and returns the module defining it, the name
+    there); a name loaded is kept in the namespace (as :mod:`coincli.api` keeps its own)."""
 
     def __getattr__(name: str):
         entry = table.get(name)
         if entry is None:
-            raise AttributeError(f"module {module!r} has no attribute {name!r}")
+            raise AttributeError(f"module {namespace['__name__']!r} has no attribute {name!r}")
         load, attribute = entry
         value = getattr(load(), attribute)
-        setattr(sys.modules[module], name, value)  # loaded once
+        namespace[name] = value  # loaded once
         return value
 
     return __getattr__

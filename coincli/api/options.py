@@ -128,7 +128,7 @@ _LAZY = {
     # a fixed step against the method's stable step (ParameterError unless force)
     "check_step": (_registry, "check_step"),
 }
-__getattr__ = lazy_names(__name__, _LAZY)
+__getattr__ = lazy_names(globals(), _LAZY)
 
 
 __all__ = ["DEFAULT_BATCH", "DEFAULT_CHUNK", "DEFAULT_FPS", "DEFAULT_LOG_EVERY",

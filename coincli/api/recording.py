@@ -93,7 +93,7 @@ _LAZY = {
     "display_available": (_stream, "display_available"),
     "NO_DISPLAY": (_stream, "NO_DISPLAY"),
 }
-__getattr__ = lazy_names(__name__, _LAZY)
+__getattr__ = lazy_names(globals(), _LAZY)
 
 
 __all__ = ["analysis_recorder", "both", "fractions_recorder", "live_destination",

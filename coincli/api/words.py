@@ -84,7 +84,7 @@ _LAZY = {
     # any result as plain JSON values (numpy numbers, enums by name, NaN as None)
     "jsonable": (_jsonable, "jsonable"),
 }
-__getattr__ = lazy_names(__name__, _LAZY)
+__getattr__ = lazy_names(globals(), _LAZY)
 
 
 __all__ = ["format_duration", "shown", *_LAZY]
