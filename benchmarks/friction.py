@@ -2,6 +2,7 @@
 """Does the paper's frictionless coin hold? The measurements of docs/friction.md.
 
     python benchmarks/friction.py --cost            # what a verified throw costs with friction
+    python benchmarks/friction.py --sensitivity     # how far the throws amplify a nudge
     python benchmarks/friction.py --slip            # is v_s small enough: the map at 4 v_s
     python benchmarks/friction.py --maps            # the default map at mu = 0, 0.1, 0.3, 0.6
     python benchmarks/friction.py --curves          # P(standing) over the 5-D box against mu
@@ -24,6 +25,11 @@ not stiff, Rodas5P where a corner sticks, a decade a rung), its single pass, and
 the explicit pairs alone with friction (``event`` then ``event_dop853``, as without friction: the
 drivers derived here with the explicit pairs, :func:`coincli.jit.derive`; this module's kernels
 make its kernel cache a folder of its own, compiled at its first run).
+
+**The sensitivity** (``--sensitivity``): why the ladder climbs further with friction, whatever
+the method: each throw of the paper's map (32 x 32) at the ladder's floor, from its initial state
+and from vphi0 nudged, counted where the runs fail the ladder's own agreement rule, with a
+control (the other pair at the floor) and the verified ladder's climb on the same throws.
 """
 
 from __future__ import annotations
@@ -195,6 +201,73 @@ def slip(out: Path, quick: bool = False) -> dict:
                       "differ": int((both & (na != nb)).sum()),
                       "parity_differs": int((both & (np.mod(na, 2) != np.mod(nb, 2))).sum())})
     return {"slip": {"res": res, "mu": 0.3, "maps": rows, "neighbours": pairs}}
+
+
+# -- the sensitivity ------------------------------------------------------------------------------
+NUDGES = (2e-9, 2e-7, 2e-5)  # rad/s added to vphi0: 1e-10, 1e-8, 1e-6 of the map's fastest
+# spin (20 rad/s)
+SENSITIVITY_CASES = ((0.0, 1e-3), (0.1, 1e-3), (0.3, 1e-3), (0.6, 1e-3), (1.0, 1e-3),
+                     (0.3, 1e-4), (1.0, 1e-4))
+
+
+def sensitivity(out: Path, quick: bool = False) -> dict:
+    """How far the throws themselves amplify a difference, whatever integrates them: each throw
+    of the paper's map (32 x 32) run at the ladder's floor (its last rung, rtol 1e-12) from its
+    initial state and from vphi0 nudged by 2e-9, 2e-7 and 2e-5 rad/s, and counted where the two
+    runs fail the ladder's own agreement rule (:func:`coincli.integrators.batch.rungs_agree`:
+    the same n, entering its well and settling at the same moments). The control: the same
+    throw by the other pair at rtol 1e-12 (DOP853 against Dormand-Prince 5(4), each with
+    Rodas5P where friction is stiff), which must fail the rule far more rarely than the nudges
+    do for the counts to be the throws' and not the integration's. Beside them, the verified
+    ladder's climb on the same throws: how many need a rung past its second."""
+    import coincli
+    from coincli.enums import Method, Status
+    from coincli.integrators.batch import integrate, outcome_label, rungs_agree, unrecorded
+    from coincli.labeller import Labeller, new_control
+
+    side = 8 if quick else 32
+    paper = coincli.load_preset("paper")
+    states = map_throws(paper, side)
+    rows = []
+    for mu, vs in SENSITIVITY_CASES:
+        scene = paper.with_overrides(mu=mu, slip_velocity=vs)
+        labeller = Labeller.of(scene)
+        labeller.load(states[0], trajectory=True)
+        run_kernel, agree = labeller.kernels[integrate], labeller.python[rungs_agree]
+        floor = labeller.rung_settings(len(labeller.ladder) - 1)
+        other = {Method.EVENT_DOP853: Method.EVENT, Method.EVENT_RODAS: Method.EVENT_DOP853_RODAS}
+        control = floor._replace(method=int(other[Method(floor.method)]))
+
+        def run(state, settings, labeller=labeller, run_kernel=run_kernel):
+            no_samples, no_events, final = unrecorded()
+            result = run_kernel(labeller.params, settings, np.ascontiguousarray(state),
+                                no_samples, no_events, final, new_control())
+            return outcome_label(result.status, result.n_well, final[2]), result
+
+        def differ(a, b, agree=agree, ladder=labeller.ladder):
+            return not agree(a[0], a[1], b[0], b[1], ladder.change_tolerance,
+                             ladder.settle_tolerance)
+
+        start = time.perf_counter()
+        reference = [run(state, floor) for state in states]
+        moved = {}
+        for nudge in NUDGES:
+            nudged = states.copy()
+            nudged[:, 5] += nudge
+            moved[nudge] = sum(differ(a, run(state, floor))
+                               for a, state in zip(reference, nudged, strict=True))
+        controls = sum(differ(a, run(state, control))
+                       for a, state in zip(reference, states, strict=True))
+        verified = labeller.label(states)
+        rows.append({"mu": mu, "v_s": vs, "n": len(states),
+                     "moved": {f"{nudge:g}": int(count) for nudge, count in moved.items()},
+                     "control": int(controls),
+                     "settled": int(sum(a[1].status == Status.SETTLED for a in reference)),
+                     "past_second_rung": int((verified.rung > 1).sum()),
+                     "steps_at_floor": float(np.mean([a[1].steps for a in reference])),
+                     "seconds": time.perf_counter() - start})
+        print(f"mu {mu:g} v_s {vs:g}: {rows[-1]}", flush=True)
+    return {"sensitivity": {"side": side, "nudges": list(NUDGES), "rows": rows}}
 
 
 # -- the maps --------------------------------------------------------------------------------------
@@ -401,8 +474,25 @@ def crossings_table(found: dict) -> str:
     return "\n".join(rows)
 
 
-TABLES = {"friction-cost": ("cost", cost_table), "friction-slip": ("slip", slip_table),
-          "friction-maps": ("maps", maps_table), "friction-curves": ("curves", curves_table),
+def sensitivity_table(found: dict) -> str:
+    """The throws' sensitivity: a nudge of vphi0 against the ladder's rule, at the floor."""
+    found = found["sensitivity"]
+    nudges = [f"{nudge:g}" for nudge in found["nudges"]]
+    rows = ["| mu | v_s (m/s) | " + " | ".join(f"vphi0 + {nudge} rad/s" for nudge in nudges)
+            + " | the other pair (control) | verified: past the second rung | steps a run at "
+            "rtol 1e-12 |", "|---:|---:|" + "---:|" * (len(nudges) + 3)]
+    for r in found["rows"]:
+        cells = [f"{100 * r['moved'][nudge] / r['n']:.1f} %" for nudge in nudges]
+        rows.append(f"| {r['mu']:g} | {r['v_s']:g} | " + " | ".join(cells)
+                    + f" | {100 * r['control'] / r['n']:.1f} % | "
+                    f"{100 * r['past_second_rung'] / r['n']:.1f} % | {r['steps_at_floor']:.0f} |")
+    return "\n".join(rows)
+
+
+TABLES = {"friction-cost": ("cost", cost_table),
+          "friction-sensitivity": ("sensitivity", sensitivity_table),
+          "friction-slip": ("slip", slip_table), "friction-maps": ("maps", maps_table),
+          "friction-curves": ("curves", curves_table),
           "friction-crossings": ("crossings", crossings_table)}
 
 
@@ -420,7 +510,7 @@ def render(found: dict) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    for part in ("cost", "slip", "maps", "curves", "crossings", "all"):
+    for part in ("cost", "sensitivity", "slip", "maps", "curves", "crossings", "all"):
         parser.add_argument(f"--{part}", action="store_true")
     parser.add_argument("--render", action="store_true",
                         help="only write the tables of benchmarks/friction.json into "
@@ -434,7 +524,7 @@ def main() -> None:
     if args.render:
         render(found)
         return
-    parts = [p for p in ("cost", "slip", "maps", "curves", "crossings")
+    parts = [p for p in ("cost", "sensitivity", "slip", "maps", "curves", "crossings")
              if getattr(args, p) or args.all]
     for part in parts:
         start = time.perf_counter()
