@@ -2,6 +2,7 @@
 """Does the paper's frictionless coin hold? The measurements of docs/friction.md.
 
     python benchmarks/friction.py --cost            # what a verified throw costs with friction
+    python benchmarks/friction.py --stick           # the upper rungs' driver in a stick
     python benchmarks/friction.py --sensitivity     # how far the throws amplify a nudge
     python benchmarks/friction.py --slip            # is v_s small enough: the map at 4 v_s
     python benchmarks/friction.py --maps            # the default map at mu = 0, 0.1, 0.3, 0.6
@@ -26,6 +27,10 @@ the explicit pairs alone with friction (``event`` then ``event_dop853``, as with
 drivers derived here with the explicit pairs, :func:`coincli.jit.derive`; this module's kernels
 make its kernel cache a folder of its own, compiled at its first run).
 
+**The upper rungs in a stick** (``--stick``): single runs of the map on the upper rungs'
+driver (DOP853; with friction its switching pair), and that pair made to step implicitly
+wherever a corner pushes (:data:`IMPLICIT8`), at rtol 1e-8, 1e-10 and 1e-12.
+
 **The sensitivity** (``--sensitivity``): why the ladder climbs further with friction, whatever
 the method: each throw of the paper's map (32 x 32) at the ladder's floor, from its initial state
 and from vphi0 nudged, counted where the runs fail the ladder's own agreement rule, with a
@@ -48,8 +53,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 sys.path.insert(0, str(HERE))
 
-from coincli.integrators import adaptive, batch, dop853, dopri  # noqa: E402
-from coincli.integrators.pairs import PAIR_NAMES  # noqa: E402
+from coincli.integrators import adaptive, batch, dop853, dopri, switching  # noqa: E402
+from coincli.integrators.pairs import PAIR_NAMES, integrate_adaptive_dop853_rodas  # noqa: E402
 from coincli.jit import derive  # noqa: E402
 from coincli.models import paper as paper_law  # noqa: E402
 
@@ -62,6 +67,14 @@ _EXPLICIT8 = derive(adaptive, "_explicit8", step_limit=paper_law.step_limit,
 EXPLICIT_LADDER = derive(batch, "_explicit", integrate_adaptive_rodas=_EXPLICIT5,
                          integrate_adaptive_dop853_rodas=_EXPLICIT8).run_ladder
 assert dopri.ORDER == 5
+# the upper rungs' switching pair made to take Rodas5P wherever a corner pushes with friction
+# (its switch at h lambda > 0 rather than past the explicit pair's stability): --stick
+_ALWAYS_RODAS = derive(switching, "_always_rodas", STIFF8=0.0)
+IMPLICIT8 = derive(adaptive, "_implicit8", ORDER=switching.ORDER8, FIRST_STEP=dop853.FIRST_STEP,
+                   step=_ALWAYS_RODAS.step8, step_factor=dop853.step_factor,
+                   controller_memory=dop853.controller_memory,
+                   dense_coefficients=_ALWAYS_RODAS.dense_coefficients8,
+                   dense_point=dop853.dense_point).integrate_adaptive
 
 RESULTS = HERE / "friction.json"
 DOCS = HERE.parent / "docs"
@@ -201,6 +214,61 @@ def slip(out: Path, quick: bool = False) -> dict:
                       "differ": int((both & (na != nb)).sum()),
                       "parity_differs": int((both & (np.mod(na, 2) != np.mod(nb, 2))).sum())})
     return {"slip": {"res": res, "mu": 0.3, "maps": rows, "neighbours": pairs}}
+
+
+# -- the upper rungs in a stick -----------------------------------------------------------------
+STICK_RTOLS = (1e-8, 1e-10, 1e-12)
+
+
+def stick(quick: bool = False, rounds: int = 3) -> dict:
+    """Where the upper rungs spend their steps: single runs of the paper's map (16 x 16 throws)
+    on the ladder's upper-rung driver at rtol 1e-8, 1e-10 and 1e-12, without friction (DOP853)
+    and with it (the switching pair, DOP853 where friction is not stiff and Rodas5P past the
+    explicit pair's stability), against the same pair made to take Rodas5P wherever a corner
+    pushes (:data:`IMPLICIT8`): whether an implicit step of order 5 would let the rungs past the
+    second step over a stick. CPU time of one thread (each batch repeated for 0.1 s at least),
+    interleaved rounds, medians (of the rounds' ratios for the ratios)."""
+    import coincli
+    from coincli.enums import Method
+    from coincli.integrators.batch import integrate, unrecorded
+    from coincli.labeller import Labeller, new_control
+
+    paper = coincli.load_preset("paper")
+    states = map_throws(paper, 8 if quick else 16)
+    rows = []
+    for mu in (0.3, 1.0):
+        frictionless = Labeller.of(paper)
+        labeller = Labeller.of(paper.with_overrides(mu=mu))
+        runs = {"frictionless": (frictionless, frictionless.kernels[integrate]),
+                "switching": (labeller, labeller.kernels[integrate_adaptive_dop853_rodas]),
+                "implicit": (labeller, labeller.kernels[IMPLICIT8])}
+        for rtol in STICK_RTOLS:
+            times = {name: [] for name in runs}
+            steps = {}
+            for r in range(rounds):
+                for name, (owner, kernel) in (list(runs.items())[::1 if r % 2 == 0 else -1]):
+                    settings = owner.settings._replace(method=int(Method.EVENT_DOP853),
+                                                       rtol=rtol)
+                    start = time.thread_time()
+                    batches = 0
+                    while batches == 0 or time.thread_time() - start < 0.1:  # a readable clock
+                        total = 0
+                        for state in states:
+                            no_samples, no_events, final = unrecorded()
+                            total += kernel(owner.params, settings, np.ascontiguousarray(state),
+                                            no_samples, no_events, final, new_control()).steps
+                        batches += 1
+                    times[name].append((time.thread_time() - start) / batches)
+                    steps[name] = total / len(states)
+            rows.append({"mu": mu, "rtol": rtol, "n": len(states),
+                         **{f"{name}_steps": steps[name] for name in runs},
+                         **{f"{name}_us": 1e6 * statistics.median(times[name]) / len(states)
+                            for name in runs},
+                         **{f"{name}_ratio": statistics.median(
+                             a / b for a, b in zip(times[name], times["frictionless"],
+                                                   strict=True)) for name in runs}})
+            print(f"mu {mu:g} rtol {rtol:g}: {rows[-1]}", flush=True)
+    return {"stick": {"rows": rows}}
 
 
 # -- the sensitivity ------------------------------------------------------------------------------
@@ -489,7 +557,22 @@ def sensitivity_table(found: dict) -> str:
     return "\n".join(rows)
 
 
-TABLES = {"friction-cost": ("cost", cost_table),
+def stick_table(found: dict) -> str:
+    """The upper rungs' driver with and without friction, and made implicit wherever a corner
+    pushes."""
+    rows = ["| mu | rtol | without friction: steps, us a throw | with friction, the switching "
+            "pair: steps, us (x without) | Rodas5P wherever a corner pushes: steps, us (x "
+            "without) |", "|---:|---:|---:|---:|---:|"]
+    for r in found["stick"]["rows"]:
+        rows.append(f"| {r['mu']:g} | {r['rtol']:g} | {r['frictionless_steps']:.0f}, "
+                    f"{r['frictionless_us']:.0f} | {r['switching_steps']:.0f}, "
+                    f"{r['switching_us']:.0f} ({_x(r['switching_ratio'])} x) | "
+                    f"{r['implicit_steps']:.0f}, {r['implicit_us']:.0f} "
+                    f"({_x(r['implicit_ratio'])} x) |")
+    return "\n".join(rows)
+
+
+TABLES = {"friction-cost": ("cost", cost_table), "friction-stick": ("stick", stick_table),
           "friction-sensitivity": ("sensitivity", sensitivity_table),
           "friction-slip": ("slip", slip_table), "friction-maps": ("maps", maps_table),
           "friction-curves": ("curves", curves_table),
@@ -510,7 +593,7 @@ def render(found: dict) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    for part in ("cost", "sensitivity", "slip", "maps", "curves", "crossings", "all"):
+    for part in ("cost", "sensitivity", "stick", "slip", "maps", "curves", "crossings", "all"):
         parser.add_argument(f"--{part}", action="store_true")
     parser.add_argument("--render", action="store_true",
                         help="only write the tables of benchmarks/friction.json into "
@@ -524,12 +607,12 @@ def main() -> None:
     if args.render:
         render(found)
         return
-    parts = [p for p in ("cost", "sensitivity", "slip", "maps", "curves", "crossings")
+    parts = [p for p in ("cost", "sensitivity", "stick", "slip", "maps", "curves", "crossings")
              if getattr(args, p) or args.all]
     for part in parts:
         start = time.perf_counter()
-        if part == "cost":
-            result = cost(args.quick, args.rounds)
+        if part in ("cost", "stick"):  # timed: no stores
+            result = globals()[part](args.quick, args.rounds)
         else:
             result = globals()[part](args.out, args.quick)
         print(f"{part}: {time.perf_counter() - start:.0f} s", flush=True)
