@@ -40,7 +40,7 @@ from . import paper
 from .interface import CORNERS, corner_offset
 from .paper import corner_force as paper_force
 from .paper import corner_force_gradient as paper_force_gradient
-from .paper import damping_split, solve_damped_velocity
+from .paper import corner_push, damping_split, solve_damped_velocity
 
 FRICTION = True
 BETA = 0.4  # a step sliding towards a stick covers at most this fraction of the time to it
@@ -150,7 +150,7 @@ def stiffness(p, mode, state, c, s):
         for i in range(CORNERS):
             if mode & (1 << i):
                 dx, dy = corner_offset(p, i, c, s)
-                normal = -p.k * (y + dy) - p.c * (vy + vphi * dx)
+                normal = corner_push(p, y, dx, dy, vy, vphi)
                 if normal > 0.0:
                     w = vx - vphi * dy
                     q = 1.0 / math.sqrt(w * w + vs2)
@@ -178,7 +178,7 @@ def step_limit(p, mode, state, k1, c, s, h):
     for i in range(CORNERS):
         if mode & (1 << i):
             dx, dy = corner_offset(p, i, c, s)
-            normal = -p.k * (y + dy) - p.c * (vy + vphi * dx)
+            normal = corner_push(p, y, dx, dy, vy, vphi)
             if normal <= 0.0:
                 continue
             w = vx - vphi * dy
@@ -205,7 +205,7 @@ def sliding(p, mode, state, c, s):
     for i in range(CORNERS):
         if mode & (1 << i):
             dx, dy = corner_offset(p, i, c, s)
-            normal = -p.k * (y + dy) - p.c * (vy + vphi * dx)
+            normal = corner_push(p, y, dx, dy, vy, vphi)
             if normal > 0.0:
                 w = vx - vphi * dy
                 power += friction_force(p, normal, w) * w
@@ -226,8 +226,7 @@ def verlet_half_kick(p, h2, state):
     for i in range(CORNERS):
         dx, dy = corner_offset(p, i, c, s)
         if y + dy < 0.0:
-            tangential = friction_force(p, -p.k * (y + dy) - p.c * (vy + vphi * dx),
-                                        vx - vphi * dy)
+            tangential = friction_force(p, corner_push(p, y, dx, dy, vy, vphi), vx - vphi * dy)
             fx += tangential
             moment -= dy * tangential
     ay0, aphi0, n, sx, sy, srr = damping_split(p, y, state[2])

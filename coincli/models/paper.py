@@ -99,11 +99,18 @@ def stick_rate(p) -> float:
 
 # -- forces -------------------------------------------------------------------------------------
 @kernel(inline=True)
+def corner_push(p, y, dx, dy, vy, vphi):
+    """-k y_i - c v_yi: the vertical force of the spring and damper on a corner in contact at
+    offset (dx, dy) (eq. 2), of either sign (a law whose corners never pull takes max(0, it))."""
+    return -p.k * (y + dy) - p.c * (vy + vphi * dx)
+
+
+@kernel(inline=True)
 def corner_force(p, y, dx, dy, vx, vy, vphi):
     """Contact force (F_x, F_y) on a corner in contact at offset (dx, dy) (eqs. 1-2): the
     Winkler spring on its height y + dy and the damper on its velocity (vx - vphi dy,
     vy + vphi dx)."""
-    return -p.c * (vx - vphi * dy), -p.k * (y + dy) - p.c * (vy + vphi * dx)
+    return -p.c * (vx - vphi * dy), corner_push(p, y, dx, dy, vy, vphi)
 
 
 @kernel(inline=True)
@@ -187,7 +194,7 @@ def sliding(p, mode, state, c, s):
     for i in range(CORNERS):
         if mode & (1 << i):
             dx, dy = corner_offset(p, i, c, s)
-            normal = -p.k * (y + dy) - p.c * (vy + vphi * dx)
+            normal = corner_push(p, y, dx, dy, vy, vphi)
             if normal > 0.0:
                 load += normal * abs(vx - vphi * dy)
     return 0.0, load
@@ -348,7 +355,7 @@ def horizon_rule(p) -> str:
 
 __all__ = ["CAP_FACTOR", "FRICTION", "PaperParams", "accelerations_auto", "constants",
            "contact_accelerations", "contact_forces", "contact_jacobian", "corner_force",
-           "corner_force_gradient", "damping_split", "decision_time", "elastic_energy",
-           "energies", "energy_with_heights", "horizon_rule", "params", "run_horizon",
-           "sliding", "solve_damped_velocity", "step_limit", "stick_rate", "stiffest_frequency",
-           "stiffness", "total_energy", "verlet_half_kick"]
+           "corner_force_gradient", "corner_push", "damping_split", "decision_time",
+           "elastic_energy", "energies", "energy_with_heights", "horizon_rule", "params",
+           "run_horizon", "sliding", "solve_damped_velocity", "step_limit", "stick_rate",
+           "stiffest_frequency", "stiffness", "total_energy", "verlet_half_kick"]
