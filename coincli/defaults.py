@@ -45,6 +45,20 @@ DEFAULT_MAX_SAMPLES = 1 << 24
 PARAMETER_UNITS = {"thickness": "m", "diameter": "m", "k": "N/m", "c": "N s/m", "mass": "kg",
                    "inertia": "kg m^2", "g": "m/s^2", "mu": "1", "slip_velocity": "m/s"}
 
+
+def display_unit(name: str) -> str:
+    """The unit a reader sees beside a parameter's values: its PARAMETER_UNITS entry, but none
+    for a dimensionless one (the "1" that stores and JSON keep, as CF conventions write it)."""
+    unit = PARAMETER_UNITS[name]
+    return "" if unit == "1" else unit
+
+
+def parameter_label(name: str) -> str:
+    """A parameter as an axis or a table column names it: ``thickness (m)``, or ``mu``."""
+    unit = display_unit(name)
+    return f"{name} ({unit})" if unit else name
+
 __all__ = ["AXIS_INFO", "DEFAULT_BATCH", "DEFAULT_CHUNK", "DEFAULT_FPS", "DEFAULT_LOG_EVERY",
            "DEFAULT_MAX_SAMPLES", "DEFAULT_PRECISION", "DEFAULT_PRESET", "DEFAULT_RANGES",
-           "DEFAULT_RES", "DEFAULT_SECONDS", "IC_NAMES", "MAX_SECONDS", "PARAMETER_UNITS"]
+           "DEFAULT_RES", "DEFAULT_SECONDS", "IC_NAMES", "MAX_SECONDS", "PARAMETER_UNITS",
+           "display_unit", "parameter_label"]

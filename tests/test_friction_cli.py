@@ -158,6 +158,12 @@ def test_a_continuation_over_mu_and_its_store(tmp_path):
                    "the scene has no friction (--mu = 0)")
     text = run("fractions", "--samples", "128", "--batch", "128", "--over", "mu=0,0.3", "-q")
     assert "(with friction: event_rodas" in text.stdout, text.stdout
+    # a dimensionless parameter is named without a unit ("1" only in the JSON, as CF writes it)
+    header = next(line for line in text.stdout.splitlines() if "samples" in line and "P" in line)
+    assert header.split()[0] == "mu" and "(1)" not in text.stdout, text.stdout
+    over = coincli.fractions_over(coincli.load_preset("paper"), over={"mu": [0.0, 0.3]},
+                                  samples=128, batch=128, store=store)  # done: read back
+    assert repr(over).startswith("FractionsOver(mu, 2 values"), repr(over)
 
 
 # -- stores --------------------------------------------------------------------------------------

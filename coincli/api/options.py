@@ -28,6 +28,7 @@ from ..defaults import (  # noqa: F401 - the defaults a front end shows
     IC_NAMES,
     MAX_SECONDS,
     PARAMETER_UNITS,
+    parameter_label,
 )
 from ..params import ParameterError, parse_number, parse_whole, shown, validate  # noqa: F401
 from ..presets import available as available_presets  # noqa: F401 - every shipped Preset
@@ -134,6 +135,6 @@ __getattr__ = lazy_names(globals(), _LAZY)
 __all__ = ["DEFAULT_BATCH", "DEFAULT_CHUNK", "DEFAULT_FPS", "DEFAULT_LOG_EVERY",
            "DEFAULT_MAX_SAMPLES", "DEFAULT_PRECISION", "DEFAULT_PRESET", "DEFAULT_RANGES",
            "DEFAULT_RES", "DEFAULT_SECONDS", "IC_NAMES", "MAX_SECONDS", "PARAMETER_UNITS",
-           "ParameterError", "available_presets", "parse_eps", "parse_number",
+           "ParameterError", "available_presets", "parameter_label", "parse_eps", "parse_number",
            "parse_quantity", "parse_whole", "presets_dir", "read_preset", "shown", "validate",
            *_LAZY]

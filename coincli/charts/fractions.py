@@ -9,8 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..defaults import parameter_label
 from ..files import check_figure_path, save_figure
-from ..montecarlo import PARAMETER_UNITS, pender_uhrin
+from ..montecarlo import pender_uhrin
 from ..montecarlo.over import Continuation
 from .accuracy import PANELS_HINT, figure_axes
 
@@ -49,7 +50,7 @@ def plot_over(result: Continuation, out=None, *, title: str | None = None, dpi: 
     for name, one in zip(panels, axes, strict=True):
         draw[name](one, result, x)
         if one is axes[-1] or not own:  # stacked in a new figure, the bottom one says x
-            one.set_xlabel(f"{result.parameter} ({PARAMETER_UNITS[result.parameter]})")
+            one.set_xlabel(parameter_label(result.parameter))
     samples = sorted({r.samples for r in result.results})
     count = f"{samples[0]:,}" if len(samples) == 1 else f"{samples[0]:,}-{samples[-1]:,}"
     if own or title:
@@ -191,7 +192,7 @@ def plot_grid(result: Continuation, out=None, *, level: float = 1 / 3,
             _log_scale(one, "y", y)
         if one is axes[0] or not own:
             second = result.parameters[1]
-            one.set_ylabel(f"{second} ({PARAMETER_UNITS[second]})")
+            one.set_ylabel(parameter_label(second))
     if own or title:
         samples = sorted({r.samples for r in result.results})
         count = f"{samples[0]:,}" if len(samples) == 1 else f"{samples[0]:,}-{samples[-1]:,}"
@@ -213,7 +214,7 @@ def _across(result: Continuation) -> tuple[np.ndarray, str, bool]:
     if other is not None and len({c[other] for c in coins}) == 1:
         ratio = np.array([c["thickness"] / c["diameter"] for c in coins[::len(result.axes[1])]])
         return ratio, f"t / d ({name} across)", True
-    return x, f"{name} ({PARAMETER_UNITS[name]})", False
+    return x, parameter_label(name), False
 
 
 def _logarithmic(centres: np.ndarray, *, decades: bool) -> bool:

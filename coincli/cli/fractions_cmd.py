@@ -17,7 +17,7 @@ from ..api.options import (
     DEFAULT_MAX_SAMPLES,
     DEFAULT_PRECISION,
     MAX_SECONDS,
-    PARAMETER_UNITS,
+    parameter_label,
 )
 from . import interruptions, recording
 from .app import app
@@ -393,7 +393,7 @@ def _print_over(plan, res) -> None:
     # at 80 columns: P(standing) named once, in the title, and why each value stopped said
     # under the table, not in a column
     table = Table(show_edge=False, pad_edge=False)
-    cols = [(f"{name} ({PARAMETER_UNITS[name]})", "right") for name in res.parameters]
+    cols = [(parameter_label(name), "right") for name in res.parameters]
     shaped = bool({"thickness", "diameter"} & set(res.parameters))
     if shaped:
         cols.append(("t/d", "right"))

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..defaults import parameter_label
 from ..params import ParameterError
 from .continuation import PARAMETER_UNITS
 from .results import BASES, Fractions, level_crossing, percent_text
@@ -53,18 +54,17 @@ class Continuation:
 
     def __repr__(self) -> str:
         if self.parameter is None:
-            size = " x ".join(f"{len(v)} {name} ({PARAMETER_UNITS[name]})"
+            size = " x ".join(f"{len(v)} {parameter_label(name)}"
                               for name, v in zip(self.parameters, self.axes, strict=True))
             p = self.standing[..., 0]
             return (f"{type(self).__name__}({size}, P(standing) from {100 * np.nanmin(p):.3g} % to "
                     f"{100 * np.nanmax(p):.3g} %)")
-        unit = PARAMETER_UNITS[self.parameter]
         rows = "; ".join(f"{v:g}: {percent_text(r.standing)}" for v, r in
                          zip(self.values, self.results, strict=True))
         if len(rows) > 300:
             rows = rows[:300].rsplit(";", 1)[0] + "; ..."
-        return (f"{type(self).__name__}({self.parameter} ({unit}), {len(self.values)} values, "
-                f"P(standing) {rows})")
+        return (f"{type(self).__name__}({parameter_label(self.parameter)}, "
+                f"{len(self.values)} values, P(standing) {rows})")
 
     def to_dict(self) -> dict:
         out = {"parameters": list(self.parameters),

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from ..defaults import PARAMETER_UNITS
+from ..defaults import display_unit
 from .basin_view import INFO
 from .stream import Destination, InProcessRecording
 
@@ -110,7 +110,7 @@ class FractionsRecorder(InProcessRecording):
         self.points: dict[int, dict] = {}  # a grid's points sent: {basis: (P, low, high)}
         if plan.parameter is not None:
             self.timeline, self.power = parameter_timeline(
-                plan.parameter, PARAMETER_UNITS[plan.parameter], plan.values)
+                plan.parameter, display_unit(plan.parameter), plan.values)
 
     def __enter__(self):
         import rerun as rr
@@ -153,8 +153,9 @@ class FractionsRecorder(InProcessRecording):
                       f"{100 * MAP_TOP:g} % (yellow) and above; white dots: the points whose "
                       "95 % interval holds 1/3 (the band of the line P = 1/3); hover a dot "
                       "for its values.", "",
-                      *(f"- {name}: {', '.join(f'{v:g}' for v in values)} "
-                        f"{PARAMETER_UNITS[name]}" for name, values
+                      *(f"- {name}: {', '.join(f'{v:g}' for v in values)}"
+                        f"{' ' + display_unit(name) if display_unit(name) else ''}"
+                        for name, values
                         in zip(plan.parameters, plan.axes, strict=True))]
         elif plan.parameter is not None:
             lines.append(f"Over {plan.parameter} ({len(plan.values)} values): timeline "
