@@ -142,6 +142,17 @@ def test_the_apis_calls_take_mu(base):
         coincli.fractions(base, mu=-1, samples=64)
 
 
+def test_stability_shock_says_its_friction():
+    """The minimal shocks depend on mu (a standing coin's base grips: vx 1.20 -> 1.12 times the
+    static kick at mu 0.3), so their table says the friction it ran with."""
+    result = run("stability", "--shock", "--mu", "0.3")
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.stdout.split())
+    assert ("smallest kick to another well, with friction (mu = 0.3 at the corners, slip "
+            "velocity 0.001 m/s)") in text, result.stdout
+    assert "0.034725 m/s │ 0.031039 m/s │ 1.119" in text, result.stdout
+
+
 def test_a_continuation_over_mu_and_its_store(tmp_path):
     store = tmp_path / "over.zarr"
     args = ("fractions", "--samples", "128", "--batch", "128", "--over", "mu=0,0.3",

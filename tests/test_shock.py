@@ -253,6 +253,7 @@ def test_cli_table_fits_80_columns():
     for phrase in ("14.336 rad/s", "6.5477 rad/s", "2.189", "3.3476 m/s", "none (1)",
                    "mirror symmetry"):
         assert phrase in out, phrase
+    assert "friction" not in out  # the paper's law: no friction to name
     # issue 48: the documentation site, not a path under docs/ that an installed package lacks
     from coincli.version import documentation
 

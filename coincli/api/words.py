@@ -67,6 +67,9 @@ _LAZY = {
     # how long a run may last (s: t_end, or the throw's cap) and that rule in words
     "scene_horizon": (_models, "scene_horizon"),
     "horizon_text": (_models, "horizon_text"),
+    # a scene's friction in words ('mu = 0.3 at the corners, slip velocity 0.001 m/s'; None
+    # without)
+    "friction_text": (_models, "friction_text"),
     # an OSError in one line ('cannot write out.zarr: read-only file system'); any error in
     # one line; the errnos of a disk that refuses a write; the OSError of an output found
     # unwritable before any work (its str() is the whole line)

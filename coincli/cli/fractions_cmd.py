@@ -336,12 +336,11 @@ def _print_result(plan, r, every_n: bool = False) -> None:
                                      f"{interval(a['standing'])}) of {a['labelled']:,} "
                                      "labelled samples, uncertain ones included"))
     from ..api.words import describe_method as describe
-    from ..api.words import horizon_text
+    from ..api.words import friction_text, horizon_text
 
     summary.append(("method", describe(scene)))
-    if scene.foundation.mu > 0:
-        summary.append(("friction", f"mu = {scene.foundation.mu:g} at the corners, slip "
-                                    f"velocity {scene.foundation.slip_velocity:g} m/s"))
+    if friction_text(scene) is not None:
+        summary.append(("friction", friction_text(scene)))
     summary.append(("horizon", horizon_text(scene)))
     cost = r.cost
     if cost.get("computed"):

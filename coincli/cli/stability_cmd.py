@@ -117,7 +117,7 @@ def stability_command(
         say(console, f"[yellow]k is below k_min = {report.k_min:.1f} N/m: a coin at phi_cr "
                      "sinks onto a second corner (eq. 10 does not hold).[/]")
     if shocks is not None:
-        print_shocks(shocks)
+        print_shocks(shocks, scene)
 
 
 STATES = ("standing", "lying")
@@ -125,12 +125,14 @@ SIGNS = {True: "agree", False: "differ", None: "one"}  # do the two signs' value
 KICKS = ("vphi", "vx", "vy")  # coincli.shock.Kick, named here without loading the kernels
 
 
-def print_shocks(shocks: dict) -> None:
-    """The minimal shocks as a table, with what each value means below it."""
+def print_shocks(shocks: dict, scene) -> None:
+    """The minimal shocks of ``scene`` as a table, with what each value means below it."""
     from ..api.words import MJ as mj
-    from ..api.words import documentation
+    from ..api.words import documentation, friction_text
 
-    table = Table(title="Minimal shocks: the smallest kick to another well",
+    friction = friction_text(scene)
+    table = Table(title="Minimal shocks: the smallest kick to another well"
+                        + (f", with friction ({friction})" if friction else ""),
                   title_justify="left")
     for name in ("state", "kick"):
         table.add_column(name)

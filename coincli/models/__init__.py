@@ -117,6 +117,16 @@ def horizon_text(scene) -> str:
     return model.horizon_rule(model.params(scene))
 
 
+def friction_text(scene) -> str | None:
+    """The scene's friction as a user reads it (``mu = 0.3 at the corners, slip velocity 0.001
+    m/s``), or None under the paper's frictionless law."""
+    foundation = scene.foundation
+    if not foundation.mu > 0:
+        return None
+    return (f"mu = {foundation.mu:g} at the corners, slip velocity "
+            f"{foundation.slip_velocity:g} m/s")
+
+
 def stiffest_frequency(scene) -> tuple[float, float]:
     """(omega, zeta) of the stiffest contact mode of ``scene`` under its model."""
     model = model_of(scene)
@@ -130,5 +140,5 @@ def stick_rate(scene) -> float:
     return model.stick_rate(model.params(scene))
 
 
-__all__ = ["FRICTION_MODEL", "MODELS", "Model", "PAPER", "horizon_text", "model_of", "model_params",
-           "scene_horizon", "stick_rate", "stiffest_frequency"]
+__all__ = ["FRICTION_MODEL", "MODELS", "Model", "PAPER", "friction_text", "horizon_text",
+           "model_of", "model_params", "scene_horizon", "stick_rate", "stiffest_frequency"]
