@@ -145,7 +145,7 @@ def test_the_apis_calls_take_mu(base):
 def test_stability_shock_says_its_friction():
     """The minimal shocks depend on mu (a standing coin's base grips: vx 1.20 -> 1.12 times the
     static kick at mu 0.3), so their table says the friction it ran with."""
-    result = run("stability", "--shock", "--mu", "0.3")
+    result = run("stability", "--shock", "--mu", "0.3", env={"COLUMNS": "80"})
     assert result.exit_code == 0, result.output
     text = " ".join(result.stdout.split())
     assert ("smallest kick to another well, with friction (mu = 0.3 at the corners, slip "
