@@ -339,8 +339,9 @@ def _print_result(plan, r, every_n: bool = False) -> None:
     from ..api.words import friction_text, horizon_text
 
     summary.append(("method", describe(scene)))
-    if friction_text(scene) is not None:
-        summary.append(("friction", friction_text(scene)))
+    friction = friction_text(scene)
+    if friction is not None:
+        summary.append(("friction", friction))
     summary.append(("horizon", horizon_text(scene)))
     cost = r.cost
     if cost.get("computed"):

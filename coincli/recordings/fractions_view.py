@@ -153,9 +153,8 @@ class FractionsRecorder(InProcessRecording):
                       f"{100 * MAP_TOP:g} % (yellow) and above; white dots: the points whose "
                       "95 % interval holds 1/3 (the band of the line P = 1/3); hover a dot "
                       "for its values.", "",
-                      *(f"- {name}: {', '.join(f'{v:g}' for v in values)}"
-                        f"{' ' + display_unit(name) if display_unit(name) else ''}"
-                        for name, values
+                      *(f"- {name}: {', '.join(f'{v:g}' for v in values)} "
+                        f"{display_unit(name)}".rstrip() for name, values
                         in zip(plan.parameters, plan.axes, strict=True))]
         elif plan.parameter is not None:
             lines.append(f"Over {plan.parameter} ({len(plan.values)} values): timeline "
