@@ -23,7 +23,7 @@ Dormand-Prince's, is handed to DOP853's controller as err^(8/5) (the same test e
 step factor err^(-1/8) of DOP853's controller is then err^(-1/5)).
 
 Measured on the paper's coin with friction (docs/friction.md): a verified throw costs 1.9 (mu
-0.1) to 16 (mu 1, v_s 1e-4) times less than with the explicit pairs alone, its certain labels as
+0.1) to 14 (mu 1, v_s 1e-4) times less than with the explicit pairs alone, its certain labels as
 often right as without friction.
 """
 
