@@ -208,6 +208,8 @@ def test_a_friction_store_renders_counts_exports_and_replays_with_its_friction(t
                        store=store, threads=1)
     stats = run("basin", "stats", store)
     assert stats.exit_code == 0 and "friction mu = 0.3" in stats.stdout
+    # the method the user chose, and the switching pair its ladder ran
+    assert "event (run as event_rodas)" in " ".join(stats.stdout.split()), stats.stdout
     assert run("basin", "render", store, "-o", tmp_path / "m.png").exit_code == 0
     assert run("basin", "export", store, tmp_path / "m.nc").exit_code == 0
     assert coincli.basin_attrs(tmp_path / "m.nc")["parameters"]["foundation"]["mu"] == 0.3

@@ -67,10 +67,15 @@ def stats_command(
                     "tiles": stats["tiles_total"], **stats})
         return
     ax0, ax1 = attrs["sweep"]["axes"]
+    method = attrs["method"]
+    # a friction scene's ladder runs the method's switching pair (event as event_rodas)
+    rungs = method.get("verification", {}).get("rungs") or [{"method": method["name"]}]
+    ran = method["name"] + ("" if rungs[0]["method"] == method["name"]
+                            else f" (run as {rungs[0]['method']})")
     console.print(f"[bold]coin basin stats[/] {path}", highlight=False)
     console.print(f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
                   f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells, "
-                  f"{attrs['method']['name']}"
+                  f"{ran}"
                   + (f", friction mu = {attrs['parameters']['foundation']['mu']:g}"
                      if attrs["parameters"]["foundation"].get("mu") else ""), highlight=False)
     if attrs["method"].get("horizon"):
