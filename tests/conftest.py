@@ -107,6 +107,17 @@ def run_kernel(scene, state, *, method: Method | str, t_end: float, dt: float = 
     return KernelRun(result, final, samples[:result.n_samples], events[:result.n_events])
 
 
+def local_cluster(n_workers: int):
+    """An in-process Dask cluster for a test: no dashboard, and the scheduler's HTTP server on a
+    free port rather than 8787, which the other test process's cluster may hold (distributed
+    warns then), as coin's own local clusters do (coincli.engines.executors.open_dask)."""
+    from distributed import LocalCluster
+
+    return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=False,
+                        dashboard_address=None,
+                        scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
+
+
 def default_signals():
     """Popen's preexec_fn for a child that must take Ctrl-C and a hang-up as a `coin` started at
     a terminal does: a signal ignored by the test runner is ignored by every child it starts,

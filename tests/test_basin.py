@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import default_signals, store_files
+from conftest import default_signals, local_cluster, store_files
 from typer.testing import CliRunner
 
 import coincli
@@ -263,8 +263,6 @@ def test_ctrl_c_stops_cleanly_and_resumes(tmp_path):
 
 # -- distributed ---------------------------------------------------------------------------------
 def test_dask_runs_give_the_same_store(tmp_path):
-    from distributed import LocalCluster
-
     args = ["--vy", "0.05:2", "--res", "16", "--chunk", "8", "-q"]
     local = tmp_path / "local.zarr"
     coin_ok(str(local), *args)
@@ -272,8 +270,7 @@ def test_dask_runs_give_the_same_store(tmp_path):
     coin_ok(str(workers), *args, "--workers", "2")  # a 2-process LocalCluster
     assert_same_store(local, workers)
     assert BasinStore.open(workers).read().runs[0]["mode"] == "dask"
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                      dashboard_address=None) as cluster:
+    with local_cluster(2) as cluster:
         remote = tmp_path / "remote.zarr"
         coin_ok(str(remote), *args, "--scheduler", cluster.scheduler_address)
     assert_same_store(local, remote)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import store_files
+from conftest import local_cluster, store_files
 from typer.testing import CliRunner
 
 import coincli
@@ -255,12 +255,9 @@ def test_a_read_only_store_is_named_in_one_line(tmp_path, monkeypatch):
 
 
 def test_a_precision_run_on_dask_makes_the_store_threads_make(tmp_path):
-    from distributed import LocalCluster
-
     kw = dict(precision=0.004, of="standing", **RUN)
     local = coincli.fractions(PAPER, store=tmp_path / "threads.zarr", **kw)
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                      dashboard_address=None) as cluster:
+    with local_cluster(2) as cluster:
         remote = coincli.fractions(PAPER, store=tmp_path / "dask.zarr",
                                    scheduler=cluster.scheduler_address, **kw)
     assert remote.standing == local.standing and remote.samples == local.samples

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import default_signals
+from conftest import default_signals, local_cluster
 from test_live import check_map, rows
 from test_signals import free_port
 from test_store import (
@@ -442,13 +442,34 @@ def test_a_cluster_without_a_worker_is_said_and_ends_at_the_time_out(tmp_path):
     assert len(err) == 2 and 7 < took < 30, (err, took)
 
 
-def test_a_worker_that_joins_ends_the_wait(tmp_path, monkeypatch, caplog):
-    from distributed import LocalCluster
+def test_a_local_cluster_beside_another_says_nothing_of_ports(tmp_path):
+    """Port 8787, where distributed puts a scheduler's HTTP server by default, held by another
+    cluster (a second coin run, a notebook's): coin's local cluster takes a free port quietly,
+    not with distributed's four-line warning on the terminal."""
+    import socket
+    import warnings
 
+    holder = socket.socket()
+    try:
+        holder.bind(("", 8787))
+        holder.listen()
+    except OSError:
+        pass  # held already, as the test wants
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            client, cluster = executors.open_dask(None, 1)
+            client.close()
+            cluster.close()
+    finally:
+        holder.close()
+    assert not [w for w in caught if "8787" in str(w.message)], [str(w.message) for w in caught]
+
+
+def test_a_worker_that_joins_ends_the_wait(tmp_path, monkeypatch, caplog):
     monkeypatch.setattr(executors, "NO_WORKER_NOTICE", 0.5)
     plan = coincli.plan_sweep(coincli.load_preset("paper"), res=8, chunk=4)
-    with LocalCluster(n_workers=0, threads_per_worker=1, processes=False,
-                      dashboard_address=None) as cluster:
+    with local_cluster(0) as cluster:
         def join_later():
             while "waiting for a Dask worker" not in caplog.text:
                 time.sleep(0.05)

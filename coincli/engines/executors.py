@@ -483,8 +483,12 @@ def open_dask(scheduler: str | None, workers: int | None):
     except ValueError:  # not the main thread
         previous = None
     try:
+        # no dashboard; and the scheduler's HTTP server (health, metrics), which it starts
+        # anyway, on a free port of this host rather than on 8787, which another cluster (a
+        # second coin run, a notebook's) may hold: distributed warns on the terminal there
         cluster = LocalCluster(n_workers=workers or usable_cores(), threads_per_worker=1,
-                               processes=True, dashboard_address=None)
+                               processes=True, dashboard_address=None,
+                               scheduler_kwargs={"dashboard_address": "127.0.0.1:0"})
     finally:
         if previous is not None:
             signal.signal(signal.SIGINT, previous)
