@@ -621,8 +621,10 @@ def main() -> None:
              if getattr(args, p) or args.all]
     for part in parts:
         start = time.perf_counter()
-        if part in ("cost", "stick"):  # timed: no stores
-            result = globals()[part](args.quick, args.rounds)
+        if part == "cost":  # timed, no stores
+            result = cost(args.quick, args.rounds)
+        elif part == "stick":
+            result = stick(args.quick, args.rounds)
         else:
             result = globals()[part](args.out, args.quick)
         print(f"{part}: {time.perf_counter() - start:.0f} s", flush=True)

@@ -257,7 +257,7 @@ SUGGESTED_MU = 0.3  # the coefficient a frictionless throw's line names (a coin 
 FRICTION_MATTERS = 0.01  # friction of SUGGESTED_MU taking this share of the energy is worth a try
 
 
-def friction_text(tr) -> str | None:
+def friction_work_text(tr) -> str | None:
     """Whether friction did any work on the throw: with friction, the energy it took and its
     share of the initial energy; without, what a coefficient mu would take (mu times the
     sliding work, to first order), and whether that is worth a try. None: not integrated."""
@@ -309,7 +309,7 @@ def print_summary(tr) -> None:
         lost = 0.0
     rows.append(("energy", f"{tr.energy_initial * 1e3:.5g} mJ -> {tr.energy_final * 1e3:.5g} "
                            f"mJ ({lost * 1e3:.5g} mJ dissipated)"))
-    friction = friction_text(tr)
+    friction = friction_work_text(tr)
     if friction:
         rows.append(("friction", friction))
     horizon = scene_horizon(tr.scene)

@@ -161,7 +161,7 @@ def differences(stored: dict, wanted: dict) -> list[str]:
         if said.skips(key) or (parameters_differ and key == "method.horizon"):
             continue
         if a.get(key, "absent") != b.get(key, "absent"):
-            name = key.split(".", 1)[1] if key.startswith(("parameters.", "sampling.")) else key
+            name = key.split(".", 1)[1] if key.startswith(ASKED) else key
             out.append(f"{name} = {show_value(a.get(key, 'absent'))} in the store, "
                        f"{show_value(b.get(key, 'absent'))} here{said.after(key)}")
     return out

@@ -69,9 +69,9 @@ def stats_command(
     ax0, ax1 = attrs["sweep"]["axes"]
     method = attrs["method"]
     # a friction scene's ladder runs the method's switching pair (event as event_rodas)
-    rungs = method.get("verification", {}).get("rungs") or [{"method": method["name"]}]
-    ran = method["name"] + ("" if rungs[0]["method"] == method["name"]
-                            else f" (run as {rungs[0]['method']})")
+    rungs = method.get("verification", {}).get("rungs")
+    first = rungs[0]["method"] if rungs else method["name"]
+    ran = method["name"] if first == method["name"] else f"{method['name']} (run as {first})"
     console.print(f"[bold]coin basin stats[/] {path}", highlight=False)
     console.print(f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
                   f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells, "
