@@ -13,6 +13,7 @@ from .text import say
 def presets_command(json_out: JsonOpt = False) -> None:
     """List the presets in presets/ with their parameter values."""
     from ..api.words import describe_method as describe
+    from ..api.words import friction_text
 
     with user_errors():
         found = available_presets()
@@ -32,18 +33,11 @@ def presets_command(json_out: JsonOpt = False) -> None:
                       f"{s.coin.mass * 1e3:.5g}", f"{s.coin.inertia:.4g}",
                       f"{s.foundation.k:g}", f"{s.foundation.c:g}")
     console.print(table)
-    grippy = [p for p in found if p.scene.foundation.mu > 0]
-    if grippy:  # the table is full at 80 columns: friction in a line of its own
-        say(console, "With friction at the corners (the others: none, the paper's model): "
-                     + "; ".join(f"{p.name}, mu = {p.scene.foundation.mu:g} and slip velocity "
-                                 f"{p.scene.foundation.slip_velocity:g} m/s" for p in grippy)
-                     + ".")
     for p in found:
         integ = p.scene.integration
         run_to = ("stop when decided" if integ.stop_on_settle else "run to the end") + (
             f", t_end = {integ.t_end:g} s" if p.scene.fixed_horizon else ", capped (no t_end)")
-        grip = (f", friction mu = {p.scene.foundation.mu:g} (slip velocity "
-                f"{p.scene.foundation.slip_velocity:g} m/s)" if p.scene.foundation.mu > 0
-                else "")
+        friction = friction_text(p.scene)  # the table has no room for it at 80 columns
+        grip = f", friction {friction}" if friction else ""
         say(console, f"[bold]{p.name}[/]: {describe(p.scene)}, {run_to}{grip}. "
                      f"{p.description}")
