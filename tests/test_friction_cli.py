@@ -211,6 +211,12 @@ def test_a_friction_store_renders_counts_exports_and_replays_with_its_friction(t
     # the method the user chose, and the switching pair its ladder ran
     assert "event (run as event_rodas)" in " ".join(stats.stdout.split()), stats.stdout
     assert run("basin", "render", store, "-o", tmp_path / "m.png").exit_code == 0
+    # the map says so too, its line of settings broken where it would be wider than the figure
+    fig = coincli.render_basin(ds)
+    subtitle = fig.axes[0].title
+    assert "event (run as event_rodas)" in subtitle.get_text(), subtitle.get_text()
+    assert ";\n" in subtitle.get_text()
+    assert subtitle.get_window_extent().width <= fig.bbox.width
     assert run("basin", "export", store, tmp_path / "m.nc").exit_code == 0
     assert coincli.basin_attrs(tmp_path / "m.nc")["parameters"]["foundation"]["mu"] == 0.3
     assert run("basin", "verify", store).exit_code == 0

@@ -50,6 +50,12 @@ def _boundary():
     return boundary
 
 
+def _basin_schema():
+    from ..stores import basin_schema
+
+    return basin_schema
+
+
 def _jsonable():
     from .. import jsonable
 
@@ -70,6 +76,9 @@ _LAZY = {
     # a scene's friction in words ('mu = 0.3 at the corners, slip velocity 0.001 m/s'; None
     # without)
     "friction_text": (_models, "friction_text"),
+    # a basin store's method attributes in words, with the pair its ladder ran on where that
+    # is another ('event (run as event_rodas)')
+    "store_method_text": (_basin_schema, "method_text"),
     # an OSError in one line ('cannot write out.zarr: read-only file system'); any error in
     # one line; the errnos of a disk that refuses a write; the OSError of an output found
     # unwritable before any work (its str() is the whole line)

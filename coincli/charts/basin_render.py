@@ -24,6 +24,7 @@ from ..grid import AXIS_INFO
 from ..integrators import NO_LABEL
 from ..params import ParameterError, scene_from_dict
 from ..quantities import parse_quantity
+from ..stores.basin_schema import method_text
 from ..stores.dataset import Basin
 from .accuracy import figure_axes
 
@@ -215,15 +216,17 @@ def render_map(basin: Basin, out: str | os.PathLike | None = None, title: str | 
                  + (")" if done < total else ""))
     params = attrs["parameters"]
     mu = params["foundation"].get("mu") or 0.0  # a store without friction records no mu
-    setting_text = (f"{_fixed_text(basin)}; k = {params['foundation']['k']:g} N/m, "
-                    f"c = {params['foundation']['c']:g} N s/m"
-                    + (f", $\\mu$ = {mu:g}" if mu else "")
-                    + f"; {method['name']} {setting}, "
-                    + (f"$t_{{end}}$ = {method['t_end']:g} s" if method["t_end"] is not None
-                       else "until decided"))
+    setting_parts = (_fixed_text(basin),
+                     f"k = {params['foundation']['k']:g} N/m, c = {params['foundation']['c']:g} "
+                     "N s/m" + (f", $\\mu$ = {mu:g}" if mu else ""),
+                     f"{method_text(method)} {setting}, "
+                     + (f"$t_{{end}}$ = {method['t_end']:g} s" if method["t_end"] is not None
+                        else "until decided"))
+    setting_text = "; ".join(setting_parts)
     if own:
         fig.suptitle(title, fontsize=11)
-        ax.set_title(setting_text, fontsize=8, color="#444444")
+        subtitle = ax.set_title(setting_text, fontsize=8, color="#444444")
+        _fit_width(subtitle, setting_parts, WIDTH_USED * fig.bbox.width)
     else:  # the figure's title is the caller's: each map says what it is over itself, its
         # settings wrapped to the map's width
         chars = max(30, int(_axes_width(ax) * 72 / (0.5 * 8)))
@@ -233,12 +236,30 @@ def render_map(basin: Basin, out: str | os.PathLike | None = None, title: str | 
     return fig
 
 
+def _fit_width(text, parts, width: float) -> None:
+    """Set ``text`` (an artist) to ``parts`` joined by '; ', in one line if it is at most
+    ``width`` display units wide, else broken after a '; ' wherever the line would be wider
+    (measured as drawn: the mathtext of the parts is narrower than its source)."""
+    lines: list[str] = []
+    current = ""
+    for part in parts:
+        candidate = f"{current}; {part}" if current else part
+        text.set_text(candidate)
+        if current and text.get_window_extent().width > width:
+            lines.append(current + ";")
+            current = part
+        else:
+            current = candidate
+    text.set_text("\n".join([*lines, current]))
+
+
 def _axes_width(ax) -> float:
     """The width of ``ax`` in inches (as placed before the layout adjusts it)."""
     return ax.get_position().width * ax.figure.get_size_inches()[0]
 
 
 LEGEND_DROP_PT = 30.0  # from the map's lower edge to the legend's top: under the axis label
+WIDTH_USED = 0.96  # of the figure's width, at most, for a map's line of settings
 MARK_SIZE = 64.0  # points^2: a circle about 3 mm wide at any resolution
 
 

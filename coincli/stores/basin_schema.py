@@ -40,6 +40,15 @@ def resumable_as(stored: dict, wanted: dict) -> dict | None:
         if method.get(key) == value and key not in (stored.get("method") or {}):
             del method[key]
     return {**wanted, "version": version, "method": method}
+def method_text(method: dict) -> str:
+    """A sweep's method attributes (``attrs["method"]``) as a user reads them: its name, and the
+    switching pair its ladder ran on where that is another (a friction scene's:
+    ``event (run as event_rodas)``)."""
+    rungs = method.get("verification", {}).get("rungs")
+    first = rungs[0]["method"] if rungs else method["name"]
+    return method["name"] if first == method["name"] else f"{method['name']} (run as {first})"
+
+
 MARK = "coin_basin"  # the root attribute that makes a group a basin store
 COPY = "sweep_attributes"  # the copy of COMPARED_ATTRS in the done array's attributes
 

@@ -48,7 +48,7 @@ def stats_command(
     from ... import api
     from ...api.basins import export_stats, open_store
     from ...api.options import check_writable
-    from ...api.words import describe_error
+    from ...api.words import describe_error, store_method_text
 
     with user_errors():
         view = open_store(path)
@@ -67,15 +67,10 @@ def stats_command(
                     "tiles": stats["tiles_total"], **stats})
         return
     ax0, ax1 = attrs["sweep"]["axes"]
-    method = attrs["method"]
-    # a friction scene's ladder runs the method's switching pair (event as event_rodas)
-    rungs = method.get("verification", {}).get("rungs")
-    first = rungs[0]["method"] if rungs else method["name"]
-    ran = method["name"] if first == method["name"] else f"{method['name']} (run as {first})"
     console.print(f"[bold]coin basin stats[/] {path}", highlight=False)
     console.print(f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
                   f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells, "
-                  f"{ran}"
+                  f"{store_method_text(attrs['method'])}"
                   + (f", friction mu = {attrs['parameters']['foundation']['mu']:g}"
                      if attrs["parameters"]["foundation"].get("mu") else ""), highlight=False)
     if attrs["method"].get("horizon"):
