@@ -40,6 +40,8 @@ def resumable_as(stored: dict, wanted: dict) -> dict | None:
         if method.get(key) == value and key not in (stored.get("method") or {}):
             del method[key]
     return {**wanted, "version": version, "method": method}
+
+
 def method_text(method: dict) -> str:
     """A sweep's method attributes (``attrs["method"]``) as a user reads them: its name, and the
     switching pair its ladder ran on where that is another (a friction scene's:
