@@ -29,6 +29,7 @@ from .integrators.common import (
     ONSET,
     SAMPLE_COLUMNS,
 )
+from .integrators.ladder import scene_ladder
 from .jit import NUMBA, PYTHON, is_built, kernels_cached
 from .labeller import Labeller
 from .models import MODELS, horizon_text, scene_horizon
@@ -195,6 +196,9 @@ class Throw:
             "sliding_work": self.sliding_work,
             "e_crit": self.e_crit,
             "method": integ.method.label,
+            # the rungs' settings, each with the method it ran (a friction scene's ladder
+            # runs the method's switching pair: event as event_rodas), as a store records them
+            "verification": scene_ladder(self.scene).to_dict(),
             "dt": integ.dt,
             "rtol": integ.rtol,
             "t_end": integ.t_end,

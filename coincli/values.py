@@ -68,6 +68,12 @@ def parse_whole(text: str) -> int:
                              "1000)") from None
 
 
+def format_seconds(seconds: float) -> str:
+    """A measured time: '0.047 s', '3.2 s', '162.2 s' (two significant digits below a second,
+    where a tenth would say a short run took 0.0 s)."""
+    return f"{seconds:.2g} s" if seconds < 1 else f"{seconds:.1f} s"
+
+
 def format_duration(seconds: float) -> str:
     """'40 s', '12 min', '3.5 h', '9.3 days', '2.1 years'."""
     if seconds < 90:
@@ -81,5 +87,6 @@ def format_duration(seconds: float) -> str:
     return f"{seconds / (365.25 * 86400):.1f} years"
 
 
-__all__ = ["ASCII_SPACE", "SHOWN_CHARS", "ParameterError", "format_duration", "parse_number",
+__all__ = ["ASCII_SPACE", "SHOWN_CHARS", "ParameterError", "format_duration", "format_seconds",
+           "parse_number",
            "parse_whole", "shown"]

@@ -83,6 +83,8 @@ def test_the_forms_of_over_make_the_same_grid():
     assert set(one.attrs["over"]) == {"parameter", "values", "keep", "note"}  # as 0.9.0
     assert one.parameter == "c" and one.values == (0.5, 2.0)
     assert list(parse_over("c=0.1, 0.5,2")[1]) == [0.1, 0.5, 2.0]
+    # a name spelled as its option is (--slip-velocity) is the parameter's
+    assert parse_over("slip-velocity=1e-3,1e-4")[0] == "slip_velocity"
     assert pilot_values((20,)) == [0, 10, 19] and pilot_values((3, 4)) == [0, 3, 6, 8, 11]
 
 

@@ -118,6 +118,20 @@ def test_a_preset_sets_friction_and_coin_presets_says_so(tmp_path, monkeypatch):
 
 # -- the API's calls ----------------------------------------------------------------------------
 
+def test_coin_methods_names_the_stick_that_bounds_a_fixed_step():
+    from coincli.models import stick_rate
+
+    scene = coincli.load_preset("paper").with_overrides(mu=0.3)
+    table = coincli.method_table(scene)
+    assert table.stick_rate == pytest.approx(stick_rate(scene)) and table.stick_rate > 1e4
+    assert coincli.method_table(coincli.load_preset("paper")).stick_rate == 0.0
+    result = run("methods", "--mu", "0.3")
+    text = " ".join(result.stdout.split())
+    assert result.exit_code == 0 and "friction's stick at rest decays at 1.604e+04 /s" in text
+    assert json.loads(run("methods", "--mu", "0.3", "--json").stdout)["stick_rate"] == \
+        pytest.approx(table.stick_rate)
+
+
 def test_the_apis_calls_take_mu(base):
     run_ = coincli.simulate(base, mu=0.3, vy=1.197, vphi=3.508)
     assert run_.scene.foundation.mu == 0.3 and run_.friction_work > 0
@@ -210,6 +224,9 @@ def test_a_friction_store_renders_counts_exports_and_replays_with_its_friction(t
     assert stats.exit_code == 0 and "friction mu = 0.3" in stats.stdout
     # the method the user chose, and the switching pair its ladder ran
     assert "event (run as event_rodas)" in " ".join(stats.stdout.split()), stats.stdout
+    # and its JSON the parameters the store holds, friction among them
+    as_json = json.loads(run("basin", "stats", store, "--json").stdout)
+    assert as_json["parameters"]["foundation"]["mu"] == 0.3
     assert run("basin", "render", store, "-o", tmp_path / "m.png").exit_code == 0
     # the map says so too, its line of settings broken where it would be wider than the figure
     fig = coincli.render_basin(ds)
@@ -260,12 +277,30 @@ def test_simulate_with_friction_says_the_energy_it_took():
     assert data["parameters"]["foundation"]["mu"] == 0.3
     assert 0 < data["friction_work"] < data["energy_dissipated"]
     assert data["method"] == "event"  # the scene's; its ladder climbs on event_rodas
+    rungs = data["verification"]["rungs"]
+    assert {r["method"] for r in rungs} == {"event_rodas"}
+    assert rungs[-1]["rtol"] == pytest.approx(1e-12)
+    frictionless = json.loads(run("simulate", *FIG2, "--no-rrd", "--json").stdout)
+    assert [r["method"] for r in frictionless["verification"]["rungs"][:2]] == [
+        "event", "event_dop853"]
     text = run("simulate", *FIG2, "--mu", "0.3", "--no-rrd").stdout
     line = " ".join(next(line for line in text.splitlines() if line.startswith("friction"))
                     .split())
     share = 100 * data["friction_work"] / data["energy_initial"]
     assert line == (f"friction took {data['friction_work'] * 1e3:.4g} mJ, {share:.3g} % of the "
                     f"throw's 2.5608 mJ (mu = 0.3, slip velocity 0.001 m/s)"), line
+
+
+def test_simulate_says_why_its_ladder_climbed_past_a_rung_of_the_same_n():
+    # a throw at mu = 0.6 whose first two rungs give n = -6 but settle 0.03 s apart: the
+    # ladder's rule wants the same moments too, so it climbs to a third rung
+    result = run("simulate", "--mu", "0.6", "--vy", "1.182258064516129", "--vphi",
+                 "3.225806451612904", "--no-rrd")
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.stdout.replace("\u00a0", " ").split())
+    assert "certain: rtol = 1e-07 and rtol = 1e-08 agree" in text, text
+    assert "rtol = 1e-07: n = -6 (settled 0.03" in text and "s apart from the rung before)" \
+        in text, text
 
 
 def test_the_work_is_the_same_recorded_or_not(base):

@@ -66,31 +66,35 @@ def stability(scene: Scene) -> StabilityReport:
 @dataclass(frozen=True)
 class MethodTable:
     """The integration methods for a scene (:func:`method_table`): its stiffest mode (rocking
-    on the two corners of a lying coin) and each method's order, kind and stable step."""
+    on the two corners of a lying coin), with friction the decay of its stick at rest, and
+    each method's order, kind and stable step."""
 
     omega: float  # rad/s, the stiffest mode's angular frequency
     zeta: float  # its damping ratio
     methods: tuple[dict, ...]  # name, order, adaptive, symplectic, stable_step (s; None for
     # an adaptive method), summary, default (the scene's own method)
+    stick_rate: float = 0.0  # 1/s, friction's stick at rest (0 without friction): a fixed
+    # step's stable step is the smaller of the rocking's and the stick's
 
     def __repr__(self) -> str:  # one line in a notebook; everything: to_dict()
         default = next((m["name"] for m in self.methods if m["default"]), None)
+        stick = f", stick rate {self.stick_rate:.4g} /s" if self.stick_rate > 0 else ""
         return (f"MethodTable(stiffest mode {self.omega:.4g} rad/s, damping ratio "
-                f"{self.zeta:.3f}; {len(self.methods)} methods, the scene's: {default})")
+                f"{self.zeta:.3f}{stick}; {len(self.methods)} methods, the scene's: {default})")
 
     def to_dict(self) -> dict:
         """What `coin methods --json` prints."""
-        return {"omega_max": self.omega, "zeta": self.zeta,
+        return {"omega_max": self.omega, "zeta": self.zeta, "stick_rate": self.stick_rate,
                 "methods": [dict(m) for m in self.methods]}
 
 
 def method_table(scene: Scene) -> MethodTable:
     """Every integration method with its properties for ``scene`` (what `coin methods` lists):
     the stable step of a fixed-step method is the largest whose error on the scene's stiffest
-    mode does not grow (``simulate`` and ``basin`` refuse a larger ``dt`` without
-    ``force``)."""
+    mode (and, with friction, on its stick at rest) does not grow (``simulate`` and ``basin``
+    refuse a larger ``dt`` without ``force``)."""
     from ..integrators import METHODS
-    from ..models import stiffest_frequency
+    from ..models import stick_rate, stiffest_frequency
 
     scene = validate(scene)
     omega, zeta = stiffest_frequency(scene)
@@ -98,7 +102,7 @@ def method_table(scene: Scene) -> MethodTable:
                   "symplectic": m.symplectic, "stable_step": m.stable_step(scene),
                   "summary": m.summary, "default": m.method == scene.integration.method}
                  for m in METHODS.values())
-    return MethodTable(omega, zeta, rows)
+    return MethodTable(omega, zeta, rows, stick_rate(scene))
 
 
 @dataclass(frozen=True)

@@ -156,9 +156,12 @@ def _plot_alpha(ax, analysis) -> None:
                               f"whole map {w.alpha:.2f}")
     grid_alpha = [b.grid_exponent.alpha if b.grid_exponent else math.nan
                   for b in analysis.bands]
-    whole_grid = w.grid_exponent.alpha if w.grid_exponent else math.nan
+    whole_alpha = w.grid_exponent.alpha if w.grid_exponent else math.nan
+    whole_grid = (f"whole map {whole_alpha:.2f}" if math.isfinite(whole_alpha)
+                  else "none: too small a map to count boxes on" if w.grid_exponent is None
+                  else "whole map none")
     ax.plot(x, grid_alpha, ls="none", marker="^", color="#7f7f7f", mfc="white",
-            label=rf"$\alpha$ by box counting on the map (Attractors.jl); whole {whole_grid:.2f}")
+            label=rf"$\alpha$ by box counting on the map (Attractors.jl); {whole_grid}")
     ax.axhline(1.0, color="grey", ls="--", lw=1)
     ax.text(x.max() + half[-1], 1.0, r"smooth boundary: $\alpha$ = 1, $D$ = 1 ",
             color="grey", fontsize=7, va="bottom", ha="right")

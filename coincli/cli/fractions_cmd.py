@@ -19,6 +19,7 @@ from ..api.options import (
     MAX_SECONDS,
     parameter_label,
 )
+from ..api.words import format_seconds
 from . import interruptions, recording
 from .app import app
 from .common import (
@@ -347,7 +348,7 @@ def _print_result(plan, r, every_n: bool = False) -> None:
     if cost.get("computed"):
         where = counted(cost["workers"], "thread") if cost["mode"] == "threads" else "Dask"
         summary.append(("cost", f"{cost['computed']:,} trajectories in "
-                                 f"{cost['wall_seconds']:.1f} s wall on {where} "
+                                 f"{format_seconds(cost['wall_seconds'])} wall on {where} "
                                  f"({cost['trajectories_per_second']:,.0f} a second; "
                                  f"{cost['cpu_ms_per_trajectory']:.3g} CPU ms each, every "
                                  f"rung of the ladder counted){_from_store(cost)}"))

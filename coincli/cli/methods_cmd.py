@@ -43,8 +43,10 @@ def methods_command(
     if json_out:
         print_json(found.to_dict())
         return
+    stick = (f"; friction's stick at rest decays at {found.stick_rate:.4g} /s"
+             if found.stick_rate > 0 else "")
     say(console, f"[bold]Integration methods[/] (stiffest mode: rocking on two corners, "
-                 f"omega = {omega:.4g} rad/s, damping ratio {zeta:.3f})")
+                 f"omega = {omega:.4g} rad/s, damping ratio {zeta:.3f}{stick})")
     table = Table(box=box.SIMPLE_HEAD, pad_edge=False)
     for col, justify in (("method", "left"), ("order", "right"), ("adaptive", "left"),
                          ("symplectic", "left"), ("stable step", "right")):
@@ -57,5 +59,6 @@ def methods_command(
     console.print(table)
     for r in rows:
         say(console, f"[bold]{r['name']}[/]: {r['summary']}")
-    say(console, "stable step: the largest fixed step whose error on the stiffest mode does "
-                 "not grow (simulate and basin refuse a larger --dt without --force).")
+    say(console, "stable step: the largest fixed step whose error on the stiffest mode "
+                 + ("and on the stick " if found.stick_rate > 0 else "")
+                 + "does not grow (simulate and basin refuse a larger --dt without --force).")

@@ -257,6 +257,33 @@ SUGGESTED_MU = 0.3  # the coefficient a frictionless throw's line names (a coin 
 FRICTION_MATTERS = 0.01  # friction of SUGGESTED_MU taking this share of the energy is worth a try
 
 
+def ladder_text(tr) -> str:
+    """Each rung's n, and where a rung gave the n of the rung before it without agreeing with
+    it (the ladder's rule: entering the final well and settling at the same moments), by how
+    much its times differ: why the ladder climbed on."""
+    from ..api.words import ladder_of
+
+    ladder = ladder_of(tr.scene)
+    parts = []
+    for k, r in enumerate(tr.rungs):
+        text = f"{r.setting}: n = {r.quarter_turns}".replace(" ", NBSP)
+        before = tr.rungs[k - 1] if k else None
+        if (before is not None and r.quarter_turns == before.quarter_turns
+                and r.status == before.status == Status.SETTLED):
+            apart = []
+            if abs(r.settle_time - before.settle_time) > ladder.settle_tolerance:
+                apart.append(f"settled {abs(r.settle_time - before.settle_time):.3g} s")
+            if abs(r.last_change - before.last_change) > ladder.change_tolerance:
+                apart.append("entered its well "
+                             f"{abs(r.last_change - before.last_change) * 1e3:.3g} ms")
+            elif math.isnan(r.last_change) != math.isnan(before.last_change):
+                apart.append("entered its well once only")
+            if apart:
+                text += f" ({' and '.join(apart)} apart from the rung before)"
+        parts.append(text)
+    return "; ".join(parts)
+
+
 def friction_work_text(tr) -> str | None:
     """Whether friction did any work on the throw: with friction, the energy it took and its
     share of the initial energy; without, what a coefficient mu would take (mu times the
@@ -318,8 +345,7 @@ def print_summary(tr) -> None:
     rows.append(("horizon", f"{horizon:.4g} s" + (
         "" if tr.scene.fixed_horizon else f": {horizon_text(tr.scene)}")))
     if len(tr.rungs) > 1:
-        rows.append(("ladder", "; ".join(f"{r.setting}: n = {r.quarter_turns}".replace(" ", NBSP)
-                                         for r in tr.rungs)))
+        rows.append(("ladder", ladder_text(tr)))
     rungs = len(tr.rungs)
     rows.append(("cost", f"{tr.steps:,} step{'s' if tr.steps != 1 else ''}"
                          + (f" over {rungs} rungs" if rungs > 1 else "")

@@ -14,13 +14,14 @@ from ..params import ParameterError, Scene, validate
 
 def parse_over(text: str) -> tuple[str, np.ndarray]:
     """``thickness=0.001:0.02:20`` -> ('thickness', linspace(0.001, 0.02, 20));
-    ``c=0.1,0.5,2`` -> ('c', [0.1, 0.5, 2]) (values listed, e.g. spaced unevenly)."""
-    m = re.fullmatch(r"\s*([a-z_]+)\s*=\s*(.+?)\s*", str(text), re.IGNORECASE | re.DOTALL)
+    ``c=0.1,0.5,2`` -> ('c', [0.1, 0.5, 2]) (values listed, e.g. spaced unevenly). A name
+    may be spelled as its option is, ``slip-velocity`` for ``slip_velocity``."""
+    m = re.fullmatch(r"\s*([a-z_-]+)\s*=\s*(.+?)\s*", str(text), re.IGNORECASE | re.DOTALL)
     if m is None or ("," not in m.group(2) and m.group(2).count(":") != 2):
         raise ParameterError(f"over '{text}' is not NAME=LO:HI:STEPS (e.g. "
                              "thickness=0.001:0.02:20) or NAME=V1,V2,... (e.g. c=0.1,0.5,2)",
                              parameters=("over",))
-    name = m.group(1).lower()
+    name = m.group(1).lower().replace("-", "_")
     if name not in PARAMETERS:
         raise ParameterError(f"over {name}: not a physical parameter; one of "
                              f"{', '.join(PARAMETERS)}", parameters=("over",))
@@ -47,6 +48,7 @@ def parse_over(text: str) -> tuple[str, np.ndarray]:
         raise ParameterError(f"over '{text}': STEPS must be a whole number from 2 to 10000",
                              parameters=("over",))
     return name, np.linspace(lo, hi, int(steps))
+
 
 PARAMETERS = tuple(PARAMETER_UNITS)
 

@@ -10,6 +10,7 @@ import typer
 from rich.table import Table
 
 from ...api import __version__
+from ...api.words import format_seconds
 from .. import recording
 from ..common import (
     JsonOpt,
@@ -217,11 +218,12 @@ def _print_analysis(path: Path, result, data: dict) -> None:
     say(console, f"Wada (merging method, up to {opts.max_dilation} cells; {w.wada.n_classes} "
                  f"classes on the whole map): {wada}")
     s, c = result.seconds, result.cpu_seconds
-    sim = (f", perturbation method {s['perturbation']:.1f} s ({result.trajectories:,} labels "
-           f"on {opts.threads} thread{'s' if opts.threads != 1 else ''})" if p is not None
+    sim = (f", perturbation method {format_seconds(s['perturbation'])} "
+           f"({result.trajectories:,} labels on {opts.threads} "
+           f"thread{'s' if opts.threads != 1 else ''})" if p is not None
            else f" (no perturbation method: {command('--points', 0)})")
-    say(console, f"took {s['total']:.1f} s wall, {c['total']:.1f} CPU s: map measures "
-                 f"{s['map']:.1f} s{sim}")
+    say(console, f"took {format_seconds(s['total'])} wall, {format_seconds(c['total'])} CPU: "
+                 f"map measures {format_seconds(s['map'])}{sim}")
 
 
 def _print_exponents(result, data: dict, regions: list, head: str) -> None:
@@ -264,5 +266,7 @@ def _print_exponents(result, data: dict, regions: list, head: str) -> None:
                  "between the two largest eps at which some label changes. left out: "
                  "points whose label (or a perturbed one) was not certain. grid: alpha by "
                  "box counting on the map (Attractors.jl's estimator), for comparison"
+                 + ("; - where the map (or band) is too small to count boxes on"
+                    if any(r.grid_exponent is None for r in regions) else "")
                  + ("; * outside 0 to 2: no dimension follows, the map does not resolve "
                     "the scaling there" if impossible else "") + ".[/dim]")

@@ -63,16 +63,17 @@ def stats_command(
     attrs = view.attrs
     if json_out:
         print_json({"path": str(path), "version": __version__, "store_version": attrs["version"],
-                    "sweep": attrs["sweep"], "method": attrs["method"],
+                    "parameters": attrs["parameters"], "sweep": attrs["sweep"],
+                    "method": attrs["method"],
                     "tiles": stats["tiles_total"], **stats})
         return
     ax0, ax1 = attrs["sweep"]["axes"]
     console.print(f"[bold]coin basin stats[/] {path}", highlight=False)
-    console.print(f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
-                  f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells, "
-                  f"{store_method_text(attrs['method'])}"
-                  + (f", friction mu = {attrs['parameters']['foundation']['mu']:g}"
-                     if attrs["parameters"]["foundation"].get("mu") else ""), highlight=False)
+    say(console, f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
+                 f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells, "
+                 f"{store_method_text(attrs['method'])}"
+                 + (f", friction mu = {attrs['parameters']['foundation']['mu']:g}"
+                    if attrs["parameters"]["foundation"].get("mu") else ""))
     if attrs["method"].get("horizon"):
         console.print(f"horizon: {attrs['method']['horizon']}", highlight=False)
     _print_outcomes(stats, every_n)

@@ -10,6 +10,7 @@ import typer
 
 from ...api import ParameterError
 from ...api.options import DEFAULT_CHUNK, DEFAULT_RANGES, DEFAULT_RES, MAX_SECONDS
+from ...api.words import format_seconds
 from .. import recording
 from ..common import (
     INIT,
@@ -281,7 +282,7 @@ def _report(path: Path, plan, report, scheduler) -> None:
     say(console, f"{path}: {report.tiles_done}/{total} tiles done; this run computed "
                  f"{counted(report.tiles_computed, 'tile')} "
                  f"({counted(report.cells, 'cell')}{halves}) in "
-                 f"{report.wall_seconds:.1f} s wall, {rate:,.0f} "
+                 f"{format_seconds(report.wall_seconds)} wall, {rate:,.0f} "
                  f"cells/s on {where}{others}.")
     if report.interrupted or not report.complete:
         say(err_console, f"[yellow]stopped:[/] {interruptions.stopped_by()}"
