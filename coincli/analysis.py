@@ -240,6 +240,13 @@ class BasinAnalysis:
     trajectories: int  # simulator runs of the perturbation method (rungs not counted)
     seconds: dict = field(default_factory=dict)  # wall seconds per stage, and "total"
     cpu_seconds: dict = field(default_factory=dict)  # process CPU seconds (all threads), same keys
+    parameters: dict = field(default_factory=dict)  # the store's physical parameters (its
+    # coin and foundation: mu among them with friction)
+
+    @property
+    def friction(self) -> float:
+        """The store's friction coefficient mu (0: the paper's frictionless model)."""
+        return float(self.parameters.get("foundation", {}).get("mu") or 0.0)
 
     @property
     def band_axis(self) -> dict:
@@ -267,6 +274,7 @@ class BasinAnalysis:
             "band_axis": name,
             "axes": list(self.axes),
             "fixed": self.fixed,
+            "parameters": self.parameters,
             "verified": self.verified,
             "evidence": ("labels certain on the store's ladder of settings" if self.verified
                          else "settled labels of a single pass (the store is not verified)"),
@@ -527,7 +535,7 @@ def analyze_basin(quarter_turns, status, certainty, attrs: dict, *,
     fixed = {k: float(v) for k, v in attrs["sweep"]["fixed"].items()}
     return BasinAnalysis(whole=whole, bands=bands, axes=axes, fixed=fixed, options=opts,
                          verified=verified, trajectories=int(trajectories), seconds=seconds,
-                         cpu_seconds=cpu)
+                         cpu_seconds=cpu, parameters=attrs["parameters"])
 
 
 def eps_values(lo: float, hi: float, count: int) -> tuple[float, ...]:

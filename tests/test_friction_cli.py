@@ -234,6 +234,11 @@ def test_a_friction_store_renders_counts_exports_and_replays_with_its_friction(t
     assert "event (run as event_rodas)" in subtitle.get_text(), subtitle.get_text()
     assert ";\n" in subtitle.get_text()
     assert subtitle.get_window_extent().width <= fig.bbox.width
+    # its analysis keeps the store's parameters and says its mu
+    analysis = coincli.analyze(ds, points=0, bands=1, box=2, radius=2, balls=100)
+    assert analysis.friction == 0.3
+    assert analysis.to_dict()["parameters"]["foundation"]["mu"] == 0.3
+    assert "$\\mu$ = 0.3" in coincli.render_analysis(analysis).get_suptitle()
     assert run("basin", "export", store, tmp_path / "m.nc").exit_code == 0
     assert coincli.basin_attrs(tmp_path / "m.nc")["parameters"]["foundation"]["mu"] == 0.3
     assert run("basin", "verify", store).exit_code == 0

@@ -207,7 +207,9 @@ def plot_analysis(analysis, path: Path | None = None, title: str | None = None,
         fig.suptitle(title or f"How fractal are the basin boundaries: {a0['name']} "
                               f"{a0['lo']:g}:{a0['hi']:g} {a0['units']} x {a1['name']} "
                               f"{a1['lo']:g}:{a1['hi']:g} {a1['units']}, "
-                              f"{a0['n']} x {a1['n']} cells", fontsize=11)
+                              f"{a0['n']} x {a1['n']} cells"
+                              + (f", $\\mu$ = {analysis.friction:g}" if analysis.friction else ""),
+                     fontsize=11)
     if path is not None:
         save_figure(fig, path, dpi)
     return fig

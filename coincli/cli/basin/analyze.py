@@ -181,7 +181,8 @@ def _print_analysis(path: Path, result, data: dict) -> None:
     w = result.whole
     console.print(f"[bold]coin basin analyze[/] {path}", highlight=False)
     say(console, f"{ax0['name']} {ax0['lo']:g}:{ax0['hi']:g} {ax0['units']} x {ax1['name']} "
-                 f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells; "
+                 f"{ax1['lo']:g}:{ax1['hi']:g} {ax1['units']}, {ax0['n']} x {ax1['n']} cells"
+                 + (f", friction mu = {result.friction:g}" if result.friction else "") + "; "
                  f"evidence: {'certain' if result.verified else 'settled (unverified)'} "
                  f"labels, {percent(1 - w.uncertain_cells)} of the cells")
     regions = [w, *result.bands]
