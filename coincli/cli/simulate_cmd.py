@@ -276,10 +276,10 @@ def ladder_text(tr) -> str:
             if abs(r.last_change - before.last_change) > ladder.change_tolerance:
                 apart.append("entered its well "
                              f"{abs(r.last_change - before.last_change) * 1e3:.3g} ms")
-            elif math.isnan(r.last_change) != math.isnan(before.last_change):
-                apart.append("entered its well once only")
             if apart:
                 text += f" ({' and '.join(apart)} apart from the rung before)"
+            elif math.isnan(r.last_change) != math.isnan(before.last_change):
+                text += " (one of it and the rung before never changed well)"
         parts.append(text)
     return "; ".join(parts)
 
