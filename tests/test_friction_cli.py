@@ -7,6 +7,7 @@ notice. The physics of the friction law is tests/test_friction.py's."""
 from __future__ import annotations
 
 import json
+import math
 import time
 from pathlib import Path
 
@@ -306,6 +307,22 @@ def test_simulate_says_why_its_ladder_climbed_past_a_rung_of_the_same_n():
     assert "certain: rtol = 1e-07 and rtol = 1e-08 agree" in text, text
     assert "rtol = 1e-07: n = -6 (settled 0.03" in text and "s apart from the rung before)" \
         in text, text
+
+
+def test_the_ladders_gaps_follow_its_rule_of_agreement():
+    from types import SimpleNamespace as Run
+
+    from coincli.api.words import ladder_of
+
+    ladder = ladder_of(coincli.load_preset("paper"))
+    a = Run(settle_time=0.4, last_change=0.1)
+    assert ladder.gaps(a, Run(settle_time=0.405, last_change=0.1005)) == []  # within both
+    assert ladder.gaps(a, Run(settle_time=0.45, last_change=0.105)) == [
+        "settled 0.05 s apart", "entered its well 5 ms apart"]
+    assert ladder.gaps(Run(settle_time=0.4, last_change=math.nan), a) == [
+        "only one of the two changed well"]
+    assert ladder.gaps(Run(settle_time=0.4, last_change=math.nan),
+                       Run(settle_time=0.4, last_change=math.nan)) == []
 
 
 def test_the_work_is_the_same_recorded_or_not(base):

@@ -270,16 +270,9 @@ def ladder_text(tr) -> str:
         before = tr.rungs[k - 1] if k else None
         if (before is not None and r.quarter_turns == before.quarter_turns
                 and r.status == before.status == Status.SETTLED):
-            apart = []
-            if abs(r.settle_time - before.settle_time) > ladder.settle_tolerance:
-                apart.append(f"settled {abs(r.settle_time - before.settle_time):.3g} s")
-            if abs(r.last_change - before.last_change) > ladder.change_tolerance:
-                apart.append("entered its well "
-                             f"{abs(r.last_change - before.last_change) * 1e3:.3g} ms")
-            if apart:
-                text += f" ({' and '.join(apart)} apart from the rung before)"
-            elif math.isnan(r.last_change) != math.isnan(before.last_change):
-                text += " (one of it and the rung before never changed well)"
+            gaps = ladder.gaps(before, r)
+            if gaps:
+                text += f" ({' and '.join(gaps)} from the rung before)"
         parts.append(text)
     return "; ".join(parts)
 

@@ -68,6 +68,21 @@ class Ladder:
         text = f"rtol = {self.rtols[k]:g}" if self.adaptive else f"dt = {self.dts[k]:g} s"
         return text if self.methods[k] == self.methods[0] else f"{text} with {self.methods[k]}"
 
+    def gaps(self, a, b) -> list[str]:
+        """Why two settled runs with the same n (each with ``settle_time`` and ``last_change``,
+        s) fail this ladder's rule (:func:`coincli.integrators.batch.rungs_agree`), in words:
+        ``settled 0.0323 s apart``, ``entered its well 4.1 ms apart``, or that only one of them
+        changed well; [] where they agree."""
+        gaps = []
+        if abs(a.settle_time - b.settle_time) > self.settle_tolerance:
+            gaps.append(f"settled {abs(a.settle_time - b.settle_time):.3g} s apart")
+        if math.isnan(a.last_change) != math.isnan(b.last_change):
+            gaps.append("only one of the two changed well")
+        elif abs(a.last_change - b.last_change) > self.change_tolerance:
+            gaps.append(f"entered its well {abs(a.last_change - b.last_change) * 1e3:.3g} ms "
+                        "apart")
+        return gaps
+
     def to_dict(self) -> dict:
         knob = "rtol" if self.adaptive else "dt"
         return {"rungs": [{"method": self.methods[k].label,
