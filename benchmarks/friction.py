@@ -601,9 +601,20 @@ def render(found: dict) -> None:
             replace_between(PAGE, marker, provenance(measured) + "\n\n" + table(found))
 
 
+# each part of the study, run with the command's arguments: the timed parts (no stores) take
+# the rounds, the others write their stores under --out
+PARTS = {"cost": lambda args: cost(args.quick, args.rounds),
+         "sensitivity": lambda args: sensitivity(args.out, args.quick),
+         "stick": lambda args: stick(args.quick, args.rounds),
+         "slip": lambda args: slip(args.out, args.quick),
+         "maps": lambda args: maps(args.out, args.quick),
+         "curves": lambda args: curves(args.out, args.quick),
+         "crossings": lambda args: crossings(args.out, args.quick)}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    for part in ("cost", "sensitivity", "stick", "slip", "maps", "curves", "crossings", "all"):
+    for part in (*PARTS, "all"):
         parser.add_argument(f"--{part}", action="store_true")
     parser.add_argument("--render", action="store_true",
                         help="only write the tables of benchmarks/friction.json into "
@@ -617,16 +628,10 @@ def main() -> None:
     if args.render:
         render(found)
         return
-    parts = [p for p in ("cost", "sensitivity", "stick", "slip", "maps", "curves", "crossings")
-             if getattr(args, p) or args.all]
+    parts = [p for p in PARTS if getattr(args, p) or args.all]
     for part in parts:
         start = time.perf_counter()
-        if part == "cost":  # timed, no stores
-            result = cost(args.quick, args.rounds)
-        elif part == "stick":
-            result = stick(args.quick, args.rounds)
-        else:
-            result = globals()[part](args.out, args.quick)
+        result = PARTS[part](args)
         print(f"{part}: {time.perf_counter() - start:.0f} s", flush=True)
         found.update(result)
         if not args.quick:
